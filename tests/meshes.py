@@ -1,0 +1,58 @@
+"""Analytic test surfaces shared by the tests (built here, no data files needed)."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def icosphere(subdivisions: int = 5, radius: float = 1.0):
+    """Icosahedron subdivided ``subdivisions`` times, projected on the sphere.
+
+    Returns ``(vertices, faces)``; 5 subdivisions give 10,242 vertices.
+    """
+    t = (1 + 5 ** 0.5) / 2
+    v = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+                  [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
+    f = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+                  [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+                  [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]])
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    for _ in range(subdivisions):
+        edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+        uniq, inv = np.unique(edges, axis=0, return_inverse=True)
+        mid = v[uniq].mean(axis=1)
+        mid /= np.linalg.norm(mid, axis=1, keepdims=True)
+        m = inv.ravel().reshape(3, -1).T + len(v)  # midpoints of edges (01, 12, 20) per face
+        v = np.vstack([v, mid])
+        a, b, c = f.T
+        ab, bc, ca = m.T
+        f = np.concatenate([np.c_[a, ab, ca], np.c_[ab, b, bc], np.c_[ca, bc, c], np.c_[ab, bc, ca]])
+    return radius * v, f
+
+
+def fibonacci_sphere(n: int, radius: float = 1.0):
+    """``n`` nearly uniform points on a sphere (Fibonacci lattice)."""
+    i = np.arange(n) + 0.5
+    z = 1 - 2 * i / n
+    phi = np.pi * (1 + 5 ** 0.5) * i
+    r = np.sqrt(1 - z ** 2)
+    return radius * np.c_[r * np.cos(phi), r * np.sin(phi), z]
+
+
+def grid(nx: int, ny: int, a: float = 1.0, b: float = 1.0, jitter: float = 0.0, seed: int = 0):
+    """Planar triangulated rectangle ``[0, a] x [0, b]`` at z = 0 with alternating diagonals.
+
+    ``jitter`` moves interior vertices by that fraction of the spacing (seeded).
+    """
+    x, y = np.meshgrid(np.linspace(0, a, nx), np.linspace(0, b, ny), indexing="ij")
+    v = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    if jitter:
+        rng = np.random.default_rng(seed)
+        interior = (x.ravel() > 0) & (x.ravel() < a) & (y.ravel() > 0) & (y.ravel() < b)
+        step = np.array([a / (nx - 1), b / (ny - 1)])
+        v[interior, :2] += jitter * step * rng.uniform(-1, 1, (interior.sum(), 2))
+    idx = np.arange(nx * ny).reshape(nx, ny)
+    p, q, r, s = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    flip = ((np.arange(nx - 1)[:, None] + np.arange(ny - 1)[None, :]) % 2).ravel().astype(bool)
+    f1 = np.where(flip[:, None], np.c_[p, q, r], np.c_[p, q, s])
+    f2 = np.where(flip[:, None], np.c_[p, r, s], np.c_[q, r, s])
+    return v, np.concatenate([f1, f2])
