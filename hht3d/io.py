@@ -184,7 +184,7 @@ def surface_from_open3d(geometry, *, clean: bool = True, name: str | None = None
                 "faces": geometry.triangle["indices"].numpy() if is_mesh and "indices" in geometry.triangle
                 else None}
         n = len(data["vertices"])
-        for key in attrs.keys():
+        for key in list(attrs):
             values = attrs[key].numpy()
             if key == "colors":
                 data["colors"] = values.astype(np.float64) / (255.0 if values.dtype.kind in "iu" else 1.0)

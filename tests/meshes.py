@@ -56,3 +56,27 @@ def grid(nx: int, ny: int, a: float = 1.0, b: float = 1.0, jitter: float = 0.0, 
     f1 = np.where(flip[:, None], np.c_[p, q, r], np.c_[p, q, s])
     f2 = np.where(flip[:, None], np.c_[p, r, s], np.c_[q, r, s])
     return v, np.concatenate([f1, f2])
+
+
+def gltf_to_glb(gltf_path, glb_path):
+    """Pack a ``.gltf`` with one embedded (data-URI) buffer into a binary ``.glb``.
+
+    Open3D 0.18–0.20 writes ``.glb`` files its own reader rejects, so the
+    GLB test builds one by the glTF 2.0 container rules instead.
+    """
+    import base64
+    import json
+    import struct
+
+    doc = json.loads(open(gltf_path).read())
+    (buffer,) = doc["buffers"]
+    payload = base64.b64decode(buffer.pop("uri").split(",", 1)[1])
+    payload += b"\0" * (-len(payload) % 4)
+    buffer["byteLength"] = len(payload)
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    total = 12 + 8 + len(text) + 8 + len(payload)
+    with open(glb_path, "wb") as out:
+        out.write(struct.pack("<4sII", b"glTF", 2, total))
+        out.write(struct.pack("<I4s", len(text), b"JSON") + text)
+        out.write(struct.pack("<I4s", len(payload), b"BIN\0") + payload)

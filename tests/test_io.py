@@ -1,0 +1,140 @@
+"""Loading, cleaning, clear errors on bad input, and attribute round trips."""
+import numpy as np
+import open3d as o3d
+import pytest
+
+from hht3d import InputError, Surface, load
+from hht3d.io import atomic_path, write_colored_ply, write_npz, write_ply
+from meshes import gltf_to_glb, icosphere
+
+
+@pytest.fixture
+def sphere():
+    return Surface(*icosphere(2), name="sphere")
+
+
+def test_ply_attributes_round_trip(tmp_path, sphere):
+    values = {"imf_1": np.sin(sphere.vertices[:, 0]), "amplitude.2": np.arange(sphere.n_vertices) / 7}
+    path = write_ply(tmp_path / "out.ply", sphere, values)
+    back = load(path, clean=False)
+    assert back.n_vertices == sphere.n_vertices and np.array_equal(back.faces, sphere.faces)
+    assert set(back.attributes) == set(values)
+    for key, v in values.items():
+        np.testing.assert_array_equal(back.attributes[key], v)  # float64 on disk: bit-exact
+    np.testing.assert_array_equal(back.vertices, sphere.vertices)
+
+
+def test_point_cloud_ply_round_trip(tmp_path):
+    cloud = Surface(icosphere(2)[0])
+    back = load(write_ply(tmp_path / "pc.ply", cloud, {"f": cloud.vertices[:, 2]}), clean=False)
+    assert not back.is_mesh
+    np.testing.assert_array_equal(back.attributes["f"], cloud.vertices[:, 2])
+
+
+@pytest.mark.parametrize("ext", [".obj", ".off", ".stl", ".gltf", ".glb"])
+def test_open3d_mesh_formats(tmp_path, ext):
+    v, f = icosphere(2)
+    mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(v), o3d.utility.Vector3iVector(f))
+    mesh.compute_vertex_normals()
+    path = tmp_path / f"m{ext}"
+    assert o3d.io.write_triangle_mesh(str(path.with_suffix(".gltf" if ext == ".glb" else ext)), mesh)
+    if ext == ".glb":
+        gltf_to_glb(path.with_suffix(".gltf"), path)
+    surface = load(path)
+    # STL stores one vertex per corner: cleaning welds them back to the original count
+    assert surface.n_vertices == len(v) and len(surface.faces) == len(f)
+
+
+@pytest.mark.parametrize("ext", [".pcd", ".xyz", ".xyzn", ".pts"])
+def test_open3d_point_formats(tmp_path, ext):
+    pts = icosphere(2)[0]
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts))
+    pcd.normals = o3d.utility.Vector3dVector(pts)
+    path = str(tmp_path / f"p{ext}")
+    assert o3d.io.write_point_cloud(path, pcd)
+    surface = load(path)
+    assert not surface.is_mesh and surface.n_vertices == len(pts)
+
+
+def test_open3d_geometries(sphere):
+    legacy = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(sphere.vertices),
+                                       o3d.utility.Vector3iVector(sphere.faces))
+    assert Surface.from_open3d(legacy).n_vertices == sphere.n_vertices
+    tensor = sphere.to_open3d({"signal": sphere.vertices[:, 0]})
+    back = Surface.from_open3d(tensor, clean=False)
+    np.testing.assert_allclose(back.attributes["signal"], sphere.vertices[:, 0])
+    cloud = o3d.t.geometry.PointCloud(o3d.core.Tensor(sphere.vertices))
+    assert not Surface.from_open3d(cloud).is_mesh
+
+
+def test_cleaning_reports_and_maps_attributes():
+    v, f = icosphere(1)
+    n = len(v)
+    # append: an unreferenced vertex, a duplicate of vertex 0 used by a copied face,
+    # a degenerate face and a duplicated face
+    v2 = np.vstack([v, [[9, 9, 9]], v[[0]]])
+    f2 = np.vstack([f, [[n + 1, f[0, 1], f[0, 2]]], [[1, 1, 2]], f[[5]]])
+    surface = Surface.cleaned(v2, f2, attributes={"id": np.arange(len(v2), dtype=float)})
+    r = surface.clean_report
+    assert (r.merged_duplicate_vertices, r.removed_degenerate_faces) == (1, 1)
+    assert r.removed_duplicate_faces == 2  # the copied face (after welding) and f[5]
+    assert r.removed_unreferenced_vertices == 1
+    assert surface.n_vertices == n and len(surface.faces) == len(f)
+    np.testing.assert_array_equal(surface.attributes["id"], np.arange(n))
+    assert r.original_to_new[n + 1] == 0 and r.original_to_new[n] == -1
+
+
+def test_real_scan_cleaning(shared_model):
+    # MANIFEST: 1,113 unreferenced vertices in the Stanford bunny; 2,100
+    # duplicate positions and 108 zero-area faces in the dragon
+    bunny = load(shared_model("bunny_zipper.ply"))
+    assert bunny.clean_report.removed_unreferenced_vertices == 1113
+    assert bunny.n_vertices == 35947 - 1113
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda p: p / "missing.ply", "no such file"),
+    (lambda p: (p / "m.dae").write_text("x") and p / "m.dae", "unknown extension"),
+    (lambda p: (p / "bad.ply").write_bytes(b"ply\nformat nonsense\n") and p / "bad.ply", "not a readable PLY"),
+    (lambda p: (p / "e.xyz").write_text("") or p / "e.xyz", "no vertices"),
+])
+def test_bad_files_give_one_clear_error(tmp_path, make, message):
+    path = make(tmp_path)
+    with pytest.raises(InputError, match=message) as info:
+        load(path)
+    assert str(path.name) in str(info.value)
+
+
+def test_bad_arrays_give_clear_errors():
+    v, f = icosphere(1)
+    with pytest.raises(InputError, match="at least 4"):
+        Surface(v[:3])
+    bad = v.copy()
+    bad[2, 1] = np.nan
+    with pytest.raises(InputError, match="NaN"):
+        Surface(bad, f)
+    with pytest.raises(InputError, match="face indices"):
+        Surface(v, f + 100)
+    with pytest.raises(InputError, match="shape"):
+        Surface(v[:, :2])
+
+
+def test_atomic_write_leaves_nothing_on_failure(tmp_path):
+    target = tmp_path / "x.npz"
+    with pytest.raises(RuntimeError):
+        with atomic_path(target) as tmp:
+            tmp.write_bytes(b"partial")
+            raise RuntimeError("boom")
+    assert list(tmp_path.iterdir()) == []
+    write_npz(target, {"a": np.arange(3)})
+    assert np.load(target)["a"].tolist() == [0, 1, 2]
+
+
+def test_colored_ply_uses_colormap(tmp_path, sphere):
+    path = write_colored_ply(tmp_path / "c.ply", sphere, sphere.vertices[:, 2], name="height")
+    back = load(path, clean=False)
+    z = back.attributes["height"]
+    # viridis: low values dark blue-purple, high values yellow (red+green high, blue low)
+    lo, hi = np.argmin(z), np.argmax(z)
+    assert back.colors[hi, 0] > 0.8 and back.colors[hi, 2] < 0.3
+    assert back.colors[lo, 2] > back.colors[lo, 0]
