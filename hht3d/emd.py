@@ -59,6 +59,7 @@ __all__ = [
     "STOPPING_RULES",
     "ENVELOPES",
     "EXTREMA_RULES",
+    "TIE_RTOL",
 ]
 
 #: Sifting stopping rules.
@@ -71,6 +72,8 @@ EXTREMA_RULES = ("strict", "ring")
 #: A signal whose deviation from its per-component mean is below this fraction
 #: of its magnitude is constant up to round-off and is not decomposed.
 _FLAT_RTOL = 1e3 * np.finfo(np.float64).eps
+#: Neighbouring values closer than this fraction of the signal's range are ties.
+TIE_RTOL = 1e-9
 
 
 @dataclass
@@ -106,7 +109,7 @@ class EMDResult:
 # -- extrema -----------------------------------------------------------------------------
 
 def local_extrema(surface: Surface, f, *, rule: str = "strict", ring: int | None = None,
-                  ratio: float = 0.8) -> tuple[np.ndarray, np.ndarray]:
+                  ratio: float = 0.8, tie_rtol: float = TIE_RTOL) -> tuple[np.ndarray, np.ndarray]:
     """Indices of the local maxima and minima of a per-vertex signal.
 
     Parameters
@@ -123,6 +126,8 @@ def local_extrema(surface: Surface, f, *, rule: str = "strict", ring: int | None
         ``"ring"`` (the paper's two-ring).
     ratio : float
         The paper's ``t`` in ``(0.5, 1]``; used by ``"ring"`` only.
+    tie_rtol : float
+        Values closer than ``tie_rtol · (max f − min f)`` count as equal.
 
     Returns
     -------
@@ -135,14 +140,17 @@ def local_extrema(surface: Surface, f, *, rule: str = "strict", ring: int | None
     neighbour (a minimum strictly smaller), so a constant patch, the interior
     of a plateau, a constant signal and an isolated vertex give no extrema,
     while a flat ridge (e.g. a signal constant across a strip) gives a line of
-    maxima.
+    maxima.  Equality is up to ``tie_rtol`` of the signal's range, so a ridge
+    that is flat up to solver round-off (about 1e-12 of the range after an
+    envelope solve) is still one ridge; the tolerance scales with the signal
+    and ignores constant offsets.
     """
-    is_max, is_min = _extrema_masks(surface, _as_signal(surface, f), rule, ring, ratio)
+    is_max, is_min = _extrema_masks(surface, _as_signal(surface, f), rule, ring, ratio, tie_rtol)
     return np.flatnonzero(is_max), np.flatnonzero(is_min)
 
 
 def _extrema_masks(surface: Surface, f: np.ndarray, rule: str, ring: int | None,
-                   ratio: float) -> tuple[np.ndarray, np.ndarray]:
+                   ratio: float, tie_rtol: float = TIE_RTOL) -> tuple[np.ndarray, np.ndarray]:
     """Boolean maximum and minimum masks (see :func:`local_extrema`)."""
     if rule not in EXTREMA_RULES:
         raise InputError(f"unknown extrema rule {rule!r}; choose one of {EXTREMA_RULES}")
@@ -155,10 +163,11 @@ def _extrema_masks(surface: Surface, f: np.ndarray, rule: str, ring: int | None,
     adj = surface.ring(ring)
     degree = np.diff(adj.indptr)
     rows = np.repeat(np.arange(len(f)), degree)
-    fi, fj = f[rows], f[adj.indices]
+    diff = f[rows] - f[adj.indices]
+    tol = tie_rtol * (np.max(f) - np.min(f))
     n = len(f)
-    n_above = np.bincount(rows[fi > fj], minlength=n)  # neighbours strictly below f_i
-    n_below = np.bincount(rows[fi < fj], minlength=n)  # neighbours strictly above f_i
+    n_above = np.bincount(rows[diff > tol], minlength=n)  # neighbours clearly below f_i
+    n_below = np.bincount(rows[diff < -tol], minlength=n)  # neighbours clearly above f_i
     need = ratio * degree
     is_max = (degree - n_below >= need) & (n_above > 0)
     is_min = (degree - n_above >= need) & (n_below > 0)

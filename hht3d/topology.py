@@ -1,0 +1,63 @@
+"""Topological facts about a surface, for ``hht3d info`` and input checks."""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from .surface import Surface
+
+__all__ = ["edge_face_counts", "describe"]
+
+
+def edge_face_counts(faces: np.ndarray):
+    """Unique undirected edges ``(e, 2)`` and how many faces use each."""
+    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    return np.unique(e, axis=0, return_counts=True)
+
+
+def _non_manifold_vertices(surface: Surface) -> int:
+    """Vertices whose incident faces do not form one fan (Open3D's test)."""
+    import open3d as o3d
+
+    mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(surface.vertices),
+                                      o3d.utility.Vector3iVector(surface.faces))
+    return len(mesh.get_non_manifold_vertices())
+
+
+def describe(surface: Surface) -> dict:
+    """Vertices, faces, components, boundary, manifoldness, Euler characteristic, bounding box."""
+    lo, hi = surface.vertices.min(axis=0), surface.vertices.max(axis=0)
+    info = {
+        "name": surface.name,
+        "kind": "mesh" if surface.is_mesh else "point cloud",
+        "vertices": surface.n_vertices,
+        "components": surface.n_components,
+        "bounding_box_min": lo.tolist(),
+        "bounding_box_max": hi.tolist(),
+        "bounding_box_diagonal": float(np.linalg.norm(hi - lo)),
+    }
+    if surface.clean_report is not None:
+        info["cleaning"] = surface.clean_report.summary()
+    if not surface.is_mesh:
+        return info
+    edges, counts = edge_face_counts(surface.faces)
+    boundary = edges[counts == 1]
+    n = surface.n_vertices
+    loops = 0
+    if len(boundary):
+        graph = sp.coo_matrix((np.ones(len(boundary)), (boundary[:, 0], boundary[:, 1])), shape=(n, n))
+        labels = connected_components(graph, directed=False)[1]
+        loops = len(np.unique(labels[np.unique(boundary)]))
+    info.update({
+        "faces": len(surface.faces),
+        "edges": len(edges),
+        "euler_characteristic": n - len(edges) + len(surface.faces),
+        "boundary_loops": loops,
+        "boundary_vertices": int(surface.boundary_vertices.sum()),
+        "non_manifold_edges": int(np.sum(counts > 2)),
+        "non_manifold_vertices": _non_manifold_vertices(surface),
+        "closed": bool(len(boundary) == 0),
+        "surface_area": float(surface.face_areas.sum()),
+    })
+    return info
