@@ -25,7 +25,15 @@ which is exactly the eliminated system ``Q_FF g_F = −Q_FC f_C`` plus
 holds a constraint.  The sparsity pattern never changes, so the fill-reducing
 ordering and symbolic factorization are done once per EMD run
 (:class:`hht3d.linalg.SymbolicFactorization`) and each envelope costs one
-numeric factorization, skipped when the constraint set repeats.
+numeric factorization and one solve.  The upper and lower envelopes have
+different constraint sets, so a sift costs two factorizations.
+
+Boundaries
+----------
+``L`` is the Neumann Laplacian, so on an open surface the envelopes have zero
+normal derivative at the boundary: on a strip or cylinder a biharmonic
+envelope is the *clamped* cubic spline through the extrema, the surface
+analogue of the mirrored end extrema of 1-D EMD codes.
 
 Components
 ----------
@@ -56,6 +64,7 @@ __all__ = [
     "combine_eemd",
     "local_extrema",
     "envelope_operator",
+    "envelope_interpolation",
     "STOPPING_RULES",
     "ENVELOPES",
     "EXTREMA_RULES",
@@ -200,15 +209,18 @@ def envelope_operator(surface: Surface, envelope: str = "biharmonic") -> sp.csr_
         q.sort_indices()
         return q
 
-    return surface._cached(f"emd:operator:{envelope}", build)
+    key = f"emd:operator:{envelope}"
+    if key not in surface.cache:
+        surface.cache[key] = build()
+    return surface.cache[key]
 
 
 class _EnvelopeSolver:
     """Constrained envelope solves sharing one symbolic factorization.
 
-    One :class:`~hht3d.linalg.SymbolicFactorization` per envelope side, so the
-    last factor of each side stays valid and is reused when a later sift has
-    the same constraint set.
+    The fill-reducing ordering and symbolic analysis of ``Q``'s pattern are
+    done on the first solve; every envelope then costs one numeric
+    factorization and one solve (module notes).
     """
 
     def __init__(self, surface: Surface, envelope: str, backend: str | None):
@@ -217,38 +229,66 @@ class _EnvelopeSolver:
             raise InputError(f"sparse solver backend {self.backend!r} is not available; "
                              f"installed: {linalg.available_backends()}")
         self.q = envelope_operator(surface, envelope)
-        n = surface.n_vertices
-        self._rows = np.repeat(np.arange(n), np.diff(self.q.indptr))
-        diag_pos = np.flatnonzero(self.q.indices == self._rows)
-        diag = self.q.data[diag_pos]
-        self._diag_pos = diag_pos
+        self._rows = np.repeat(np.arange(surface.n_vertices), np.diff(self.q.indptr))
+        self._diag_pos = np.flatnonzero(self.q.indices == self._rows)
+        diag = self.q.data[self._diag_pos]
         self._scale = np.where(diag > 0, diag, 1.0)
-        self._symbolic: dict[str, linalg.SymbolicFactorization] = {}
-        self._last: dict[str, tuple[np.ndarray, linalg.Factor]] = {}
-        self.n_factorizations = 0
+        self._symbolic: linalg.SymbolicFactorization | None = None
 
-    def solve(self, f: np.ndarray, constrained: np.ndarray, side: str) -> np.ndarray:
+    @property
+    def n_factorizations(self) -> int:
+        return 0 if self._symbolic is None else self._symbolic.n_factorizations
+
+    def solve(self, f: np.ndarray, constrained: np.ndarray) -> np.ndarray:
         """The envelope ``g`` with ``g_C = f_C`` minimising ``gᵀQg`` (Eq. 11)."""
-        factor = self._factor(constrained, side)
-        fc = np.where(constrained, f, 0.0)
-        rhs = -(self.q @ fc)
-        rhs[constrained] = self._scale[constrained] * f[constrained]
-        return factor.solve(rhs)
-
-    def _factor(self, constrained: np.ndarray, side: str) -> linalg.Factor:
-        last = self._last.get(side)
-        if last is not None and np.array_equal(last[0], constrained):
-            return last[1]
         free = ~constrained
         data = self.q.data * (free[self._rows] & free[self.q.indices])
         data[self._diag_pos[constrained]] = self._scale[constrained]
-        matrix = sp.csr_matrix((data, self.q.indices, self.q.indptr), shape=self.q.shape)
-        if side not in self._symbolic:
-            self._symbolic[side] = linalg.SymbolicFactorization(self.q, self.backend)
-        factor = self._symbolic[side].factorize(matrix)
-        self.n_factorizations += 1
-        self._last[side] = (constrained.copy(), factor)
-        return factor
+        matrix = sp.csr_matrix((data, self.q.indices.copy(), self.q.indptr.copy()), shape=self.q.shape)
+        if self._symbolic is None:
+            self._symbolic = linalg.SymbolicFactorization(self.q, self.backend)
+        factor = self._symbolic.factorize(matrix)
+        rhs = -(self.q @ np.where(constrained, f, 0.0))
+        rhs[constrained] = self._scale[constrained] * f[constrained]
+        return factor.solve(rhs)
+
+
+def envelope_interpolation(surface: Surface, values, constrained, *, envelope: str = "biharmonic",
+                           backend: str | None = None) -> np.ndarray:
+    """Interpolate ``values`` from the ``constrained`` vertices (Eq. 11).
+
+    Solves ``min gᵀQg`` subject to ``g_C = values_C`` with ``Q`` from
+    :func:`envelope_operator`; this is one EMD envelope.
+
+    Parameters
+    ----------
+    surface : Surface
+    values : (n,) array_like
+        Only the entries at ``constrained`` are used.
+    constrained : (n,) bool array_like or int indices
+        The vertices ``C``; every connected component needs at least one.
+    envelope : {"biharmonic", "harmonic"}
+    backend : str, optional
+        Sparse solver of :mod:`hht3d.linalg`.
+
+    Returns
+    -------
+    (n,) ndarray
+    """
+    f = _as_signal(surface, values)
+    c = np.asarray(constrained)
+    if c.dtype == bool and c.shape != f.shape:
+        raise InputError(f"constrained mask has shape {c.shape}; expected {f.shape}")
+    if c.dtype != bool and (c.size and (not np.issubdtype(c.dtype, np.integer)
+                                        or c.min() < -len(f) or c.max() >= len(f))):
+        raise InputError(f"constrained indices must be integers in [0, {len(f)})")
+    mask = np.zeros(len(f), dtype=bool)
+    mask[c] = True
+    covered = np.bincount(surface.component_labels[mask], minlength=surface.n_components) > 0
+    if not covered.all():
+        raise InputError(f"{int((~covered).sum())} connected components of {surface.name} have no "
+                         "constrained vertex; their interpolant is undefined")
+    return _EnvelopeSolver(surface, envelope, backend).solve(f, mask)
 
 
 # -- sifting -----------------------------------------------------------------------------
@@ -268,22 +308,28 @@ class _Options:
     energy_threshold: float
 
     def __post_init__(self):
-        if self.stopping not in STOPPING_RULES:
-            raise InputError(f"unknown stopping rule {self.stopping!r}; choose one of {STOPPING_RULES}")
-        if self.envelope not in ENVELOPES:
-            raise InputError(f"unknown envelope {self.envelope!r}; choose one of {ENVELOPES}")
-        if self.extrema not in EXTREMA_RULES:
-            raise InputError(f"unknown extrema rule {self.extrema!r}; choose one of {EXTREMA_RULES}")
-        for name in ("max_imfs", "s_number", "fixed_sifts", "max_sifts", "ring"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or int(value) != value or value < (0 if name == "max_imfs" else 1):
-                raise InputError(f"EMD option {name} must be a positive integer, got {value!r}")
-        for name in ("sd_threshold", "energy_threshold"):
-            if not np.isfinite(getattr(self, name)) or getattr(self, name) < 0:
-                raise InputError(f"EMD option {name} must be a finite number >= 0, "
-                                 f"got {getattr(self, name)!r}")
-        if self.extrema == "ring" and not 0.5 < self.ratio <= 1:
+        for name, allowed in (("stopping", STOPPING_RULES), ("envelope", ENVELOPES),
+                              ("extrema", EXTREMA_RULES)):
+            if getattr(self, name) not in allowed:
+                raise InputError(f"unknown EMD {name} {getattr(self, name)!r}; choose one of {allowed}")
+        _check_int("max_imfs", self.max_imfs, 0)
+        for name in ("s_number", "fixed_sifts", "max_sifts", "ring"):
+            _check_int(name, getattr(self, name), 1)
+        _check_number("sd_threshold", self.sd_threshold)
+        _check_number("energy_threshold", self.energy_threshold)
+        if not (isinstance(self.ratio, (int, float, np.number)) and 0.5 < self.ratio <= 1):
             raise InputError(f"EMD option ratio must lie in (0.5, 1], got {self.ratio!r}")
+
+
+def _check_int(name: str, value, minimum: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
+
+
+def _check_number(name: str, value) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) \
+            or not np.isfinite(value) or value < 0:
+        raise InputError(f"{name} must be a finite number >= 0, got {value!r}")
 
 
 class _Sifter:
@@ -310,16 +356,17 @@ class _Sifter:
 
     def mean_envelope(self, h: np.ndarray, is_max, is_min, passive) -> np.ndarray:
         """Mean of the upper and lower biharmonic envelopes (Eq. 11)."""
-        upper = self._envelope(h, is_max | passive, "upper")
-        lower = self._envelope(h, is_min | passive, "lower")
+        upper = self._envelope(h, is_max | passive)
+        lower = self._envelope(h, is_min | passive)
         return 0.5 * (upper + lower)
 
-    def _envelope(self, h: np.ndarray, constrained: np.ndarray, side: str) -> np.ndarray:
-        g = self.solver.solve(h, constrained, side)
+    def _envelope(self, h: np.ndarray, constrained: np.ndarray) -> np.ndarray:
+        g = self.solver.solve(h, constrained)
         scale = np.max(np.abs(h[constrained]))
         if scale > 0:
             error = np.max(np.abs(g[constrained] - h[constrained])) / scale
             self.max_constraint_error = max(self.max_constraint_error, float(error))
+        g[constrained] = h[constrained]  # exact, so passive components give exactly zero IMFs
         return g
 
     def imf(self, residue: np.ndarray):
@@ -327,7 +374,6 @@ class _Sifter:
         o = self.options
         start, factorizations = time.perf_counter(), self.solver.n_factorizations
         h = residue
-        limit = o.fixed_sifts if o.stopping == "fixed" else o.max_sifts
         sifts, stable, previous = 0, 0, None
         value = float(np.inf) if o.stopping == "sd" else 0.0
         while True:
@@ -524,11 +570,10 @@ def eemd_member(surface: Surface, signal, member_index: int, seed: int, noise_st
         the signal plus noise); average members with :func:`combine_eemd`.
     """
     f = _as_signal(surface, signal)
-    if isinstance(member_index, bool) or int(member_index) != member_index or member_index < 0:
-        raise InputError(f"member_index must be an integer >= 0, got {member_index!r}")
-    if not np.isfinite(noise_std) or noise_std < 0:
-        raise InputError(f"noise_std must be a finite number >= 0, got {noise_std!r}")
-    rng = np.random.default_rng(np.random.SeedSequence(_check_seed(seed), spawn_key=(int(member_index),)))
+    _check_int("member_index", member_index, 0)
+    _check_int("seed", seed, 0)
+    _check_number("noise_std", noise_std)
+    rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(member_index),)))
     noise = noise_std * np.std(f) * rng.standard_normal(len(f))
     return emd(surface, f + noise, **emd_options)
 
@@ -596,15 +641,10 @@ def eemd(surface: Surface, signal, *, ensemble_size: int = 100, noise_std: float
     **emd_options
         Further :func:`emd` options.
     """
-    if isinstance(ensemble_size, bool) or int(ensemble_size) != ensemble_size or ensemble_size < 1:
-        raise InputError(f"ensemble_size must be a positive integer, got {ensemble_size!r}")
+    _check_int("ensemble_size", ensemble_size, 1)
     f = _as_signal(surface, signal)
     members = [eemd_member(surface, f, i, seed, noise_std, max_imfs=max_imfs, **emd_options)
                for i in range(int(ensemble_size))]
-    return combine_eemd(f, members)
-
-
-def _check_seed(seed) -> int:
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError(f"EEMD seed must be an integer >= 0, got {seed!r}")
-    return int(seed)
+    result = combine_eemd(f, members)
+    result.info.update(seed=int(seed), noise_std=float(noise_std))
+    return result

@@ -20,6 +20,10 @@ results to solver round-off.
 """
 from __future__ import annotations
 
+import functools
+import os
+import weakref
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -92,25 +96,40 @@ class _SuperLUPattern:
         return Factor(lu.solve, self.n)
 
 
+@functools.lru_cache(maxsize=1)
+def _locate_mkl() -> None:
+    """Find MKL's runtime once per process and tell pypardiso where it is.
+
+    pypardiso otherwise searches the whole installation tree for ``mkl_rt``
+    every time a solver is created (0.3-0.7 s each).
+    """
+    if "PYPARDISO_MKL_RT" not in os.environ:
+        os.environ["PYPARDISO_MKL_RT"] = _pypardiso.PyPardisoSolver().libmkl._name
+
+
 class _PardisoPattern:
     """MKL PARDISO in SPD mode with the symbolic phase run once."""
 
     def __init__(self, pattern: sp.csr_matrix):
         self.n = pattern.shape[0]
-        upper = sp.triu(pattern, format="csr")
-        upper.sort_indices()
-        self._indptr, self._indices = upper.indptr, upper.indices
+        self._indptr, self._indices = pattern.indptr.copy(), pattern.indices.copy()
+        rows = np.repeat(np.arange(self.n), np.diff(pattern.indptr))
+        self._upper_mask = pattern.indices >= rows
+        upper_rows = rows[self._upper_mask]
+        self._upper_indices = pattern.indices[self._upper_mask]
+        self._upper_indptr = np.concatenate([[0], np.cumsum(np.bincount(upper_rows, minlength=self.n))])
+        _locate_mkl()
         self._solver = _pypardiso.PyPardisoSolver(mtype=2)  # MKL's SPD defaults
+        weakref.finalize(self, self._solver.free_memory, True)
         self._current = None
-        self._run(11, upper, np.zeros((self.n, 1)))
+        self._run(11, self._upper(pattern), np.zeros((self.n, 1)))
 
     def _upper(self, a: sp.csr_matrix) -> sp.csr_matrix:
-        upper = sp.triu(a, format="csr")
-        upper.sort_indices()
-        if not (np.array_equal(upper.indptr, self._indptr)
-                and np.array_equal(upper.indices, self._indices)):
+        """The upper triangle of ``a`` by the index map of the analysed pattern."""
+        if not (np.array_equal(a.indptr, self._indptr) and np.array_equal(a.indices, self._indices)):
             raise InputError("matrix sparsity pattern differs from the analysed one")
-        return upper
+        return sp.csr_matrix((a.data[self._upper_mask], self._upper_indices, self._upper_indptr),
+                             shape=(self.n, self.n))
 
     def _run(self, phase: int, upper: sp.csr_matrix, b: np.ndarray) -> np.ndarray:
         self._solver.set_phase(phase)
@@ -131,11 +150,6 @@ class _PardisoPattern:
             return self._run(33, upper, np.asfortranarray(b))
 
         return Factor(solve, self.n)
-
-    def __del__(self):
-        solver = getattr(self, "_solver", None)
-        if solver is not None:
-            solver.free_memory(everything=True)
 
 
 class SymbolicFactorization:

@@ -80,3 +80,20 @@ def gltf_to_glb(gltf_path, glb_path):
         out.write(struct.pack("<4sII", b"glTF", 2, total))
         out.write(struct.pack("<I4s", len(text), b"JSON") + text)
         out.write(struct.pack("<I4s", len(payload), b"BIN\0") + payload)
+
+
+def open_cylinder(n_axial: int, n_around: int, length: float = 1.0, radius: float = 1.0):
+    """Open cylinder along z: ``n_axial`` rings of ``n_around`` vertices, ``z ∈ [0, length]``.
+
+    Every quad between rings is split along the same diagonal, so all
+    triangles are congruent right triangles; vertex ``i * n_around + j`` sits
+    on ring ``i`` at angle ``2πj / n_around``.  Returns ``(vertices, faces)``.
+    """
+    z = np.linspace(0.0, length, n_axial)
+    t = 2 * np.pi * np.arange(n_around) / n_around
+    zz, tt = np.meshgrid(z, t, indexing="ij")
+    v = np.c_[radius * np.cos(tt.ravel()), radius * np.sin(tt.ravel()), zz.ravel()]
+    idx = np.arange(n_axial * n_around).reshape(n_axial, n_around)
+    nxt = np.roll(idx, -1, axis=1)
+    p, q, r, s = idx[:-1].ravel(), idx[1:].ravel(), nxt[1:].ravel(), nxt[:-1].ravel()
+    return v, np.concatenate([np.c_[p, s, r], np.c_[p, r, q]])
