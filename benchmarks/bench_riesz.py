@@ -1,0 +1,351 @@
+"""Riesz transform / monogenic benchmark over the public models in ../shared/data (not a test).
+
+Part 1 — the paper's Fig. 2(h).  The 4,098-vertex octahedron: the vertices
+of ``sphere_oct4098.ply`` (a subdivided octahedron projected on the unit
+sphere) mapped back to the octahedron ``|x|+|y|+|z| = 1``, with the paper's
+centroid-distance signal.  (On the projected sphere that signal is constant
+up to float32 rounding, std 1.6e-8, so the flat-faced model is the one the
+figure can mean.)  ``spectral`` with 50, 150, 300, 600 and 1500 eigenpairs
+(Eq. 18) and ``quadrature`` are compared with ``dense`` (Eq. 16).
+
+Part 2 — the model ladder.  Per model, 15 IMF-like signals: band-passes of
+the mean curvature ``H`` (Eq. 24) between 16 heat-smoothing scales
+``u_t = (M + tL)⁻¹ M H``, ``t`` geometric from the squared mean edge
+length to ``(diagonal/4)²`` (finest band first: ``H − u_{t_1}``).  Riesz
+transform + monogenic quantities of all 15 at once with ``quadrature``
+(default tol 1e-8) and ``spectral`` (300 eigenpairs), each in its own
+subprocess for its own peak memory; errors against ``quadrature`` at
+tol 1e-12.
+
+Timed: :func:`hht3d.riesz.spectral_bounds` (quadrature) or
+:func:`hht3d.riesz.smallest_eigenpairs` (spectral), then
+:func:`hht3d.monogenic.monogenic`.  Not timed: loading, ``L``, ``M`` and the
+gradient operator (shared by both methods; reported apart), and
+pypardiso's search for the MKL library (looked up once, passed to the
+workers as ``PYPARDISO_MKL_RT``).  OpenBLAS (dense eigensolver, ARPACK's
+orthogonalisation) runs single-threaded by default (``--blas-threads``): on
+this shared 2-core machine its spinning threads made ARPACK with 300
+eigenpairs 9× slower (rocker_arm: 86 s against 10 s).  Peak memory: the worker's peak resident
+set size during the timed part (``/proc/self/clear_refs`` resets it).
+
+Usage::
+
+    python benchmarks/bench_riesz.py [--models NAME ...] [--without-igea] [--skip-fig2]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT.parent / "shared" / "data"
+RESULTS = ROOT / "benchmarks" / "results"
+SCRATCH = RESULTS / "scratch"
+MODELS = ["spot", "sphere_oct4098", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti",
+          "igea"]
+FIG2_EIGENPAIRS = [50, 150, 300, 600, 1500]
+N_SIGNALS = 15
+SPECTRAL_EIGENPAIRS = 300
+REFERENCE_TOL = 1e-12
+#: Paper Table 1, RT column: (vertices, IMFs, seconds), MATLAB 2014 on a 4-core i7.
+PAPER_RT = [(4098, 3, 5.13), (13424, 5, 24.37), (31124, 8, 110.81), (61563, 13, 238.76),
+            (100003, 15, 356.13)]
+
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+
+# -- measurement helpers ---------------------------------------------------------------------------
+
+def _status_mb(field: str) -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(field + ":"):
+            return int(line.split()[1]) / 1024.0
+    return float("nan")
+
+
+def _reset_peak() -> float:
+    """Reset the peak RSS (VmHWM) to the current RSS; return the current RSS in MB."""
+    try:
+        Path("/proc/self/clear_refs").write_text("5")
+    except OSError:
+        pass
+    return _status_mb("VmRSS")
+
+
+def _m_error(mass, approx, exact) -> np.ndarray:
+    """Relative M-norm error per signal (last axes summed)."""
+    axes = tuple(range(1, exact.ndim))
+    w = mass.reshape((1, -1) + (1,) * (exact.ndim - 2))
+    return np.sqrt(np.sum((approx - exact) ** 2 * w, axis=axes) / np.sum(exact ** 2 * w, axis=axes))
+
+
+def _clear_riesz_cache(surface) -> None:
+    for key in [k for k in surface.cache if k.startswith("riesz:")]:
+        del surface.cache[key]
+
+
+# -- part 1: Fig. 2(h) ----------------------------------------------------------------------------
+
+def run_fig2() -> dict:
+    import hht3d
+    from hht3d.riesz import fractional_laplacian, vertex_gradient
+    from hht3d.signals import centroid_distance
+
+    sphere = hht3d.load(DATA / "sphere_oct4098.ply")
+    v = sphere.vertices / np.abs(sphere.vertices).sum(axis=1, keepdims=True)
+    surface = hht3d.Surface(v, sphere.faces, name="octahedron4098")
+    f = centroid_distance(surface)
+    mass = surface.mass_diagonal
+    surface.gradient("lsq")
+
+    def run(method, **options):
+        _clear_riesz_cache(surface)
+        t0 = time.perf_counter()
+        u = fractional_laplacian(surface, f, method=method, **options)
+        seconds = time.perf_counter() - t0
+        return u, vertex_gradient(surface, u, "lsq"), seconds
+
+    u_ref, r_ref, dense_seconds = run("dense")
+    magnitude = np.linalg.norm(r_ref, axis=1)
+    rows = []
+
+    def record(label, u, r, seconds):
+        error = np.abs(np.linalg.norm(r, axis=1) - magnitude)
+        rows.append({"method": label, "seconds": seconds,
+                     "mean_magnitude_error": float(error.mean()),
+                     "relative_mean_magnitude_error": float(error.mean() / magnitude.mean()),
+                     "max_magnitude_error": float(error.max()),
+                     "relative_m_error_L-1/2": float(_m_error(mass, u[None], u_ref[None])[0])})
+
+    for p in FIG2_EIGENPAIRS:
+        record(f"spectral({p})", *run("spectral", eigenpairs=p))
+    for tol in (1e-8, 1e-12):
+        record(f"quadrature(tol={tol:g})", *run("quadrature", tol=tol))
+    return {"model": "octahedron from sphere_oct4098", "vertices": surface.n_vertices,
+            "signal": "centroid distance", "dense_seconds": dense_seconds,
+            "mean_riesz_magnitude": float(magnitude.mean()), "rows": rows}
+
+
+# -- part 2: model ladder -------------------------------------------------------------------------
+
+def band_signals(surface) -> np.ndarray:
+    """15 band-passes of the mean curvature between heat-smoothing scales."""
+    from hht3d import linalg
+    from hht3d.signals import mean_curvature
+
+    h = mean_curvature(surface)
+    coo = surface.adjacency.tocoo()
+    edge = np.linalg.norm(surface.vertices[coo.row] - surface.vertices[coo.col], axis=1).mean()
+    times = np.geomspace(edge ** 2, (surface.bounding_box_diagonal / 4) ** 2, N_SIGNALS + 1)
+    mass = surface.mass_diagonal
+    smooth = [h] + [linalg.factorize(surface.mass + t * surface.stiffness).solve(mass * h) for t in times]
+    return np.stack([smooth[i] - smooth[i + 1] for i in range(N_SIGNALS)])
+
+
+def _load(name: str):
+    import hht3d
+
+    t0 = time.perf_counter()
+    surface = hht3d.load(DATA / f"{name}.ply")
+    surface.stiffness, surface.gradient("lsq")
+    operators = time.perf_counter() - t0
+    return surface, operators
+
+
+def run_worker(name: str, method: str) -> dict:
+    from hht3d.riesz import fractional_laplacian, quadrature_nodes, smallest_eigenpairs, spectral_bounds
+    from hht3d.monogenic import monogenic
+
+    surface, operators = _load(name)
+    signals = band_signals(surface)
+    baseline = _reset_peak()
+    t0 = time.perf_counter()
+    if method == "quadrature":
+        spectral_bounds(surface)
+    else:
+        smallest_eigenpairs(surface, SPECTRAL_EIGENPAIRS)
+    t1 = time.perf_counter()
+    result = monogenic(surface, signals, method=method, eigenpairs=SPECTRAL_EIGENPAIRS)
+    t2 = time.perf_counter()
+    peak = _status_mb("VmHWM")
+    arrays = {"u": fractional_laplacian(surface, signals, method=method, eigenpairs=SPECTRAL_EIGENPAIRS),
+              "riesz": result.riesz, "amplitude": result.amplitude, "frequency": result.frequency,
+              "mass": surface.mass_diagonal}
+    record = {"model": name, "method": method, "vertices": surface.n_vertices,
+              "signals": len(signals), "operators_seconds": operators,
+              "setup_seconds": t1 - t0, "monogenic_seconds": t2 - t1, "seconds": t2 - t0,
+              "baseline_rss_mb": baseline, "peak_rss_mb": peak}
+    if method == "quadrature":
+        m, mbar = spectral_bounds(surface)
+        record.update(condition=mbar / m, shifts=len(quadrature_nodes(m, mbar, 1e-8)[0]))
+        reference = monogenic(surface, signals, tol=REFERENCE_TOL)
+        arrays.update(u_ref=fractional_laplacian(surface, signals, tol=REFERENCE_TOL),
+                      riesz_ref=reference.riesz, amplitude_ref=reference.amplitude,
+                      frequency_ref=reference.frequency)
+    SCRATCH.mkdir(parents=True, exist_ok=True)
+    np.savez(SCRATCH / f"riesz_{name}_{method}.npz", **arrays)
+    return record
+
+
+def errors(name: str, method: str) -> dict:
+    """Errors of one method against the tight-tolerance quadrature reference."""
+    ours = np.load(SCRATCH / f"riesz_{name}_{method}.npz")
+    ref = np.load(SCRATCH / f"riesz_{name}_quadrature.npz")
+    mass = ref["mass"]
+    weight = ref["amplitude_ref"] ** 2 * mass
+    freq = np.sum(weight * np.abs(ours["frequency"] - ref["frequency_ref"]), axis=1) / np.sum(
+        weight * ref["frequency_ref"], axis=1)
+    riesz = _m_error(mass, ours["riesz"], ref["riesz_ref"])
+    return {"L-1/2": float(_m_error(mass, ours["u"], ref["u_ref"]).max()),
+            "riesz": float(riesz.max()),
+            "amplitude": float(_m_error(mass, ours["amplitude"], ref["amplitude_ref"]).max()),
+            "frequency": float(freq.max()),
+            "riesz_per_signal_fine_to_coarse": riesz.tolist()}
+
+
+# -- reporting ----------------------------------------------------------------------------------------
+
+def _fmt(x, digits=2) -> str:
+    return f"{x:.{digits}f}" if abs(x) >= 0.01 else f"{x:.1e}"
+
+
+def paper_rt(vertices: int) -> float:
+    """Paper Table 1 RT seconds interpolated log-log in the vertex count (clamped)."""
+    v = np.log([p[0] for p in PAPER_RT])
+    s = np.log([p[2] for p in PAPER_RT])
+    return float(np.exp(np.interp(np.log(vertices), v, s)))
+
+
+def markdown(fig2: dict | None, ladder: list[dict], meta: dict) -> str:
+    out = ["# Riesz transform and monogenic signal benchmark", "",
+           f"Machine: {meta['machine']}; {meta['cpus']} CPUs (shared with other jobs, load average "
+           f"{meta['load_average']}); backend `{meta['backend']}`; OpenBLAS threads "
+           f"{meta['openblas_threads']}; Python {meta['python']}.  "
+           "Generated by `python benchmarks/bench_riesz.py`; the method is in its docstring.", ""]
+    if fig2:
+        out += ["## Fig. 2(h): truncated eigen-expansion vs. the exact transform", "",
+                f"{fig2['model']} ({fig2['vertices']} vertices), signal: {fig2['signal']}; reference "
+                f"`dense` ({_fmt(fig2['dense_seconds'])} s).  Magnitude error = mean over vertices of "
+                "| |Rf| − |Rf|_dense |, as in the paper's plot, also relative to the mean |Rf|_dense.", "",
+                "| method | seconds | mean magnitude error | relative | max magnitude error "
+                "| rel. M-norm error of L^-1/2 f |", "|---|---|---|---|---|---|"]
+        for r in fig2["rows"]:
+            out.append(f"| {r['method']} | {_fmt(r['seconds'])} | {r['mean_magnitude_error']:.2e} | "
+                       f"{r['relative_mean_magnitude_error']:.2e} | {r['max_magnitude_error']:.2e} | "
+                       f"{r['relative_m_error_L-1/2']:.2e} |")
+        out.append("")
+    if ladder:
+        out += ["## Model ladder: 15 band-passed mean-curvature signals, Riesz + monogenic", "",
+                "Seconds: bounds or eigenpairs + `monogenic()` of all 15 signals (operators L, M, "
+                "gradient built beforehand, `ops s`).  Errors: largest over the 15 signals, relative, "
+                f"against `quadrature` at tol {REFERENCE_TOL:g} — M-norm for L^-1/2 f, Riesz vectors and "
+                "amplitude; energy-weighted mean |Δω|/ω for the frequency.  Peak RSS during the timed "
+                "part.  Paper: Table 1 RT column interpolated at this vertex count (their IMF counts, "
+                "3–15, MATLAB, 300 eigenpairs).", "",
+                "| model | #V | ops s | method | shifts / κ | seconds | peak RSS MB | err L^-1/2 | err Riesz "
+                "| err amplitude | err frequency | speed-up | error ratio | paper RT s |",
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for q, s in ladder:
+            for r in (q, s):
+                e = r["errors"]
+                extra = (f"{r['shifts']} / {r['condition']:.1e}" if r["method"] == "quadrature"
+                         else str(SPECTRAL_EIGENPAIRS) + " pairs")
+                speed = f"{s['seconds'] / q['seconds']:.1f}x" if r is q else ""
+                ratio = f"{s['errors']['riesz'] / max(q['errors']['riesz'], 1e-300):.1e}x" if r is q else ""
+                out.append(f"| {r['model']} | {r['vertices']:,} | {_fmt(r['operators_seconds'])} "
+                           f"| {r['method']} "
+                           f"| {extra} | {_fmt(r['seconds'])} | {r['peak_rss_mb']:.0f} | {e['L-1/2']:.1e} "
+                           f"| {e['riesz']:.1e} | {e['amplitude']:.1e} | {e['frequency']:.1e} | {speed} "
+                           f"| {ratio} | {_fmt(paper_rt(r['vertices']), 1) if r is q else ''} |")
+        out += ["", "Speed-up: spectral(300) seconds / quadrature seconds in the same run.  Error ratio: "
+                "spectral(300) Riesz error / quadrature Riesz error.", "",
+                "Relative Riesz error of spectral(300) per band, finest to coarsest:", "",
+                "| model | " + " | ".join(str(i + 1) for i in range(N_SIGNALS)) + " |",
+                "|---|" + "---|" * N_SIGNALS]
+        for _, s in ladder:
+            bands = s["errors"]["riesz_per_signal_fine_to_coarse"]
+            out.append(f"| {s['model']} | " + " | ".join(f"{x:.0e}" for x in bands) + " |")
+        out.append("")
+    return "\n".join(out)
+
+
+# -- driver -------------------------------------------------------------------------------------------
+
+def _mkl_environment() -> tuple[dict, float | None]:
+    """Environment for the workers with ``PYPARDISO_MKL_RT`` set, and the lookup time."""
+    env = dict(os.environ)
+    try:
+        import pypardiso
+    except ImportError:
+        return env, None
+    t0 = time.perf_counter()
+    solver = pypardiso.PyPardisoSolver()
+    lookup = time.perf_counter() - t0
+    env.setdefault("PYPARDISO_MKL_RT", solver.libmkl._name)
+    return env, lookup
+
+
+def _worker(args: list[str], env: dict) -> dict:
+    done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--worker", *args],
+                          capture_output=True, text=True, env=env)
+    if done.returncode != 0:
+        raise RuntimeError(f"worker {args} failed:\n{done.stderr}")
+    return json.loads(done.stdout)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--models", nargs="*", default=None, help="model names (default: the ladder)")
+    parser.add_argument("--without-igea", action="store_true", help="leave out igea (134k vertices)")
+    parser.add_argument("--skip-fig2", action="store_true", help="leave out the Fig. 2(h) part")
+    parser.add_argument("--blas-threads", type=int, default=1, help="OpenBLAS threads of the workers")
+    parser.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.worker:
+        record = run_fig2() if args.worker == ["fig2"] else run_worker(*args.worker)
+        json.dump(record, sys.stdout)
+        return 0
+    from hht3d import linalg
+
+    env, lookup = _mkl_environment()
+    env["OPENBLAS_NUM_THREADS"] = str(args.blas_threads)
+    fig2 = None
+    if not args.skip_fig2 and (DATA / "sphere_oct4098.ply").is_file():
+        fig2 = _worker(["fig2"], env)
+        print("fig2 done", file=sys.stderr)
+    names = args.models or [m for m in MODELS if not (args.without_igea and m == "igea")]
+    ladder = []
+    for name in names:
+        if not (DATA / f"{name}.ply").is_file():
+            print(f"skip {name}: {DATA / (name + '.ply')} not present", file=sys.stderr)
+            continue
+        pair = [_worker([name, method], env) for method in ("quadrature", "spectral")]
+        for r in pair:
+            r["errors"] = errors(name, r["method"])
+        for r in pair:
+            (SCRATCH / f"riesz_{name}_{r['method']}.npz").unlink()
+        ladder.append(pair)
+        q, s = pair
+        print(f"{name}: {q['vertices']} V, quadrature {q['seconds']:.2f} s (err {q['errors']['riesz']:.1e}), "
+              f"spectral {s['seconds']:.2f} s (err {s['errors']['riesz']:.1e})", file=sys.stderr)
+    meta = {"machine": platform.platform(), "cpus": os.cpu_count(), "backend": linalg.default_backend(),
+            "python": platform.python_version(), "load_average": [round(x, 1) for x in os.getloadavg()],
+            "pypardiso_mkl_lookup_seconds": lookup, "openblas_threads": args.blas_threads,
+            "paper_table1_rt": PAPER_RT}
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / "riesz.json").write_text(json.dumps({"meta": meta, "fig2": fig2, "ladder": ladder}, indent=1))
+    (RESULTS / "riesz.md").write_text(markdown(fig2, ladder, meta))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
