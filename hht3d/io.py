@@ -32,6 +32,8 @@ __all__ = [
     "write_ply",
     "write_npz",
     "write_colored_ply",
+    "field_colors",
+    "resolve_inputs",
 ]
 
 MESH_EXTENSIONS = (".ply", ".obj", ".off", ".stl", ".glb", ".gltf")
@@ -331,3 +333,35 @@ def write_colored_ply(path, surface: Surface, values, *, cmap: str = "viridis", 
     values are kept as attribute ``name``."""
     values = _per_vertex(surface, name, values)
     return write_ply(path, surface, {name: values}, colors=field_colors(values, cmap=cmap, limits=limits))
+
+
+def resolve_inputs(spec) -> list[Path]:
+    """Expand an input spec into files: a file, a folder (its mesh/point files),
+    a glob pattern, or a list of these.  Order is sorted and duplicates dropped.
+
+    Raises
+    ------
+    InputError
+        A named file is missing, or a folder/glob matches no usable file.
+    """
+    import glob
+
+    specs = [spec] if isinstance(spec, (str, Path)) else list(spec)
+    found: list[Path] = []
+    usable = set(MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS)
+    for item in specs:
+        text = str(item)
+        path = Path(text)
+        if path.is_dir():
+            matches = sorted(p for p in path.iterdir() if p.suffix.lower() in usable and p.is_file())
+        elif any(ch in text for ch in "*?["):
+            matches = sorted(Path(p) for p in glob.glob(text, recursive=True))
+        elif path.is_file():
+            matches = [path]
+        else:
+            raise InputError(f"{text}: no such file or folder")
+        if not matches:
+            raise InputError(f"{text}: matches no mesh or point-cloud file "
+                             f"({', '.join(sorted(usable))})")
+        found.extend(matches)
+    return list(dict.fromkeys(found))

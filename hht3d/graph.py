@@ -1,0 +1,190 @@
+"""Lazy task-graph API: every HHT stage as a ``dask.delayed`` task.
+
+This layer adds laziness only; each task calls one core function.  Stages
+compose freely and run on any scheduler of :mod:`hht3d.scheduling`:
+
+>>> from hht3d import graph
+>>> s = graph.load("model.ply")
+>>> f = graph.signal(s, "mean_curvature")
+>>> result = graph.hht(s, f)                  # EMD -> Riesz shift groups -> spectra
+>>> graph.compute(graph.save(result, "out/model_hht.ply"), scheduler="processes")
+
+Parallelism follows the method:
+
+* independent signals give independent :func:`emd` tasks; EEMD members are
+  tasks of their own (:func:`eemd`);
+* the Riesz transform of all IMFs is a sum over quadrature shifts
+  (:mod:`hht3d.riesz`): one task finds the spectral bounds and shifts, then
+  ``riesz_tasks`` independent *shift-group* tasks each factorize their shifts
+  once and solve all IMFs as one multi-column right-hand side; they depend
+  only on the EMD task and the surface, and factorizations never leave a task.
+  (One task per IMF would repeat every factorization once per IMF.);
+* the files of a dataset are independent subgraphs (:mod:`hht3d.dataset`).
+
+A surface or array enters a graph once, as one key, and is shared by
+reference between the tasks that use it.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from dask import delayed
+
+from .emd import combine_eemd, eemd_member
+from .emd import emd as _emd
+from .hht import HHTResult
+from .io import load as _load
+from .monogenic import monogenic_from_potential
+from .riesz import combine_quadrature_parts, fractional_laplacian, quadrature_part, quadrature_plan
+from .signals import signal as _signal
+from .scheduling import compute
+from .surface import Surface
+
+__all__ = [
+    "Builder",
+    "compute",
+    "load",
+    "from_surface",
+    "operators",
+    "signal",
+    "emd",
+    "eemd",
+    "riesz_potential",
+    "monogenic",
+    "hht",
+    "save",
+    "transform",
+    "transform_file",
+]
+
+
+class Builder:
+    """Makes the tasks of a graph.
+
+    Parameters
+    ----------
+    guard : callable, optional
+        ``guard(step, func) -> callable`` wrapping every task's function; the
+        dataset runner uses it to isolate failures per file
+        (:class:`hht3d.dataset.Failure`).  Default: tasks raise normally.
+    """
+
+    def __init__(self, guard=None):
+        self.guard = guard
+
+    def task(self, step: str, func):
+        """A ``dask.delayed`` of ``func`` named after ``step``."""
+        return delayed(func if self.guard is None else self.guard(step, func), pure=True)
+
+
+_PLAIN = Builder()
+
+
+def load(path, **options):
+    """Lazy :func:`hht3d.io.load`."""
+    return _PLAIN.task("load", _load)(str(path), **options)
+
+
+def from_surface(surface: Surface):
+    """Put an in-memory surface into the graph once, as a single key."""
+    return delayed(surface, name=f"surface-{surface.name}-{id(surface):x}")
+
+
+def _with_operators(surface: Surface) -> Surface:
+    """Build the cached Laplacian, mass and normals (shared under the threads scheduler)."""
+    _ = surface.stiffness, surface.mass, surface.normals
+    return surface
+
+
+def operators(surface):
+    """Lazy operator build: under a process scheduler each task rebuilds them anyway."""
+    return _PLAIN.task("operators", _with_operators)(surface)
+
+
+def signal(surface, kind: str, **options):
+    """Lazy :func:`hht3d.signals.signal` (``"mean_curvature"``, ``"x"``, ``"stored"``, ...)."""
+    return _PLAIN.task("signal", _signal)(surface, kind, **options)
+
+
+def emd(surface, signal, **options):
+    """Lazy :func:`hht3d.emd.emd` of one signal: one task."""
+    return _PLAIN.task("emd", _emd)(surface, signal, **options)
+
+
+def eemd(surface, signal, *, ensemble_size: int = 100, noise_std: float = 0.2, seed: int = 0,
+         builder: Builder = _PLAIN, **options):
+    """Lazy ensemble EMD: one task per member (:func:`hht3d.emd.eemd_member`), one averaging task."""
+    member = builder.task("eemd_member", eemd_member)
+    members = [member(surface, signal, i, seed, noise_std, **options) for i in range(ensemble_size)]
+    return builder.task("eemd_combine", combine_eemd)(signal, members)
+
+
+def _imfs(decomposition) -> object:
+    return decomposition.imfs
+
+
+def riesz_potential(surface, imfs, *, method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
+                    backend: str | None = None, riesz_tasks: int = 4, builder: Builder = _PLAIN):
+    """Lazy ``L^{-1/2}`` of all IMFs, ``(k, n)``.
+
+    ``method="quadrature"``: a bounds task, ``riesz_tasks`` shift-group tasks
+    (:func:`hht3d.riesz.quadrature_part`) and a summing task.  Other methods:
+    one task (:func:`hht3d.riesz.fractional_laplacian`).
+    """
+    if method != "quadrature":
+        return builder.task("riesz", fractional_laplacian)(
+            surface, imfs, -0.5, method, tol, eigenpairs, backend)
+    plan = builder.task("riesz_bounds", quadrature_plan)(surface, tol, backend)
+    part = builder.task("riesz_shifts", quadrature_part)
+    parts = [part(surface, imfs, plan, group, riesz_tasks, backend) for group in range(riesz_tasks)]
+    return builder.task("riesz_sum", combine_quadrature_parts)(surface, parts)
+
+
+def monogenic(surface, imfs, potential, *, gradient: str = "lsq", builder: Builder = _PLAIN):
+    """Lazy :func:`hht3d.monogenic.monogenic_from_potential` (Eqs. 21–23)."""
+    return builder.task("monogenic", monogenic_from_potential)(surface, imfs, potential, gradient)
+
+
+def transform(builder: Builder, surface, signal, *, emd_options: dict | None = None,
+              ensemble: dict | None = None,
+              gradient: str = "lsq", method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
+              backend: str | None = None, riesz_tasks: int = 4) -> dict:
+    """The tasks of one HHT, by stage name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
+
+    ``ensemble``: EEMD options (``ensemble_size``, ``noise_std``, ``seed``)
+    to decompose with ensemble EMD instead of EMD.
+    """
+    emd_options = {"backend": backend, **(emd_options or {})}
+    if ensemble is not None:
+        decomposition = eemd(surface, signal, builder=builder, **ensemble, **emd_options)
+    else:
+        decomposition = builder.task("emd", _emd)(surface, signal, **emd_options)
+    imfs = builder.task("imfs", _imfs)(decomposition)
+    potential = riesz_potential(surface, imfs, method=method, tol=tol, eigenpairs=eigenpairs,
+                                backend=backend, riesz_tasks=riesz_tasks, builder=builder)
+    mono = monogenic(surface, imfs, potential, gradient=gradient, builder=builder)
+    riesz_options = {"gradient": gradient, "method": method, "tol": tol, "eigenpairs": eigenpairs}
+    result = builder.task("hht", HHTResult.from_parts)(surface, signal, decomposition, mono, riesz_options)
+    return {"emd": decomposition, "imfs": imfs, "riesz": potential, "monogenic": mono, "hht": result}
+
+
+def transform_file(builder: Builder, path, signal: str = "mean_curvature", load_options: dict | None = None,
+                   **options) -> dict:
+    """:func:`transform` of one file's signal, with its ``load`` and ``signal`` tasks."""
+    surface = builder.task("load", _load)(str(path), **(load_options or {}))
+    values = builder.task("signal", _signal)(surface, signal)
+    return {"load": surface, "signal": values, **transform(builder, surface, values, **options)}
+
+
+def hht(surface, signal, **options):
+    """Lazy :class:`hht3d.hht.HHTResult` of one signal; options as in :func:`transform`."""
+    return transform(_PLAIN, surface, signal, **options)["hht"]
+
+
+def _save(result, path) -> Path:
+    return result.save(path)
+
+
+def save(result, path):
+    """Lazy ``result.save(path)`` (atomic PLY or npz write); returns the path."""
+    return _PLAIN.task("save", _save)(result, str(path))
