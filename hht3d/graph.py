@@ -28,7 +28,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 from dask import delayed
+from dask.base import tokenize
 
 from .emd import combine_eemd, eemd_member
 from .emd import emd as _emd
@@ -45,6 +47,7 @@ __all__ = [
     "compute",
     "load",
     "from_surface",
+    "as_key",
     "operators",
     "signal",
     "emd",
@@ -73,8 +76,17 @@ class Builder:
         self.guard = guard
 
     def task(self, step: str, func):
-        """A ``dask.delayed`` of ``func`` named after ``step``."""
-        return delayed(func if self.guard is None else self.guard(step, func), pure=True)
+        """A ``dask.delayed`` of ``func`` named after ``step``.
+
+        In-memory surfaces and arrays among its arguments enter the graph once,
+        as their own keys (:func:`as_key`), instead of being copied into every task.
+        """
+        wrapped = delayed(func if self.guard is None else self.guard(step, func), pure=True)
+
+        def call(*args, **kwargs):
+            return wrapped(*map(as_key, args), **{k: as_key(v) for k, v in kwargs.items()})
+
+        return call
 
 
 _PLAIN = Builder()
@@ -88,6 +100,15 @@ def load(path, **options):
 def from_surface(surface: Surface):
     """Put an in-memory surface into the graph once, as a single key."""
     return delayed(surface, name=f"surface-{surface.name}-{id(surface):x}")
+
+
+def as_key(value):
+    """A surface or array as one graph key (Delayed objects and small values pass through)."""
+    if isinstance(value, Surface):
+        return from_surface(value)
+    if isinstance(value, np.ndarray) and value.size > 64:
+        return delayed(value, name=f"array-{tokenize(value)}")
+    return value
 
 
 def _with_operators(surface: Surface) -> Surface:

@@ -119,6 +119,14 @@ def test_bad_arrays_give_clear_errors():
         Surface(v[:, :2])
 
 
+def _current_umask() -> int:
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def test_atomic_write_leaves_nothing_on_failure(tmp_path):
     target = tmp_path / "x.npz"
     with pytest.raises(RuntimeError):
@@ -128,6 +136,7 @@ def test_atomic_write_leaves_nothing_on_failure(tmp_path):
     assert list(tmp_path.iterdir()) == []
     write_npz(target, {"a": np.arange(3)})
     assert np.load(target)["a"].tolist() == [0, 1, 2]
+    assert target.stat().st_mode & 0o777 == 0o666 & ~_current_umask()  # like an ordinary write
 
 
 def test_colored_ply_uses_colormap(tmp_path, sphere):
