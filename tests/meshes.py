@@ -97,3 +97,38 @@ def open_cylinder(n_axial: int, n_around: int, length: float = 1.0, radius: floa
     nxt = np.roll(idx, -1, axis=1)
     p, q, r, s = idx[:-1].ravel(), idx[1:].ravel(), nxt[1:].ravel(), nxt[:-1].ravel()
     return v, np.concatenate([np.c_[p, s, r], np.c_[p, r, q]])
+
+
+def bump_band_sphere(subdivisions: int = 5, waves: int = 20, amplitude: float = 0.005):
+    """Unit icosphere carrying a band of ``waves`` bumps around the equator, along the normal.
+
+    The displacement is ``amplitude · cos(waves·φ) · sin^waves(θ)``: the sectoral
+    spherical harmonic ``Y_l^l`` (``l = waves``) scaled to a peak of 1, an
+    eigenfunction of the sphere's Laplacian with ``λ = l(l+1)``, so the bumps
+    have the single scale ``ω = √(l(l+1))`` radians per unit length; it decays
+    away from the equator over a polar width of about ``1/√l``.
+
+    Returns ``(vertices, faces, clean_vertices, bumps)`` with ``bumps`` the
+    unit-peak pattern and ``clean_vertices`` on the unit sphere.
+    """
+    clean, faces = icosphere(subdivisions)
+    x, y, z = clean.T
+    bumps = np.cos(waves * np.arctan2(y, x)) * np.clip(1 - z ** 2, 0, None) ** (waves / 2)
+    return clean * (1 + amplitude * bumps)[:, None], faces, clean, bumps
+
+
+def height_field_grid(nx: int = 30, ny: int = 30, height: float = 0.15):
+    """Open curved patch: :func:`grid` on ``[0, 1]²`` lifted to ``z = height·sin(2πx)·cos(πy)``."""
+    v, f = grid(nx, ny)
+    v[:, 2] = height * np.sin(2 * np.pi * v[:, 0]) * np.cos(np.pi * v[:, 1])
+    return v, f
+
+
+def disjoint_union(*meshes):
+    """Concatenate ``(vertices, faces)`` pairs into one mesh with separate components."""
+    vertices, faces, offset = [], [], 0
+    for v, f in meshes:
+        vertices.append(np.asarray(v, dtype=float))
+        faces.append(np.asarray(f) + offset)
+        offset += len(v)
+    return np.vstack(vertices), np.vstack(faces)

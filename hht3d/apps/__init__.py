@@ -1,0 +1,43 @@
+"""Applications of the Hilbert–Huang transform on surfaces (Sec. 5).
+
+* :mod:`~hht3d.apps.filters` — gains ``μ(ω)`` and Hilbert-spectrum filtering
+  of a signal (Eq. 26);
+* :mod:`~hht3d.apps.reconstruction` — new vertex positions from a filtered
+  mean-curvature signal (Eq. 27), and both steps in one call;
+* :mod:`~hht3d.apps.features` — prominent feature points from IMF extrema
+  statistics (Sec. 5.2);
+* :mod:`~hht3d.apps.baselines` — the methods the paper compares with: IMF1
+  enhancement (Hu et al. 2014), manifold-harmonics filtering (Vallet & Lévy
+  2008) and heat-kernel-signature features (Sun et al. 2009).
+
+>>> from hht3d import load
+>>> from hht3d.hht import hht
+>>> from hht3d.signals import mean_curvature
+>>> from hht3d.apps import BandStop, filter_geometry, prominent_features
+>>> surface = load("model.ply")
+>>> result = hht(surface, mean_curvature(surface))
+>>> smooth = filter_geometry(result, BandStop(low=40.0, high=120.0, width=10.0))
+>>> smooth.to_open3d()                                   # or hht3d.io.write_ply(path, smooth)
+>>> features = prominent_features(surface, result.imfs)  # features.vertices, features.counts
+"""
+from .baselines import (HKS_TIME_FRACTION, heat_kernel_signature, hks_features, imf_enhancement,
+                        manifold_harmonics_filter)
+from .features import FeatureResult, features_from_counts, merge_hits, prominent_features, repeatability
+from .filters import (GAINS, BandBoost, BandStop, Constant, Gain, HighBoost, LowPass, PiecewiseLinear,
+                      filter_signal, gains_of, make_gain)
+from .reconstruction import (BOUNDARY_WEIGHT, INTERIOR_WEIGHT, check_mean_curvature_signal, filter_geometry,
+                             position_weights, reconstruct, reconstruct_from_change)
+
+__all__ = [
+    # filters (Eq. 26)
+    "Gain", "Constant", "LowPass", "HighBoost", "BandStop", "BandBoost", "PiecewiseLinear", "GAINS",
+    "make_gain", "gains_of", "filter_signal",
+    # reconstruction (Eq. 27)
+    "INTERIOR_WEIGHT", "BOUNDARY_WEIGHT", "position_weights", "reconstruct", "reconstruct_from_change",
+    "check_mean_curvature_signal", "filter_geometry",
+    # features (Sec. 5.2)
+    "FeatureResult", "prominent_features", "features_from_counts", "merge_hits", "repeatability",
+    # baselines
+    "imf_enhancement", "manifold_harmonics_filter", "heat_kernel_signature", "hks_features",
+    "HKS_TIME_FRACTION",
+]

@@ -1,0 +1,236 @@
+"""Prominent feature points from IMF extrema statistics (Sec. 5.2, Fig. 7).
+
+Each IMF ``f_k`` of a shape signal (the mean curvature of Eq. 24 by
+default) shows the shape's features at one scale.  A vertex ``v_i`` is a
+local maximum of ``f_k`` when
+
+    |N⁺_{f_k}(v_i)| ≥ t |N_2(i)|,   N⁺_{f_k}(v_i) = {j ∈ N_2(i) : f_k(v_i) ≥ f_k(v_j)},
+
+with ``N_2(i)`` its two-ring and ``t = 0.8`` by default (minima likewise
+with ``≤``); :func:`hht3d.emd.local_extrema` with ``rule="ring"``.  Counting
+over the ``K`` IMFs how often each vertex is an extremum, the *prominent*
+features are the vertices counted at least ``⌈K/2⌉`` times (the paper's
+"half of the decomposition IMF number"; ``fraction`` changes it).
+
+Hits of one feature often sit on neighbouring vertices; ``merge_radius``
+merges hits closer than that Euclidean distance (transitively) into one
+feature point, the hit with the highest count (lowest index on ties).
+
+Everything depends only on the IMF values and the mesh connectivity, so the
+features of a rigidly moved and uniformly scaled copy are the same vertices
+(the mean curvature scales by ``1/c`` and EMD's thresholds are relative).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from ..emd import local_extrema
+from ..errors import InputError
+from ..surface import Surface
+
+__all__ = ["FeatureResult", "prominent_features", "features_from_counts", "merge_hits", "repeatability"]
+
+
+@dataclass(frozen=True)
+class FeatureResult:
+    """Feature points of a surface.
+
+    Attributes
+    ----------
+    vertices : (m,) ndarray of int
+        Feature vertices, ascending (after merging, one per merged group).
+    counts : (m,) ndarray of int
+        Appearance count of each feature vertex.
+    points : (m, 3) ndarray
+        Their positions.
+    vertex_counts : (n,) ndarray of int
+        Appearance count of every vertex (how many scales it is an extremum of).
+    maxima, minima : tuple of ndarray of int
+        Local maxima and minima per scale (per IMF, finest first).
+    min_count : int
+        Count a vertex needed to be a hit.
+    hits : (h,) ndarray of int
+        Vertices reaching ``min_count``, before merging (ascending).
+    groups : (h,) ndarray of int
+        Index into ``vertices`` of the feature each hit was merged into.
+    """
+
+    vertices: np.ndarray
+    counts: np.ndarray
+    points: np.ndarray
+    vertex_counts: np.ndarray
+    maxima: tuple
+    minima: tuple
+    min_count: int
+    hits: np.ndarray
+    groups: np.ndarray
+
+    @property
+    def n_features(self) -> int:
+        return len(self.vertices)
+
+    @property
+    def n_scales(self) -> int:
+        """Number of scales counted over (IMFs for :func:`prominent_features`)."""
+        return len(self.maxima)
+
+
+def merge_hits(points: np.ndarray, scores: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """Group points closer than ``radius`` (transitively) and pick one per group.
+
+    Parameters
+    ----------
+    points : (h, 3) ndarray
+    scores : (h,) ndarray
+        The representative of a group is its highest-scoring point, the
+        first one on ties.
+    radius : float
+        Euclidean distance, model units; 0 merges nothing.
+
+    Returns
+    -------
+    representatives : (g,) ndarray of int
+        Positions in ``points`` of the representatives, ascending.
+    groups : (h,) ndarray of int
+        Index into ``representatives`` of each point's group.
+    """
+    h = len(points)
+    if radius == 0 or h == 0:
+        return np.arange(h), np.arange(h)
+    pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
+    graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(h, h))
+    _, labels = connected_components(graph, directed=False)
+    order = np.lexsort((np.arange(h), -np.asarray(scores, dtype=np.float64)))  # best first, then first index
+    _, first = np.unique(labels[order], return_index=True)
+    best = order[first]  # the best point of each label, by label
+    representatives = np.sort(best)
+    rank = np.empty(len(best), dtype=np.int64)
+    rank[np.argsort(best)] = np.arange(len(best))
+    return representatives, rank[labels]
+
+
+def _check_radius(merge_radius) -> float:
+    if merge_radius is None:
+        return 0.0
+    try:
+        r = float(merge_radius)
+    except (TypeError, ValueError):
+        raise InputError(f"merge_radius must be a number, got {merge_radius!r}") from None
+    if not (math.isfinite(r) and r >= 0):
+        raise InputError(f"merge_radius must be a finite distance >= 0, got {merge_radius!r}")
+    return r
+
+
+def _as_imfs(surface: Surface, imfs) -> np.ndarray:
+    a = getattr(imfs, "imfs", imfs)
+    try:
+        a = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError("imfs are not numeric") from None
+    if a.ndim == 1:
+        a = a[None]
+    if a.ndim != 2 or a.shape[1] != surface.n_vertices:
+        raise InputError(f"imfs must have shape (k, {surface.n_vertices}) for {surface.name}, got {a.shape}")
+    if len(a) == 0:
+        raise InputError(f"{surface.name}: the decomposition has no IMFs; there are no extrema to count")
+    if not np.all(np.isfinite(a)):
+        raise InputError("imfs have NaN or infinite values")
+    return a
+
+
+def features_from_counts(surface: Surface, maxima, minima, min_count: int,
+                         merge_radius: float | None = None, scores=None) -> FeatureResult:
+    """Count extrema over scales, keep vertices with ``count >= min_count``, merge.
+
+    Parameters
+    ----------
+    surface : Surface
+    maxima, minima : sequence of index arrays
+        Extrema per scale.
+    min_count : int
+    merge_radius : float, optional
+        See :func:`merge_hits`.
+    scores : (n,) array_like, optional
+        Ranks hits within a merged group (default: the counts).
+    """
+    r = _check_radius(merge_radius)
+    n = surface.n_vertices
+    counts = np.zeros(n, dtype=np.int64)
+    for mx, mn in zip(maxima, minima):
+        hit = np.zeros(n, dtype=bool)
+        hit[mx] = True
+        hit[mn] = True
+        counts += hit
+    hits = np.flatnonzero(counts >= min_count)
+    score = counts if scores is None else np.asarray(scores, dtype=np.float64)
+    representatives, groups = merge_hits(surface.vertices[hits], score[hits], r)
+    vertices = hits[representatives]
+    return FeatureResult(vertices=vertices, counts=counts[vertices], points=surface.vertices[vertices],
+                         vertex_counts=counts, maxima=tuple(np.asarray(m) for m in maxima),
+                         minima=tuple(np.asarray(m) for m in minima), min_count=int(min_count),
+                         hits=hits, groups=groups)
+
+
+def prominent_features(surface: Surface, imfs, *, ratio: float = 0.8, ring: int = 2,
+                       fraction: float = 0.5, merge_radius: float | None = None) -> FeatureResult:
+    """Prominent features: vertices that are IMF extrema at many scales (Sec. 5.2).
+
+    Parameters
+    ----------
+    surface : Surface
+    imfs : (k, n) array_like, EMDResult or HHTResult
+        IMFs of a shape signal, e.g. ``emd(surface, mean_curvature(surface))``.
+    ratio : float
+        The paper's ``t`` in ``(0.5, 1]``: a maximum is ``>=`` at least this
+        fraction of its ``ring``-ring (default 0.8).
+    ring : int
+        Neighbourhood in edges (default 2, the paper's two-ring).
+    fraction : float
+        A vertex is a hit when it is an extremum (maximum or minimum) of at
+        least ``⌈fraction · k⌉`` IMFs; default 0.5, the paper's half of the
+        IMF number.  In ``(0, 1]``.
+    merge_radius : float, optional
+        Merge hits closer than this (model units) into one feature point.
+
+    Returns
+    -------
+    FeatureResult
+    """
+    if not isinstance(surface, Surface):
+        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
+    f = _as_imfs(surface, imfs)
+    try:
+        fraction = float(fraction)
+    except (TypeError, ValueError):
+        raise InputError(f"fraction must be a number, got {fraction!r}") from None
+    if not 0 < fraction <= 1:
+        raise InputError(f"fraction must lie in (0, 1], got {fraction!r}")
+    _check_radius(merge_radius)
+    extrema = [local_extrema(surface, fk, rule="ring", ring=ring, ratio=ratio) for fk in f]
+    min_count = max(1, math.ceil(fraction * len(f) - 1e-9))
+    return features_from_counts(surface, [e[0] for e in extrema], [e[1] for e in extrema], min_count,
+                                merge_radius)
+
+
+def repeatability(points, reference, radius: float) -> float:
+    """Fraction of ``points`` with a point of ``reference`` within ``radius``.
+
+    The measure of the paper's Fig. 8 comparison: features found on a
+    perturbed copy, mapped to common positions, against the original's.
+    Returns ``nan`` when ``points`` is empty.
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    q = np.asarray(reference, dtype=np.float64).reshape(-1, 3)
+    radius = _check_radius(radius)
+    if len(p) == 0:
+        return float("nan")
+    if len(q) == 0:
+        return 0.0
+    distance, _ = cKDTree(q).query(p, k=1)
+    return float(np.mean(distance <= radius))

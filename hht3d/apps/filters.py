@@ -1,0 +1,358 @@
+"""Filtering a surface signal through its Hilbert spectrum (Sec. 5.1, Eqs. 25–26).
+
+The Hilbert–Huang transform writes a signal as (Eq. 25)
+
+    s = Re Σ_k a_k e^{i ∫ω_k} + r_N = Σ_k a_k cos φ_k + r_N,
+
+with local amplitude ``a_k``, phase ``φ_k`` and instantaneous frequency
+``ω_k`` of IMF ``k`` at every vertex (:mod:`hht3d.monogenic`).  A filter is
+a gain ``μ(ω)`` applied per vertex and IMF (Eq. 26):
+
+    s' = Σ_k μ(ω_k) a_k cos φ_k + r_N.
+
+Since ``a_k cos φ_k`` equals the IMF ``f_k`` exactly (Eqs. 21–22),
+:func:`filter_signal` computes ``s' = Σ_k μ(ω_k) f_k + r_N``; a gain of 1
+everywhere returns the signal to round-off.  The residue is never filtered.
+
+Gains
+-----
+Each gain is a small frozen dataclass, picklable and callable on an array of
+frequencies (radians per model unit of length, as :mod:`hht3d.monogenic`
+reports them; a wavelength ``ℓ`` is the frequency ``2π/ℓ``):
+
+=================  ==========================================================
+:class:`Constant`      ``μ ≡ value`` (1: identity)
+:class:`LowPass`       1 below ``cutoff``, ``stop`` above
+:class:`HighBoost`     1 below ``cutoff``, ``factor`` above (high-frequency
+                       enhancement)
+:class:`BandStop`      ``stop`` inside ``[low, high]``, 1 outside
+:class:`BandBoost`     ``factor`` inside ``[low, high]``, 1 outside
+                       (band enhancement)
+:class:`PiecewiseLinear`  linear through user points ``(ω, μ)``, constant
+                       beyond the first and last point
+=================  ==========================================================
+
+Edges are sharp by default (``width=0``; a frequency exactly on an edge
+counts as below it).  With ``width > 0`` an edge at ``e`` becomes a
+raised-cosine transition over ``[e − width/2, e + width/2]``, so that
+vertices whose frequency estimate sits near an edge are not switched on and
+off by its noise.  :func:`make_gain` builds a gain from a name and
+parameters (as a pipeline description would give them).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+
+__all__ = [
+    "Gain",
+    "Constant",
+    "LowPass",
+    "HighBoost",
+    "BandStop",
+    "BandBoost",
+    "PiecewiseLinear",
+    "GAINS",
+    "make_gain",
+    "gains_of",
+    "filter_signal",
+]
+
+
+def _finite(name: str, value) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"gain parameter {name} must be a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise InputError(f"gain parameter {name} must be finite, got {value!r}")
+    return x
+
+
+def _non_negative(name: str, value) -> float:
+    x = _finite(name, value)
+    if x < 0:
+        raise InputError(f"gain parameter {name} must be >= 0 (frequencies are non-negative), got {value!r}")
+    return x
+
+
+def _rise(omega: np.ndarray, edge: float, width: float) -> np.ndarray:
+    """0 below an edge, 1 above it; a raised cosine over ``edge ± width/2`` when ``width > 0``."""
+    if width == 0:
+        return (omega > edge).astype(np.float64)
+    t = np.clip((omega - edge) / width + 0.5, 0.0, 1.0)
+    return 0.5 - 0.5 * np.cos(np.pi * t)
+
+
+class Gain:
+    """Base class of the gains: ``gain(omega)`` returns ``μ(ω)`` with the shape of ``omega``."""
+
+    def __call__(self, omega) -> np.ndarray:
+        return self._evaluate(np.asarray(omega, dtype=np.float64))
+
+    def _evaluate(self, omega: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class Constant(Gain):
+    """``μ(ω) = value`` everywhere; ``Constant(1.0)`` leaves the signal unchanged."""
+
+    value: float = 1.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "value", _finite("value", self.value))
+
+    def _evaluate(self, omega):
+        return np.full(omega.shape, self.value)
+
+
+@dataclass(frozen=True)
+class LowPass(Gain):
+    """Keep frequencies up to ``cutoff``, multiply higher ones by ``stop`` (default 0).
+
+    Parameters
+    ----------
+    cutoff : float
+        Edge frequency, radians per unit length (``>= 0``).
+    width : float
+        Width of the raised-cosine transition centred on ``cutoff`` (0: sharp).
+    stop : float
+        Gain above the cutoff.
+    """
+
+    cutoff: float
+    width: float = 0.0
+    stop: float = 0.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "cutoff", _non_negative("cutoff", self.cutoff))
+        object.__setattr__(self, "width", _non_negative("width", self.width))
+        object.__setattr__(self, "stop", _finite("stop", self.stop))
+
+    def _evaluate(self, omega):
+        return 1.0 + (self.stop - 1.0) * _rise(omega, self.cutoff, self.width)
+
+
+@dataclass(frozen=True)
+class HighBoost(Gain):
+    """High-frequency enhancement: multiply frequencies above ``cutoff`` by ``factor``.
+
+    Parameters
+    ----------
+    cutoff : float
+        Edge frequency, radians per unit length (``>= 0``).
+    factor : float
+        Gain above the cutoff (e.g. 2.5 as in the paper's Fig. 6); 1 below.
+    width : float
+        Width of the raised-cosine transition (0: sharp).
+    """
+
+    cutoff: float
+    factor: float = 2.0
+    width: float = 0.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "cutoff", _non_negative("cutoff", self.cutoff))
+        object.__setattr__(self, "factor", _finite("factor", self.factor))
+        object.__setattr__(self, "width", _non_negative("width", self.width))
+
+    def _evaluate(self, omega):
+        return 1.0 + (self.factor - 1.0) * _rise(omega, self.cutoff, self.width)
+
+
+def _check_band(low, high, width) -> tuple[float, float, float]:
+    low, high = _non_negative("low", low), _non_negative("high", high)
+    if not low < high:
+        raise InputError(f"a band needs low < high, got low={low!r}, high={high!r}")
+    return low, high, _non_negative("width", width)
+
+
+def _band(omega: np.ndarray, low: float, high: float, width: float) -> np.ndarray:
+    """1 inside ``(low, high]``, 0 outside, with raised-cosine edges of ``width``."""
+    return _rise(omega, low, width) * (1.0 - _rise(omega, high, width))
+
+
+@dataclass(frozen=True)
+class BandStop(Gain):
+    """Multiply frequencies in the band ``(low, high]`` by ``stop`` (default 0), keep the rest.
+
+    Parameters
+    ----------
+    low, high : float
+        Band edges, radians per unit length, ``0 <= low < high``.
+    width : float
+        Width of each raised-cosine edge (0: sharp).
+    stop : float
+        Gain inside the band.
+    """
+
+    low: float
+    high: float
+    width: float = 0.0
+    stop: float = 0.0
+
+    def __post_init__(self):
+        low, high, width = _check_band(self.low, self.high, self.width)
+        object.__setattr__(self, "low", low)
+        object.__setattr__(self, "high", high)
+        object.__setattr__(self, "width", width)
+        object.__setattr__(self, "stop", _finite("stop", self.stop))
+
+    def _evaluate(self, omega):
+        return 1.0 + (self.stop - 1.0) * _band(omega, self.low, self.high, self.width)
+
+
+@dataclass(frozen=True)
+class BandBoost(Gain):
+    """Band enhancement: multiply frequencies in ``(low, high]`` by ``factor``, keep the rest.
+
+    Parameters
+    ----------
+    low, high : float
+        Band edges, radians per unit length, ``0 <= low < high``.
+    factor : float
+        Gain inside the band.
+    width : float
+        Width of each raised-cosine edge (0: sharp).
+    """
+
+    low: float
+    high: float
+    factor: float = 2.0
+    width: float = 0.0
+
+    def __post_init__(self):
+        low, high, width = _check_band(self.low, self.high, self.width)
+        object.__setattr__(self, "low", low)
+        object.__setattr__(self, "high", high)
+        object.__setattr__(self, "width", width)
+        object.__setattr__(self, "factor", _finite("factor", self.factor))
+
+    def _evaluate(self, omega):
+        return 1.0 + (self.factor - 1.0) * _band(omega, self.low, self.high, self.width)
+
+
+@dataclass(frozen=True)
+class PiecewiseLinear(Gain):
+    """A user gain: linear between points ``(ω_j, μ_j)``, constant beyond the ends.
+
+    Parameters
+    ----------
+    points : sequence of (float, float)
+        At least one point; frequencies ``>= 0`` and strictly increasing.
+    """
+
+    points: tuple
+
+    def __post_init__(self):
+        try:
+            pts = np.asarray(self.points, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError(f"PiecewiseLinear points must be (frequency, gain) pairs, got {self.points!r}") from None
+        if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) == 0:
+            raise InputError(f"PiecewiseLinear points must be a non-empty list of (frequency, gain) "
+                             f"pairs, got shape {pts.shape}")
+        if not np.all(np.isfinite(pts)):
+            raise InputError("PiecewiseLinear points must be finite")
+        if pts[0, 0] < 0 or np.any(np.diff(pts[:, 0]) <= 0):
+            raise InputError("PiecewiseLinear frequencies must be >= 0 and strictly increasing, "
+                             f"got {pts[:, 0].tolist()}")
+        object.__setattr__(self, "points", tuple(map(tuple, pts.tolist())))
+
+    def _evaluate(self, omega):
+        pts = np.asarray(self.points)
+        return np.interp(omega, pts[:, 0], pts[:, 1])
+
+
+#: Gain classes by name, for configuration files.
+GAINS = {
+    "constant": Constant,
+    "low_pass": LowPass,
+    "high_boost": HighBoost,
+    "band_stop": BandStop,
+    "band_boost": BandBoost,
+    "piecewise_linear": PiecewiseLinear,
+}
+
+
+def make_gain(kind: str, **parameters) -> Gain:
+    """Build a gain by name (one of :data:`GAINS`) from keyword parameters.
+
+    >>> make_gain("band_stop", low=8.0, high=20.0, width=2.0)
+    BandStop(low=8.0, high=20.0, width=2.0, stop=0.0)
+    """
+    if kind not in GAINS:
+        raise InputError(f"unknown gain {kind!r}; choose one of {sorted(GAINS)}")
+    try:
+        return GAINS[kind](**parameters)
+    except TypeError as exc:
+        raise InputError(f"gain {kind!r}: {exc}") from None
+
+
+def _decomposition_parts(decomposition) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(imfs (k, n), residue (n,), frequency (k, n))`` from an HHT result or a tuple."""
+    if isinstance(decomposition, tuple):
+        if len(decomposition) != 3:
+            raise InputError("pass an HHTResult or a tuple (imfs, residue, monogenic)")
+        imfs, residue, mono = decomposition
+    else:
+        try:
+            imfs, residue, mono = decomposition.imfs, decomposition.residue, decomposition.monogenic
+        except AttributeError:
+            raise InputError(f"expected an HHTResult or a tuple (imfs, residue, monogenic), "
+                             f"got {type(decomposition).__name__}") from None
+    imfs = np.asarray(imfs, dtype=np.float64)
+    residue = np.asarray(residue, dtype=np.float64)
+    frequency = np.asarray(getattr(mono, "frequency", None), dtype=np.float64)
+    if residue.ndim != 1 or imfs.ndim != 2 or imfs.shape[1] != residue.shape[0]:
+        raise InputError(f"imfs must have shape (k, n) and the residue (n,), got {imfs.shape} and {residue.shape}")
+    if frequency.shape != imfs.shape:
+        raise InputError(f"the monogenic frequency has shape {frequency.shape}; the imfs have {imfs.shape}")
+    return imfs, residue, frequency
+
+
+def gains_of(decomposition, gain) -> np.ndarray:
+    """The gains ``μ(ω_k(v))`` (k, n) of a decomposition's instantaneous frequencies."""
+    _, _, frequency = _decomposition_parts(decomposition)
+    return _evaluate_gain(gain, frequency)
+
+
+def _evaluate_gain(gain, frequency: np.ndarray) -> np.ndarray:
+    if not callable(gain):
+        raise InputError(f"gain must be callable on frequencies (e.g. hht3d.apps.LowPass), got {gain!r}")
+    mu = np.asarray(gain(frequency), dtype=np.float64)
+    if mu.ndim == 0:
+        mu = np.full(frequency.shape, float(mu))
+    if mu.shape != frequency.shape:
+        raise InputError(f"gain returned shape {mu.shape} for frequencies of shape {frequency.shape}")
+    if not np.all(np.isfinite(mu)):
+        raise InputError("gain returned NaN or infinite values")
+    return mu
+
+
+def filter_signal(decomposition, gain) -> np.ndarray:
+    """Filter a signal through its Hilbert spectrum (Eq. 26).
+
+    Parameters
+    ----------
+    decomposition : HHTResult or tuple (imfs, residue, monogenic)
+        IMFs ``(k, n)``, residue ``(n,)`` and their
+        :class:`~hht3d.monogenic.MonogenicSignal` (its ``frequency`` is used).
+    gain : callable
+        ``μ(ω)`` evaluated elementwise on the ``(k, n)`` instantaneous
+        frequencies: a :class:`Gain` or any function returning an array of
+        the same shape (or a scalar).
+
+    Returns
+    -------
+    (n,) ndarray
+        ``s' = Σ_k μ(ω_k) a_k cos φ_k + r_N = Σ_k μ(ω_k) f_k + r_N``.
+    """
+    imfs, residue, frequency = _decomposition_parts(decomposition)
+    mu = _evaluate_gain(gain, frequency)
+    return np.sum(mu * imfs, axis=0) + residue

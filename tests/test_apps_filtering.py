@@ -1,0 +1,306 @@
+"""Hilbert-spectrum filtering (Eq. 26), reconstruction (Eq. 27) and the filtering baselines."""
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+from meshes import bump_band_sphere, disjoint_union, fibonacci_sphere, grid, height_field_grid, icosphere
+from scipy.spatial.transform import Rotation
+
+import hht3d
+from hht3d import InputError, Surface
+from hht3d.apps import (BandBoost, BandStop, Constant, HighBoost, LowPass, PiecewiseLinear, filter_geometry,
+                        filter_signal, gains_of, imf_enhancement, make_gain, manifold_harmonics_filter,
+                        position_weights, reconstruct, reconstruct_from_change)
+from hht3d.hht import hht
+from hht3d.signals import mean_curvature
+
+#: Identity: the filtered positions may differ from the input by this fraction of the bounding-box
+#: diagonal (RMS).  With gain 1 the change s' − s is zero or a few ulps, so the solve moves nothing.
+IDENTITY_RTOL = 1e-6
+#: Bump sphere: 20 bumps around the equator, peak 0.005 of the radius; ω = √(20·21) ≈ 20.5.
+WAVES, AMPLITUDE = 20, 0.005
+OMEGA = np.sqrt(WAVES * (WAVES + 1))
+
+
+def relative_rms(a: np.ndarray, b: np.ndarray, diagonal: float) -> float:
+    return float(np.sqrt(np.mean(np.sum((a - b) ** 2, axis=1))) / diagonal)
+
+
+def enclosed_volume(surface: Surface) -> float:
+    p = surface.vertices[surface.faces]
+    return float(np.einsum("ij,ij->", p[:, 0], np.cross(p[:, 1], p[:, 2])) / 6)
+
+
+@pytest.fixture(scope="module")
+def bumps():
+    """(surface, clean unit-sphere vertices, unit bump pattern, HHT of the mean curvature)."""
+    v, f, clean, pattern = bump_band_sphere(5, WAVES, AMPLITUDE)
+    surface = Surface(v, f, name="bump_band_sphere")
+    return surface, clean, pattern, hht(surface, mean_curvature(surface), emd_options={"max_imfs": 4})
+
+
+def sphere_distance(surface: Surface, vertices: np.ndarray) -> float:
+    """Area-weighted RMS distance of ``vertices`` to the unit sphere (areas of ``surface``)."""
+    area = surface.mass_diagonal
+    return float(np.sqrt(np.sum(area * (np.linalg.norm(vertices, axis=1) - 1) ** 2) / area.sum()))
+
+
+def bump_amplitude(surface: Surface, vertices: np.ndarray, pattern: np.ndarray) -> float:
+    """Least-squares amplitude of the bump pattern in the radial deviation."""
+    area = surface.mass_diagonal
+    deviation = np.linalg.norm(vertices, axis=1) - 1
+    return float(np.sum(area * deviation * pattern) / np.sum(area * pattern ** 2))
+
+
+# -- gains ---------------------------------------------------------------------------------
+
+def test_gain_shapes():
+    omega = np.array([0.0, 5.0, 10.0, 10.5, 20.0, 30.0, 40.0])
+    assert LowPass(10.0)(omega).tolist() == [1, 1, 1, 0, 0, 0, 0]
+    assert LowPass(10.0, stop=0.25)(omega)[-1] == 0.25
+    assert HighBoost(10.0, 3.0)(omega).tolist() == [1, 1, 1, 3, 3, 3, 3]
+    assert BandStop(5.0, 20.0)(omega).tolist() == [1, 1, 0, 0, 0, 1, 1]
+    assert BandBoost(5.0, 20.0, 2.5)(omega).tolist() == [1, 1, 2.5, 2.5, 2.5, 1, 1]
+    assert Constant(0.5)(omega).tolist() == [0.5] * 7
+    # user points: linear between, constant beyond
+    user = PiecewiseLinear([(10.0, 1.0), (30.0, 3.0)])
+    assert np.allclose(user(omega), [1, 1, 1, 1.05, 2, 3, 3])
+    # raised-cosine edges: half-way at the edge, flat beyond edge ± width/2, monotone between
+    smooth = LowPass(10.0, width=4.0)
+    assert smooth(np.array([7.9, 8.0, 10.0, 12.0, 12.1])).tolist() == pytest.approx([1, 1, 0.5, 0, 0])
+    assert np.all(np.diff(smooth(np.linspace(7, 13, 50))) <= 0)
+    band = BandStop(5.0, 20.0, width=2.0)
+    assert band(np.array([3.9, 5.0, 6.0, 12.0, 19.0, 20.0, 21.0])).tolist() == pytest.approx(
+        [1, 0.5, 0, 0, 0, 0.5, 1])
+
+
+def test_gains_pickle_and_by_name():
+    gains = [LowPass(3.0, width=1.0), HighBoost(2.0, 2.5), BandStop(1.0, 2.0), BandBoost(1.0, 2.0, 3.0),
+             PiecewiseLinear([(0.0, 1.0), (5.0, 0.0)]), Constant(1.0)]
+    omega = np.linspace(0, 10, 11)
+    for gain in gains:
+        back = pickle.loads(pickle.dumps(gain))
+        assert back == gain and np.array_equal(back(omega), gain(omega))
+    assert make_gain("band_stop", low=1.0, high=2.0) == BandStop(1.0, 2.0)
+    assert make_gain("piecewise_linear", points=[[0, 1], [5, 0]]) == gains[4]
+
+
+def test_filter_signal_is_eq26(bumps):
+    result = bumps[3]
+    mono = result.monogenic
+    gain = BandStop(OMEGA / 2, 2 * OMEGA, width=OMEGA / 4)
+    expected = np.sum(gain(mono.frequency) * mono.amplitude * np.cos(mono.phase), axis=0) + result.residue
+    assert np.allclose(filter_signal(result, gain), expected, rtol=0, atol=1e-12 * np.abs(result.signal).max())
+    # tuple input, identity, all-stop, any callable
+    parts = (result.imfs, result.residue, mono)
+    assert np.allclose(filter_signal(parts, Constant(1.0)), result.signal, rtol=0,
+                       atol=1e-13 * np.abs(result.signal).max())
+    assert np.array_equal(filter_signal(parts, Constant(0.0)), result.residue)
+    assert np.array_equal(filter_signal(parts, lambda w: np.where(w > 5, 2.0, 1.0)),
+                          filter_signal(parts, HighBoost(5.0, 2.0)))
+    assert gains_of(result, gain).shape == result.imfs.shape
+
+
+# -- identity (Eq. 27 with s' = s) -----------------------------------------------------------
+
+def assert_identity(surface: Surface, result) -> None:
+    diagonal = surface.bounding_box_diagonal
+    exact = filter_geometry(result, Constant(1.0))
+    assert np.array_equal(exact.vertices, surface.vertices)
+    # s' from Eq. 26 differs from s by round-off: the solve runs and must not move the vertices
+    solved = reconstruct(surface, filter_signal(result, Constant(1.0)))
+    assert relative_rms(solved.vertices, surface.vertices, diagonal) <= IDENTITY_RTOL
+    assert np.array_equal(solved.faces, surface.faces) if surface.is_mesh else solved.faces is None
+
+
+def test_identity_closed_mesh(bumps):
+    assert_identity(bumps[0], bumps[3])
+
+
+def test_identity_open_grid():
+    surface = Surface(*height_field_grid(30, 30), name="height_field")
+    assert surface.boundary_vertices.sum() == 4 * 29
+    assert_identity(surface, hht(surface, mean_curvature(surface), emd_options={"max_imfs": 3}))
+
+
+def test_identity_open_scan(shared_model):
+    surface = hht3d.load(shared_model("spacetime_face_neutral.ply"))
+    assert surface.boundary_vertices.any()
+    assert_identity(surface, hht(surface, mean_curvature(surface), emd_options={"max_imfs": 3}))
+
+
+def test_identity_point_cloud_and_components():
+    cloud = Surface(fibonacci_sphere(1500), name="cloud")
+    assert_identity(cloud, hht(cloud, mean_curvature(cloud), emd_options={"max_imfs": 2}))
+    v, f = icosphere(3)
+    pair = Surface(*disjoint_union((v, f), (0.5 * v + [3.0, 0, 0], f)), name="pair")
+    assert pair.n_components == 2
+    assert_identity(pair, hht(pair, mean_curvature(pair), emd_options={"max_imfs": 2}))
+
+
+# -- the least-squares problem -------------------------------------------------------------
+
+@pytest.mark.parametrize("mesh", ["open", "closed"])
+def test_reconstruction_minimises_documented_energy(mesh):
+    """V' is the stationary point of Σ A_i |(M⁻¹LV')_i − δ'_i|² + Σ w_i |v'_i − v_i|², δ' = δ + (s'−s)n,
+    w_i = μ_i A_i / Ā² (checked with dense algebra, independent of the solver)."""
+    v, f = height_field_grid(12, 10) if mesh == "open" else icosphere(2)
+    surface = Surface(v, f)
+    rng = np.random.default_rng(4)
+    change = rng.standard_normal(surface.n_vertices)
+    new = reconstruct_from_change(surface, change, preserve_scale=False).vertices
+    lap, area, normals = surface.stiffness.toarray(), surface.mass_diagonal, surface.normals
+    delta = lap @ v / area[:, None]
+    target = delta + change[:, None] * normals
+    w = position_weights(surface) * area / area.mean() ** 2
+    gradient = lap @ (lap @ new / area[:, None] - target) + w[:, None] * (new - v)
+    scale = np.abs(lap @ (change[:, None] * normals)).max()
+    assert np.abs(gradient).max() <= 1e-8 * scale
+    # the boundary is held 100x more strongly than the interior
+    if mesh == "open":
+        weights = position_weights(surface)
+        assert set(weights[surface.boundary_vertices]) == {1.0} and set(weights[~surface.boundary_vertices]) == {0.01}
+
+
+def test_reconstruction_is_invariant_to_similarity_transforms():
+    v, f = height_field_grid(15, 15)
+    surface = Surface(v, f)
+    change = np.sin(6 * v[:, 0]) * np.cos(4 * v[:, 1])
+    new = reconstruct_from_change(surface, change).vertices
+    rotation = Rotation.from_euler("xyz", [0.4, -0.7, 1.9]).as_matrix()
+    c = 3.7
+    moved = Surface(c * v @ rotation.T + [1.0, 2.0, -5.0], f)
+    # the mean curvature scales by 1/c, so the same edit is change / c
+    new_moved = reconstruct_from_change(moved, change / c).vertices
+    expected = c * new @ rotation.T + [1.0, 2.0, -5.0]
+    assert relative_rms(new_moved, expected, moved.bounding_box_diagonal) <= 1e-10
+
+
+def test_preserve_scale_removes_the_mean_change():
+    """A uniform signal change on a closed surface is the scale mode that the fixed-M linearisation
+    gets with the wrong sign (it inflates the sphere); preserve_scale removes it per component."""
+    v, f = icosphere(3)
+    pair = Surface(*disjoint_union((v, f), (0.5 * v + [3.0, 0, 0], f)))
+    uniform = np.where(pair.component_labels == 0, 0.1, -0.2)
+    kept = reconstruct_from_change(pair, uniform)
+    assert relative_rms(kept.vertices, pair.vertices, pair.bounding_box_diagonal) <= 1e-12
+    inflated = reconstruct_from_change(pair, uniform, preserve_scale=False)
+    radius = np.linalg.norm(inflated.vertices[: len(v)], axis=1)
+    assert radius.min() > 1.001  # larger mean curvature, yet a larger sphere
+
+
+# -- bump band sphere --------------------------------------------------------------------------
+
+def test_band_stop_removes_bumps(bumps):
+    surface, _, pattern, result = bumps
+    before = sphere_distance(surface, surface.vertices)
+    out = filter_geometry(result, BandStop(OMEGA / 2, 2 * OMEGA, width=OMEGA / 4))
+    factor = before / sphere_distance(surface, out.vertices)
+    print(f"band-stop at the bump scale: RMS distance to the clean sphere {before:.3g} -> "
+          f"{before / factor:.3g} ({factor:.2f}x lower)")
+    assert factor >= 3, factor  # measured 4.94
+    assert abs(bump_amplitude(surface, out.vertices, pattern)) <= 0.25 * AMPLITUDE  # measured 0.14
+    # a band far above the bumps holds no energy: the geometry barely moves
+    untouched = filter_geometry(result, BandStop(3 * OMEGA, 8 * OMEGA, width=OMEGA / 4))
+    assert relative_rms(untouched.vertices, surface.vertices, 1.0) <= 0.01 * AMPLITUDE
+
+
+def test_low_pass_keeps_volume(bumps):
+    surface, _, _, result = bumps
+    out = filter_geometry(result, LowPass(OMEGA / 2, width=OMEGA / 4))
+    change = enclosed_volume(out) / enclosed_volume(surface) - 1
+    assert abs(change) <= 0.01, change  # measured 1e-5 (the mean change is removed per component)
+    assert sphere_distance(surface, out.vertices) < sphere_distance(surface, surface.vertices) / 3
+
+
+@pytest.mark.parametrize("gain", [HighBoost(OMEGA / 2, 2.0, width=OMEGA / 4),
+                                  BandBoost(OMEGA / 2, 2 * OMEGA, 2.0, width=OMEGA / 4)])
+def test_enhancement_raises_bumps(bumps, gain):
+    surface, _, pattern, result = bumps
+    ratio = bump_amplitude(surface, filter_geometry(result, gain).vertices, pattern) / AMPLITUDE
+    assert 1.5 <= ratio <= 2.2, ratio  # measured 1.86 for a gain of 2
+
+
+# -- baselines -------------------------------------------------------------------------------
+
+def test_imf_enhancement(bumps):
+    surface, _, pattern, result = bumps
+    assert np.array_equal(imf_enhancement(surface, result, 1.0).vertices, surface.vertices)
+    ratio = bump_amplitude(surface, imf_enhancement(surface, result, 2.0).vertices, pattern) / AMPLITUDE
+    assert 1.5 <= ratio <= 2.2, ratio  # measured 1.96: IMF1 holds the bumps here
+
+
+def test_manifold_harmonics_filter():
+    v, f, _, pattern = bump_band_sphere(3, 8, 0.01)  # 642 vertices; bumps are Y_8^8, ω = √72
+    surface = Surface(v, f)
+    omega = np.sqrt(72)
+    # all eigenpairs and gain 1 synthesise the coordinates exactly (M-orthonormal basis + centroid)
+    full = manifold_harmonics_filter(surface, Constant(1.0), eigenpairs=surface.n_vertices - 1,
+                                     keep_remainder=False)
+    assert np.abs(full.vertices - v).max() <= 1e-10
+    assert np.array_equal(manifold_harmonics_filter(surface, Constant(1.0), eigenpairs=50).vertices, v)
+    out = manifold_harmonics_filter(surface, BandStop(omega / 1.5, 1.5 * omega), eigenpairs=150)
+    factor = sphere_distance(surface, v) / sphere_distance(surface, out.vertices)
+    assert factor >= 10, factor  # measured 17: the bumps are one eigenspace
+    truncated = manifold_harmonics_filter(surface, Constant(1.0), eigenpairs=40, keep_remainder=False)
+    assert abs(bump_amplitude(surface, truncated.vertices, pattern)) <= 0.1 * 0.01  # low-pass at √λ_40
+
+
+# -- output ----------------------------------------------------------------------------------
+
+def test_output_is_an_open3d_mesh(bumps, tmp_path):
+    import open3d as o3d
+
+    surface, _, _, result = bumps
+    out = filter_geometry(result, LowPass(OMEGA / 2))
+    path = tmp_path / "filtered.ply"
+    assert o3d.t.io.write_triangle_mesh(str(path), out.to_open3d())
+    back = hht3d.load(path, clean=False)
+    assert np.allclose(back.vertices, out.vertices, atol=1e-6) and np.array_equal(back.faces, surface.faces)
+
+
+# -- bad parameters --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("build", [
+    lambda: LowPass(-1.0), lambda: LowPass(float("nan")), lambda: LowPass(1.0, width=-1),
+    lambda: HighBoost(1.0, float("inf")), lambda: BandStop(5.0, 5.0), lambda: BandBoost(6.0, 2.0),
+    lambda: PiecewiseLinear([]), lambda: PiecewiseLinear([(2.0, 1.0), (1.0, 0.0)]),
+    lambda: PiecewiseLinear([(0.0, 1.0, 2.0)]), lambda: PiecewiseLinear([(-1.0, 1.0)]),
+    lambda: LowPass("high"), lambda: make_gain("notch", low=1), lambda: make_gain("low_pass", cut=1),
+])
+def test_bad_gains(build):
+    with pytest.raises(InputError):
+        build()
+
+
+def test_bad_filter_and_reconstruction_inputs(bumps):
+    surface, _, _, result = bumps
+    n = surface.n_vertices
+    with pytest.raises(InputError):
+        filter_signal(result, "low")  # not callable
+    with pytest.raises(InputError):
+        filter_signal(result, lambda w: w[:1])  # wrong shape
+    with pytest.raises(InputError):
+        filter_signal(result, lambda w: np.full(w.shape, np.nan))
+    with pytest.raises(InputError):
+        filter_signal((result.imfs, result.residue[:-1], result.monogenic), Constant(1.0))
+    with pytest.raises(InputError):
+        filter_signal(result.imfs, Constant(1.0))
+    with pytest.raises(InputError):
+        reconstruct(surface, np.zeros(n - 1))
+    for bad in ({"interior_weight": 0.0}, {"boundary_weight": -1.0}, {"interior_weight": float("nan")},
+                {"weights": np.zeros(n)}, {"weights": np.ones(3)}):
+        with pytest.raises(InputError):
+            reconstruct(surface, mean_curvature(surface), **bad)
+    # an HHT of another signal cannot drive the geometry
+    other = hht(Surface(*icosphere(2)), icosphere(2)[0][:, 0], emd_options={"max_imfs": 1})
+    with pytest.raises(InputError, match="mean-curvature"):
+        filter_geometry(other, Constant(1.0))
+    with pytest.raises(InputError):
+        imf_enhancement(surface, result, 2.0, index=result.n_imfs)
+    with pytest.raises(InputError):
+        manifold_harmonics_filter(surface, Constant(1.0), eigenpairs=0)
+    with pytest.raises(InputError):
+        reconstruct(grid(3, 3), np.zeros(9))  # not a Surface
