@@ -48,6 +48,8 @@ PAPER = [(4098, 3, 0.6), (13424, 5, 3.8), (31124, 8, 10.9), (61563, 13, 38.2), (
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from benchmarks.common import mkl_environment  # noqa: E402
+
 
 def _peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
@@ -209,20 +211,6 @@ def markdown(records: list[dict], meta: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _mkl_environment() -> tuple[dict, float | None]:
-    """Environment for the workers with ``PYPARDISO_MKL_RT`` set, and the lookup time."""
-    env = dict(os.environ)
-    try:
-        import pypardiso
-    except ImportError:
-        return env, None
-    t0 = time.perf_counter()
-    solver = pypardiso.PyPardisoSolver()
-    lookup = time.perf_counter() - t0
-    env.setdefault("PYPARDISO_MKL_RT", solver.libmkl._name)
-    return env, lookup
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--models", nargs="*", default=None, help="model names (default: the ladder)")
@@ -234,7 +222,7 @@ def main(argv=None) -> int:
         return 0
     from hht3d import linalg
 
-    env, lookup = _mkl_environment()
+    env, lookup = mkl_environment()
     load_before = os.getloadavg()[0]
     names = args.models or MODELS + (LARGE if args.with_igea else [])
     records = []

@@ -62,6 +62,8 @@ PAPER_RT = [(4098, 3, 5.13), (13424, 5, 24.37), (31124, 8, 110.81), (61563, 13, 
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from benchmarks.common import mkl_environment  # noqa: E402
+
 
 # -- measurement helpers ---------------------------------------------------------------------------
 
@@ -280,20 +282,6 @@ def markdown(fig2: dict | None, ladder: list[dict], meta: dict) -> str:
 
 # -- driver -------------------------------------------------------------------------------------------
 
-def _mkl_environment() -> tuple[dict, float | None]:
-    """Environment for the workers with ``PYPARDISO_MKL_RT`` set, and the lookup time."""
-    env = dict(os.environ)
-    try:
-        import pypardiso
-    except ImportError:
-        return env, None
-    t0 = time.perf_counter()
-    solver = pypardiso.PyPardisoSolver()
-    lookup = time.perf_counter() - t0
-    env.setdefault("PYPARDISO_MKL_RT", solver.libmkl._name)
-    return env, lookup
-
-
 def _worker(args: list[str], env: dict) -> dict:
     done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--worker", *args],
                           capture_output=True, text=True, env=env)
@@ -316,7 +304,7 @@ def main(argv=None) -> int:
         return 0
     from hht3d import linalg
 
-    env, lookup = _mkl_environment()
+    env, lookup = mkl_environment()
     env["OPENBLAS_NUM_THREADS"] = str(args.blas_threads)
     fig2 = None
     if not args.skip_fig2 and (DATA / "sphere_oct4098.ply").is_file():

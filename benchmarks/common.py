@@ -25,6 +25,25 @@ PAPER_TABLE1 = [
 ]
 
 
+def mkl_environment() -> tuple[dict, float | None]:
+    """Environment for worker processes with ``PYPARDISO_MKL_RT`` set, and the lookup time.
+
+    pypardiso otherwise searches the installation tree for ``mkl_rt`` once per process.
+    """
+    import time
+
+    env = dict(os.environ)
+    try:
+        import pypardiso
+    except ImportError:
+        return env, None
+    start = time.perf_counter()
+    solver = pypardiso.PyPardisoSolver()
+    lookup = time.perf_counter() - start
+    env.setdefault("PYPARDISO_MKL_RT", solver.libmkl._name)
+    return env, lookup
+
+
 def model_path(name: str) -> Path | None:
     """``../shared/data/NAME.ply`` if present."""
     path = DATA / f"{name}.ply"
