@@ -1,10 +1,13 @@
 """The ``hht3d`` command line.
 
-``hht3d demo``  runs the HHT of the shipped demo model and writes its outputs;
-``hht3d info FILE``  prints what a mesh or point cloud holds.
+``hht3d run PIPELINE.yaml``       validate and run a pipeline (:mod:`hht3d.pipeline`);
+``hht3d validate PIPELINE.yaml``  validate it and print the planned graph, running nothing;
+``hht3d ops [OP]``                list the operations, their parameters and defaults;
+``hht3d info FILE``               what a mesh or point cloud holds;
+``hht3d demo``                    run the demo pipeline shipped in the package.
 
 Exit codes: 0 on success; 1 with a one-line ``hht3d: error: ...`` reason for
-bad input or a failed step; 2 for bad command-line usage.
+an invalid pipeline, bad input or a failed step; 2 for bad command-line usage.
 """
 from __future__ import annotations
 
@@ -14,11 +17,13 @@ import sys
 from importlib import resources
 from pathlib import Path
 
-from .errors import HHT3DError
+from .errors import HHT3DError, PipelineError
 from .scheduling import SCHEDULERS
 
 #: The demo model shipped in the package: Keenan Crane's "spot" (CC0).
 DEMO_MODEL = "spot.ply"
+#: The demo pipeline shipped in the package (also ``pipelines/demo.yaml``).
+DEMO_PIPELINE = "demo.yaml"
 
 
 def demo_model_path() -> Path:
@@ -26,31 +31,80 @@ def demo_model_path() -> Path:
     return Path(str(resources.files("hht3d") / "data" / DEMO_MODEL))
 
 
-def _demo(args) -> int:
-    from . import graph
-    from .io import write_colored_ply
+def demo_pipeline_path() -> Path:
+    """Path of the shipped demo pipeline."""
+    return Path(str(resources.files("hht3d") / "data" / DEMO_PIPELINE))
 
-    source = demo_model_path()
-    out = Path(args.out)
-    surface = graph.load(source)
-    result = graph.hht(surface, graph.signal(surface, "mean_curvature"),
-                       emd_options={"max_imfs": args.max_imfs})
-    stem = source.stem
-    saved = [graph.save(result, out / f"{stem}_hht.ply"), graph.save(result, out / f"{stem}_hht.npz")]
-    result, *paths = graph.compute(result, *saved, scheduler=args.scheduler, workers=args.workers,
-                                   address=args.address, progress=not args.quiet)
-    fields = {"signal": result.signal, "imf_1": result.imfs[0] if result.n_imfs else result.residue,
-              "frequency_1": result.monogenic.frequency[0] if result.n_imfs else None}
-    for name, values in fields.items():
-        if values is not None:
-            paths.append(write_colored_ply(out / f"{stem}_{name}.ply", result.surface, values, name=name))
-    spectrum = result.spectrum
-    print(f"{source.name}: {result.surface.n_vertices} vertices, {result.n_imfs} IMFs "
-          f"(EMD {result.info['emd']['seconds']:.2f} s, {result.info['emd']['factorizations']} factorizations)")
-    for k, (freq, energy) in enumerate(zip(spectrum.mean_frequency(), spectrum.imf_energy()), start=1):
-        print(f"  IMF {k}: mean frequency {freq:9.3f} rad/unit, energy {energy:.4g}")
-    for path in paths:
-        print(f"wrote {path}")
+
+def _plan(path, overrides):
+    from .pipeline import load_pipeline
+
+    return load_pipeline(path, overrides)
+
+
+def _execute(plan, args) -> int:
+    from .pipeline import failures, run_pipeline
+
+    rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
+                        progress=False if args.quiet else None, resume=args.resume)
+    for row in rows:
+        if row.status == "ok":
+            print(f"{row.source}: ok, {row.vertices} vertices"
+                  + (f", {row.imfs} IMFs" if row.imfs is not None else "") + f", {row.seconds:.2f} s")
+        elif row.status == "skipped":
+            print(f"{row.source}: skipped (outputs exist)")
+        else:
+            print(f"{row.source}: FAILED in step {row.step}: {row.error}")
+        for path in row.outputs if row.status == "ok" else ():
+            print(f"  wrote {path}")
+    if plan.summary:
+        print(f"summary: {plan.folder / 'summary.json'}, {plan.folder / 'summary.csv'}")
+    failed = failures(rows)
+    if failed:
+        raise PipelineError(f"{len(failed)} of {len(rows)} inputs failed; first: {failed[0]}")
+    return 0
+
+
+def _run(args) -> int:
+    return _execute(_plan(args.pipeline, args.set), args)
+
+
+def _demo(args) -> int:
+    return _execute(_plan(demo_pipeline_path(), [f"outputs.folder={json.dumps(args.out)}", *args.set]), args)
+
+
+def _validate(args) -> int:
+    from .pipeline import pipeline_graph
+
+    plan = _plan(args.pipeline, args.set)
+    print(plan.describe())
+    tasks = len(dict(pipeline_graph(plan).__dask_graph__()))
+    print(f"dask graph: {tasks} tasks for {len(plan.inputs)} input file{'' if len(plan.inputs) == 1 else 's'}")
+    print("valid; nothing was run")
+    return 0
+
+
+def _ops(args) -> int:
+    from .pipeline import FORMATS, OPERATIONS
+    from .pipeline.params import did_you_mean, yaml_text
+
+    names = args.op or list(OPERATIONS)
+    for name in names:
+        if name not in OPERATIONS:
+            raise PipelineError(f"unknown op {name!r}{did_you_mean(name, OPERATIONS)}")
+    for name in names:
+        op = OPERATIONS[name]
+        takes = ", ".join(f"{s.name}: {'|'.join(s.kinds)}" for s in op.slots)
+        print(f"{op.name}({takes}) -> {op.output}\n    {op.summary}")
+        width = max((len(p.name) for p in op.params), default=0)
+        for p in op.params:
+            print(f"    {p.name:<{width}}  {yaml_text(p.default):<10}  {p.describe()} — {p.doc}")
+    if not args.op:
+        print("\noutputs (outputs.files entries: {from: STEP, path: PATTERN, format: ..., options}):")
+        for kind, formats in FORMATS.items():
+            for fmt in formats.values():
+                options = ", ".join(f"{p.name}={yaml_text(p.default)}" for p in fmt.params)
+                print(f"    {kind:<9} {fmt.name:<12} {fmt.summary}" + (f" [{options}]" if options else ""))
     return 0
 
 
@@ -68,24 +122,48 @@ def _info(args) -> int:
     return 0
 
 
+def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -> None:
+    parser.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
+                        help="override a pipeline value, e.g. steps.hht.params.max_imfs=4 or inputs=scans/ "
+                             "(repeatable; values are YAML)")
+    if not running:
+        return
+    parser.add_argument("--scheduler", choices=SCHEDULERS, default=None,
+                        help="Dask scheduler (default: the pipeline's execution.scheduler)")
+    parser.add_argument("--workers", type=int, default=None, help="threads, processes or cluster workers")
+    parser.add_argument("--address", default=None, help="address of a running dask.distributed scheduler")
+    parser.add_argument("--resume", action="store_true", help="skip inputs whose outputs all exist")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="hht3d", description="Hilbert–Huang transform on 3D surfaces")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    demo = sub.add_parser("demo", help="HHT of the shipped demo model (spot, CC0)")
-    demo.add_argument("--out", default="out/demo", help="output folder (default: out/demo)")
-    demo.add_argument("--max-imfs", type=int, default=6, help="most IMFs (default: 6)")
-    demo.add_argument("--scheduler", choices=SCHEDULERS, default="threads")
-    demo.add_argument("--workers", type=int, default=None)
-    demo.add_argument("--address", default=None, help="address of a running dask.distributed scheduler")
-    demo.add_argument("--quiet", action="store_true", help="no progress bar")
-    demo.set_defaults(run=_demo)
+    run = sub.add_parser("run", help="validate and run a YAML pipeline")
+    run.add_argument("pipeline", help="a pipeline YAML file (see pipelines/)")
+    _add_run_options(run)
+    run.set_defaults(run=_run)
+
+    validate = sub.add_parser("validate", help="validate a YAML pipeline and print the planned graph")
+    validate.add_argument("pipeline")
+    _add_run_options(validate, running=False)
+    validate.set_defaults(run=_validate)
+
+    ops = sub.add_parser("ops", help="list the pipeline operations, their parameters and defaults")
+    ops.add_argument("op", nargs="*", help="only these operations")
+    ops.set_defaults(run=_ops)
 
     info = sub.add_parser("info", help="vertices, faces, components, boundary, manifoldness, bounding box")
     info.add_argument("file")
     info.add_argument("--json", action="store_true", help="print JSON")
     info.add_argument("--no-clean", action="store_true", help="describe the file as stored, before cleaning")
     info.set_defaults(run=_info)
+
+    demo = sub.add_parser("demo", help="run the demo pipeline: HHT of the shipped model spot (CC0)")
+    demo.add_argument("--out", default="out/demo", help="output folder (default: out/demo)")
+    _add_run_options(demo)
+    demo.set_defaults(run=_demo)
     return parser
 
 

@@ -26,7 +26,7 @@ from . import graph
 from .io import atomic_path, resolve_inputs
 from .scheduling import compute
 
-__all__ = ["Failure", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary"]
+__all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary"]
 
 #: Output formats of a dataset item, by file suffix.
 FORMATS = (".ply", ".npz")
@@ -49,7 +49,7 @@ class _Timed:
     seconds: float
 
 
-class _Guarded:
+class Guarded:
     """Run ``func`` unless an input already failed; turn an exception into a :class:`Failure`."""
 
     def __init__(self, step: str, func, source: str):
@@ -148,7 +148,7 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=FO
         if resume and all(p.is_file() for p in paths):
             rows.append(ItemSummary(str(source), "skipped", outputs=tuple(map(str, paths))))
             continue
-        tasks = graph.Builder(guard=lambda step, func, src=str(source): _Guarded(step, func, src))
+        tasks = graph.Builder(guard=lambda step, func, src=str(source): Guarded(step, func, src))
         stages = graph.transform_file(tasks, source, signal, load_options or {}, **hht_options)
         stages["export"] = tasks.task("export", _save_all)(stages["hht"], paths)
         rows.append(delayed(_summarize, pure=True, name=f"summary-{tokenize(str(source), paths)}")(

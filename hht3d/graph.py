@@ -32,6 +32,7 @@ import numpy as np
 from dask import delayed
 from dask.base import tokenize
 
+from . import apps
 from .emd import combine_eemd, eemd_member
 from .emd import emd as _emd
 from .hht import HHTResult
@@ -58,6 +59,13 @@ __all__ = [
     "save",
     "transform",
     "transform_file",
+    "filter_signal",
+    "filter_geometry",
+    "reconstruct",
+    "prominent_features",
+    "hks_features",
+    "imf_enhancement",
+    "manifold_harmonics_filter",
 ]
 
 
@@ -209,3 +217,39 @@ def _save(result, path) -> Path:
 def save(result, path):
     """Lazy ``result.save(path)`` (atomic PLY or npz write); returns the path."""
     return _PLAIN.task("save", _save)(result, str(path))
+
+
+# -- applications (Sec. 5, hht3d.apps): one task each ----------------------------------------
+def filter_signal(result, gain, *, builder: Builder = _PLAIN):
+    """Lazy :func:`hht3d.apps.filter_signal`: the signal of an HHT result through a gain (Eq. 26)."""
+    return builder.task("filter_signal", apps.filter_signal)(result, gain)
+
+
+def filter_geometry(result, gain, *, builder: Builder = _PLAIN, **options):
+    """Lazy :func:`hht3d.apps.filter_geometry`: Eq. (26) on the mean curvature, then Eq. (27)."""
+    return builder.task("filter_geometry", apps.filter_geometry)(result, gain, **options)
+
+
+def reconstruct(surface, signal, *, builder: Builder = _PLAIN, **options):
+    """Lazy :func:`hht3d.apps.reconstruct`: the surface whose mean curvature is ``signal`` (Eq. 27)."""
+    return builder.task("reconstruct", apps.reconstruct)(surface, signal, **options)
+
+
+def prominent_features(surface, imfs, *, builder: Builder = _PLAIN, **options):
+    """Lazy :func:`hht3d.apps.prominent_features` of an EMD or HHT result (Sec. 5.2)."""
+    return builder.task("features", apps.prominent_features)(surface, imfs, **options)
+
+
+def hks_features(surface, *, builder: Builder = _PLAIN, **options):
+    """Lazy :func:`hht3d.apps.hks_features` (heat-kernel-signature baseline)."""
+    return builder.task("hks_features", apps.hks_features)(surface, **options)
+
+
+def imf_enhancement(surface, imfs, *, builder: Builder = _PLAIN, **options):
+    """Lazy :func:`hht3d.apps.imf_enhancement` (IMF-scaling baseline, Hu et al. 2014)."""
+    return builder.task("imf_enhancement", apps.imf_enhancement)(surface, imfs, **options)
+
+
+def manifold_harmonics_filter(surface, gain, *, builder: Builder = _PLAIN, **options):
+    """Lazy :func:`hht3d.apps.manifold_harmonics_filter` (Vallet & Lévy 2008 baseline)."""
+    return builder.task("manifold_harmonics_filter", apps.manifold_harmonics_filter)(surface, gain, **options)

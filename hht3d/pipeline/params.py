@@ -1,0 +1,184 @@
+"""Typed parameters of pipeline operations and outputs, checked before anything runs.
+
+A :class:`Param` knows its type, default, allowed range or choices and a
+one-line description; :meth:`Param.check` turns a YAML value into the value
+the core function receives, or raises :class:`~hht3d.errors.PipelineError`
+saying where, what was expected and what was found.  :func:`did_you_mean`
+adds the closest known name to messages about unknown names.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import inspect
+import math
+from dataclasses import dataclass
+
+from ..apps.filters import GAINS, make_gain
+from ..errors import InputError, PipelineError
+
+__all__ = ["Param", "REQUIRED", "did_you_mean", "with_defaults", "yaml_text"]
+
+
+class _Required:
+    def __repr__(self) -> str:
+        return "required"
+
+
+#: Default of a parameter that must be given.
+REQUIRED = _Required()
+#: Default to be read from the signature of the core function (see :func:`with_defaults`).
+_SIGNATURE = object()
+
+KINDS = ("int", "float", "bool", "str", "choice", "gain")
+
+
+def did_you_mean(word, known, *, listing: bool = True) -> str:
+    """``"; did you mean 'x'?"`` for the closest of ``known``; else the list of ``known``
+    (with ``listing``) or nothing."""
+    known = [str(k) for k in known]
+    close = difflib.get_close_matches(str(word), known, n=1, cutoff=0.6)
+    if close:
+        return f"; did you mean {close[0]!r}?"
+    return f"; known: {', '.join(sorted(known))}" if known and listing else ""
+
+
+def yaml_text(value) -> str:
+    """A value as it would be written in YAML (``null``, ``true``, ``0.2``, ``cotan``)."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
+
+
+def _what(value) -> str:
+    """How a YAML value reads in a message: ``'six' (a string)``, ``null``."""
+    names = {str: "a string", bool: "a boolean", int: "an integer", float: "a number", list: "a list",
+             dict: "a mapping"}
+    kind = next((n for t, n in names.items() if isinstance(value, t)), type(value).__name__)
+    return "null" if value is None else f"{value!r} ({kind})"
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter: name, type, default, range or choices, description.
+
+    ``kind`` is ``"int"``, ``"float"``, ``"bool"``, ``"str"``, ``"choice"``
+    (one of ``choices``) or ``"gain"`` (a mapping ``{kind: band_stop, ...}``
+    of :func:`hht3d.apps.make_gain`).  A default of ``None`` makes ``null``
+    an allowed value; :data:`REQUIRED` makes the parameter mandatory.
+    """
+
+    name: str
+    kind: str
+    doc: str
+    default: object = _SIGNATURE
+    choices: tuple = ()
+    minimum: float | None = None
+    maximum: float | None = None
+    open_minimum: bool = False
+    open_maximum: bool = False
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise ValueError(f"parameter {self.name}: unknown kind {self.kind!r}")
+
+    @property
+    def required(self) -> bool:
+        return self.default is REQUIRED
+
+    def describe(self) -> str:
+        """The type and range, e.g. ``int >= 0``, ``float in (0.5, 1]``, ``sd | s_number | fixed``."""
+        if self.kind == "choice":
+            return " | ".join(map(str, self.choices))
+        if self.kind == "gain":
+            return f"gain {{kind: {' | '.join(GAINS)}, ...}}"
+        text = self.kind + self._range()
+        return f"{text} or null" if self.default is None else text
+
+    def _range(self) -> str:
+        lo, hi = self.minimum, self.maximum
+        if lo is not None and hi is not None:
+            return f" in {'(' if self.open_minimum else '['}{lo:g}, {hi:g}{')' if self.open_maximum else ']'}"
+        if lo is not None:
+            return f" {'>' if self.open_minimum else '>='} {lo:g}"
+        if hi is not None:
+            return f" {'<' if self.open_maximum else '<='} {hi:g}"
+        return ""
+
+    def check(self, value, where: str):
+        """The checked value (ints stay ints, gains become :class:`~hht3d.apps.Gain` objects).
+
+        Raises
+        ------
+        PipelineError
+            ``"{where}: parameter NAME must be ..., got ..."``.
+        """
+        if value is None:
+            if self.default is None:
+                return None
+            self._fail(where, value)
+        if self.kind == "choice":
+            if value not in self.choices:
+                raise PipelineError(f"{where}: parameter {self.name} must be one of "
+                                    f"{', '.join(map(str, self.choices))}; got {_what(value)}"
+                                    f"{did_you_mean(value, self.choices, listing=False) if isinstance(value, str) else ''}")
+            return value
+        if self.kind == "gain":
+            return _gain(value, f"{where}: parameter {self.name}")
+        if self.kind == "bool":
+            if not isinstance(value, bool):
+                self._fail(where, value)
+            return value
+        if self.kind == "str":
+            if not isinstance(value, str):
+                self._fail(where, value)
+            return value
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or (self.kind == "int" and not isinstance(value, int)) or not math.isfinite(value):
+            self._fail(where, value)
+        if not self._in_range(value):
+            self._fail(where, value)
+        return value if self.kind == "int" else float(value)
+
+    def _in_range(self, x) -> bool:
+        lo, hi = self.minimum, self.maximum
+        return ((lo is None or (x > lo if self.open_minimum else x >= lo))
+                and (hi is None or (x < hi if self.open_maximum else x <= hi)))
+
+    def _fail(self, where: str, value):
+        article = {"int": "an integer", "float": "a number", "bool": "true or false", "str": "a string"}
+        expected = article[self.kind] + self._range()
+        if value is None and self.kind in ("int", "float"):
+            expected += " (not null)"
+        raise PipelineError(f"{where}: parameter {self.name} must be {expected}; got {_what(value)}")
+
+
+def _gain(value, where: str):
+    """A gain from ``{kind: NAME, PARAM: VALUE, ...}``."""
+    if not isinstance(value, dict) or "kind" not in value:
+        raise PipelineError(f"{where} must be a mapping with a kind ({', '.join(GAINS)}) and its "
+                            f"parameters, e.g. {{kind: band_stop, low: 8, high: 20}}; got {_what(value)}")
+    options = dict(value)
+    kind = options.pop("kind")
+    if kind not in GAINS:
+        raise PipelineError(f"{where}: unknown gain kind {kind!r}{did_you_mean(kind, GAINS)}")
+    fields = [f.name for f in dataclasses.fields(GAINS[kind])]
+    for key in options:
+        if key not in fields:
+            raise PipelineError(f"{where}: gain {kind} has no parameter {key!r}{did_you_mean(key, fields)}")
+    try:
+        return make_gain(kind, **options)
+    except InputError as exc:
+        raise PipelineError(f"{where}: {exc}") from None
+
+
+def with_defaults(func, *params: Param) -> tuple[Param, ...]:
+    """``params`` with every unset default read from the signature of ``func``.
+
+    Keeps the documented defaults of ``hht3d ops`` equal to the core's own.
+    """
+    signature = inspect.signature(func).parameters
+    return tuple(dataclasses.replace(p, default=signature[p.name].default) if p.default is _SIGNATURE else p
+                 for p in params)

@@ -1,0 +1,143 @@
+"""The validated pipeline: typed, complete, and checked before anything runs.
+
+:func:`hht3d.pipeline.load_pipeline` turns YAML into a :class:`Pipeline`;
+every default is filled in, every reference resolved, every input file
+found, so the runner (:mod:`hht3d.pipeline.runner`) only compiles it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .outputs import Format
+from .params import yaml_text
+from .registry import Operation
+
+__all__ = ["FILE", "Execution", "Step", "Output", "Pipeline"]
+
+#: Reference of a ``file`` slot: the input file of the item being processed.
+FILE = "<input file>"
+
+#: Placeholders of output path patterns.
+PLACEHOLDERS = ("stem", "parent", "name")
+
+
+@dataclass(frozen=True)
+class Execution:
+    """Where and how the graph runs (:func:`hht3d.scheduling.compute`)."""
+
+    scheduler: str = "threads"
+    workers: int | None = None
+    address: str | None = None
+    progress: bool = True
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step: its operation, checked parameters (defaults filled in) and resolved inputs.
+
+    ``refs`` maps each slot of the operation to the id of the step whose
+    result it takes (:data:`FILE` for the input file); ``given`` are the
+    parameter names the pipeline set explicitly.
+    """
+
+    id: str
+    op: Operation
+    params: dict
+    refs: dict
+    given: tuple[str, ...] = ()
+
+    @property
+    def kind(self) -> str:
+        return self.op.output
+
+
+@dataclass(frozen=True)
+class Output:
+    """One file per input: the result of step ``step`` written as ``format`` to ``path``.
+
+    ``options`` are the format's options with defaults filled in; ``given``
+    names those the pipeline set.
+    """
+
+    step: str
+    path: str
+    format: Format
+    options: dict = field(default_factory=dict)
+    given: tuple[str, ...] = ()
+
+    def resolve(self, folder: Path, source: Path, name: str) -> Path:
+        """The file for one input: placeholders ``{stem}``, ``{parent}``, ``{name}`` filled in."""
+        return folder / self.path.format(stem=source.stem, parent=source.parent.name, name=name)
+
+
+@dataclass(frozen=True)
+class Pipeline:
+    """A validated pipeline.
+
+    Attributes
+    ----------
+    name : str
+    source : str
+        The YAML file it came from (for messages).
+    execution : Execution
+    inputs : tuple of Path
+        The input files, resolved.
+    steps : tuple of Step
+        In an order where every step follows the steps it uses.
+    outputs : tuple of Output
+    folder : Path
+        Output folder; output paths are relative to it.
+    summary : bool
+        Write ``summary.json`` and ``summary.csv`` in ``folder``.
+    """
+
+    name: str
+    source: str
+    execution: Execution
+    inputs: tuple[Path, ...]
+    steps: tuple[Step, ...]
+    outputs: tuple[Output, ...]
+    folder: Path
+    summary: bool = True
+
+    def step(self, step_id: str) -> Step:
+        return next(s for s in self.steps if s.id == step_id)
+
+    def output_paths(self, source: Path) -> list[Path]:
+        """The files the pipeline writes for one input, in the order of :attr:`outputs`."""
+        return [o.resolve(self.folder, source, self.name) for o in self.outputs]
+
+    def surface_of(self, step_id: str) -> str:
+        """Id of the step whose surface a step's result lives on (itself for a surface)."""
+        step = self.step(step_id)
+        if step.kind == "surface":
+            return step.id
+        slot = "surface" if "surface" in step.refs else next(iter(step.refs))
+        return self.surface_of(step.refs[slot])
+
+    def describe(self) -> str:
+        """The planned graph as text (``hht3d validate``)."""
+        ex = self.execution
+        where = f" at {ex.address}" if ex.address else ""
+        files = f"{len(self.inputs)} input file{'' if len(self.inputs) == 1 else 's'}"
+        header = f"pipeline {self.name!r} ({self.source}): {files}, {len(self.steps)} steps"
+        lines = [f"{header}, {len(self.outputs)} outputs per input",
+                 (f"execution: scheduler {ex.scheduler}{where}, workers {ex.workers or 'one per core'}, "
+                  f"progress {yaml_text(ex.progress)}, seed {ex.seed}"),
+                 "inputs:"]
+        lines += [f"  {p}" for p in self.inputs]
+        lines.append("steps:")
+        width = max(len(s.id) for s in self.steps)
+        for s in self.steps:
+            uses = ", ".join(f"{slot}={'file' if ref == FILE else ref}" for slot, ref in s.refs.items())
+            lines.append(f"  {s.id:<{width}}  {s.op.name}({uses}) -> {s.kind}")
+            if s.given:
+                lines.append(f"  {'':<{width}}    " + ", ".join(f"{k}={yaml_text(s.params[k])}" for k in s.given))
+        lines.append(f"outputs (folder {self.folder}" + (", with summary.json/.csv):" if self.summary else "):"))
+        example = self.inputs[0]
+        for o, path in zip(self.outputs, self.output_paths(example)):
+            options = "".join(f", {k}={yaml_text(o.options[k])}" for k in o.given)
+            lines.append(f"  {o.step} -> {o.path} ({o.format.name}{options}), e.g. {path}")
+        return "\n".join(lines)

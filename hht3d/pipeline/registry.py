@@ -1,0 +1,279 @@
+"""The operations a pipeline step can name, with their inputs, output and parameters.
+
+Every operation takes *slots* (named inputs, each accepting results of some
+kinds) and produces one result of one kind:
+
+=========  ==============================================================
+kind       value
+=========  ==============================================================
+file       the input file of the current item (only ``load`` takes it)
+surface    :class:`~hht3d.surface.Surface`
+signal     ``(n,)`` array
+emd        :class:`~hht3d.emd.EMDResult`
+hht        :class:`~hht3d.hht.HHTResult`
+features   :class:`~hht3d.apps.FeatureResult`
+=========  ==============================================================
+
+``build(builder, inputs, params)`` makes the step's lazy tasks through
+:mod:`hht3d.graph` and returns them by name, the step's result under
+``"result"``.  ``hht3d ops`` prints this registry.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .. import graph
+from ..apps import hks_features, imf_enhancement, manifold_harmonics_filter, prominent_features
+from ..apps import reconstruct as _reconstruct
+from ..emd import ENVELOPES, EXTREMA_RULES, STOPPING_RULES
+from ..emd import emd as _emd
+from ..errors import PipelineError
+from ..io import load as _load
+from ..riesz import GRADIENTS, METHODS, MIN_TOL
+from ..signals import SIGNALS
+from ..signals import signal as _signal
+from ..surface import LAPLACIANS
+from .params import REQUIRED, Param, did_you_mean, with_defaults
+
+__all__ = ["Slot", "Operation", "OPERATIONS", "operation"]
+
+#: Sparse solver backends of :mod:`hht3d.linalg` (availability is checked when a step runs).
+SOLVERS = ("pardiso", "superlu")
+
+
+@dataclass(frozen=True)
+class Slot:
+    """A named input of an operation and the result kinds it accepts."""
+
+    name: str
+    kinds: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Operation:
+    """A registered operation: what it takes, makes and accepts as parameters."""
+
+    name: str
+    summary: str
+    slots: tuple[Slot, ...]
+    output: str
+    params: tuple[Param, ...]
+    build: Callable = field(repr=False)
+    check: Callable | None = field(default=None, repr=False)
+
+    def param(self, name: str) -> Param | None:
+        return next((p for p in self.params if p.name == name), None)
+
+
+# -- parameters -------------------------------------------------------------------------------------
+_BACKEND = Param("backend", "choice", "sparse solver (default: the fastest installed)", default=None,
+                 choices=SOLVERS)
+
+LOAD = with_defaults(
+    _load,
+    Param("clean", "bool", "weld duplicate vertices, drop degenerate faces and unused vertices"),
+    Param("laplacian", "choice", "mesh Laplacian (point clouds always use the robust one)", choices=LAPLACIANS),
+    Param("n_neighbors", "int", "neighbours of the point-cloud Laplacian and normals", minimum=3),
+)
+
+SIGNAL = (
+    Param("kind", "choice", "which signal; mean_curvature is Eq. 24", default=REQUIRED,
+          choices=(*SIGNALS, "stored", "file")),
+    Param("attribute", "str", "vertex property of the file, with kind: stored", default=None),
+    Param("path", "str", "a .npy file of one value per vertex, with kind: file", default=None),
+)
+
+EMD = with_defaults(
+    _emd,
+    Param("max_imfs", "int", "at most this many IMFs", minimum=0),
+    Param("stopping", "choice", "sifting stop rule", choices=STOPPING_RULES),
+    Param("sd_threshold", "float", "SD stopping threshold", minimum=0),
+    Param("s_number", "int", "S-number: unchanged extrema counts in a row", minimum=1),
+    Param("fixed_sifts", "int", "sifts per IMF with stopping: fixed", minimum=1),
+    Param("max_sifts", "int", "cap on sifts per IMF", minimum=1),
+    Param("envelope", "choice", "envelope interpolant (Eqs. 8, 11)", choices=ENVELOPES),
+    Param("extrema", "choice", "extremum rule: 1-ring, or ratio of the ring-ring", choices=EXTREMA_RULES),
+    Param("ring", "int", "neighbourhood of extrema: ring", minimum=1),
+    Param("ratio", "float", "fraction of extrema: ring", minimum=0.5, maximum=1, open_minimum=True),
+    Param("energy_threshold", "float", "stop when the residue keeps less of the energy", minimum=0),
+    _BACKEND,
+)
+
+ENSEMBLE = with_defaults(
+    graph.eemd,
+    Param("ensemble_size", "int", "EEMD members", minimum=1),
+    Param("noise_std", "float", "EEMD noise, relative to the signal's standard deviation", minimum=0),
+) + (Param("seed", "int", "EEMD noise seed (default: execution.seed)", default=None, minimum=0),)
+
+SPECTRA = with_defaults(
+    graph.transform,
+    Param("gradient", "choice", "tangent gradient of the monogenic signal", choices=GRADIENTS),
+    Param("method", "choice", "L^{-1/2}: exact quadrature, spectral truncation or dense", choices=METHODS),
+    Param("tol", "float", "relative accuracy of the quadrature", minimum=MIN_TOL, maximum=1, open_maximum=True),
+    Param("eigenpairs", "int", "eigenpairs of method: spectral", minimum=1),
+    Param("riesz_tasks", "int", "parallel shift-group tasks of the quadrature", minimum=1),
+)
+
+HHT = (
+    *(p for p in EMD if p.name != "backend"),
+    Param("ensemble_size", "int", "use EEMD with this many members (default: plain EMD)", default=None,
+          minimum=1),
+    *ENSEMBLE[1:],
+    *SPECTRA,
+    _BACKEND,
+)
+
+_WEIGHTS = with_defaults(
+    _reconstruct,
+    Param("interior_weight", "float", "position weight μ of interior vertices (Eq. 27)", minimum=0,
+          open_minimum=True),
+    Param("boundary_weight", "float", "position weight μ of boundary vertices (Eq. 27)", minimum=0,
+          open_minimum=True),
+    Param("preserve_scale", "bool", "remove the mean curvature change per component"),
+)
+_GAIN = Param("gain", "gain", "μ(ω) of the instantaneous frequency, e.g. {kind: band_stop, low: 8, high: 20}",
+              default=REQUIRED)
+
+FEATURES = with_defaults(
+    prominent_features,
+    Param("ratio", "float", "a maximum is >= this fraction of its ring", minimum=0.5, maximum=1,
+          open_minimum=True),
+    Param("ring", "int", "neighbourhood in edges", minimum=1),
+    Param("fraction", "float", "hit: extremum of at least this fraction of the IMFs", minimum=0, maximum=1,
+          open_minimum=True),
+    Param("merge_radius", "float", "merge hits closer than this (model units)", minimum=0),
+)
+
+HKS = with_defaults(
+    hks_features,
+    Param("time", "float", "diffusion time (default: a fraction of 4 ln 10 / λ1)", minimum=0,
+          open_minimum=True),
+    Param("eigenpairs", "int", "eigenpairs in the heat-kernel sum", minimum=1),
+    Param("ring", "int", "neighbourhood in edges", minimum=1),
+    Param("merge_radius", "float", "merge maxima closer than this (model units)", minimum=0),
+) + (_BACKEND,)
+
+ENHANCE = with_defaults(
+    imf_enhancement,
+    Param("factor", "float", "multiply the IMF by this"),
+    Param("index", "int", "which IMF, from 0 (the finest)", minimum=0),
+) + _WEIGHTS + (_BACKEND,)
+
+MHB = with_defaults(
+    manifold_harmonics_filter,
+    Param("eigenpairs", "int", "Laplacian eigenpairs of the basis", minimum=1),
+    Param("keep_remainder", "bool", "keep the part of the shape beyond the basis"),
+) + (_BACKEND,)
+
+
+# -- builders ------------------------------------------------------------------------------------
+def _load_step(builder, inputs, params):
+    return {"result": builder.task("load", _load)(str(inputs["file"]), **params)}
+
+
+def _signal_step(builder, inputs, params):
+    return {"result": builder.task("signal", _signal)(inputs["surface"], **params)}
+
+
+def _check_signal(params, where):
+    kind = params["kind"]
+    needs = {"stored": "attribute", "file": "path"}
+    for name in ("attribute", "path"):
+        if params[name] is not None and needs.get(kind) != name:
+            raise PipelineError(f"{where}: parameter {name} is only used with kind: "
+                                f"{'stored' if name == 'attribute' else 'file'} (kind is {kind})")
+    if kind in needs and params[needs[kind]] is None:
+        raise PipelineError(f"{where}: kind: {kind} needs the parameter {needs[kind]}")
+    if kind == "file" and not Path(params["path"]).is_file():
+        raise PipelineError(f"{where}: signal file {params['path']}: no such file")
+
+
+def _emd_step(builder, inputs, params):
+    return {"result": builder.task("emd", _emd)(inputs["surface"], inputs["signal"], **params)}
+
+
+def _eemd_step(builder, inputs, params):
+    return {"result": graph.eemd(inputs["surface"], inputs["signal"], builder=builder, **params)}
+
+
+def _hht_step(builder, inputs, params):
+    emd_names = {p.name for p in EMD} - {"backend"}
+    emd_options = {k: v for k, v in params.items() if k in emd_names}
+    ensemble = {k: params[k] for k in ("ensemble_size", "noise_std", "seed")}
+    spectra = {k: params[k] for k in (*(p.name for p in SPECTRA), "backend")}
+    stages = graph.transform(builder, inputs["surface"], inputs["signal"], emd_options=emd_options,
+                             ensemble=ensemble if ensemble["ensemble_size"] is not None else None, **spectra)
+    return {**stages, "result": stages["hht"]}
+
+
+def _filter_signal_step(builder, inputs, params):
+    return {"result": graph.filter_signal(inputs["hht"], params["gain"], builder=builder)}
+
+
+def _filter_geometry_step(builder, inputs, params):
+    return {"result": graph.filter_geometry(inputs["hht"], builder=builder, **params)}
+
+
+def _reconstruct_step(builder, inputs, params):
+    return {"result": graph.reconstruct(inputs["surface"], inputs["signal"], builder=builder, **params)}
+
+
+def _features_step(builder, inputs, params):
+    return {"result": graph.prominent_features(inputs["surface"], inputs["imfs"], builder=builder, **params)}
+
+
+def _hks_step(builder, inputs, params):
+    return {"result": graph.hks_features(inputs["surface"], builder=builder, **params)}
+
+
+def _enhance_step(builder, inputs, params):
+    return {"result": graph.imf_enhancement(inputs["surface"], inputs["imfs"], builder=builder, **params)}
+
+
+def _mhb_step(builder, inputs, params):
+    return {"result": graph.manifold_harmonics_filter(inputs["surface"], builder=builder, **params)}
+
+
+_SURFACE = Slot("surface", ("surface",))
+_SIGNAL_IN = Slot("signal", ("signal",))
+_IMFS = Slot("imfs", ("emd", "hht"))
+_HHT = Slot("hht", ("hht",))
+
+#: The operations by name.
+OPERATIONS: dict[str, Operation] = {op.name: op for op in (
+    Operation("load", "read a mesh or point cloud (PLY, OBJ, OFF, STL, GLB, PCD, XYZ, ...)",
+              (Slot("file", ("file",)),), "surface", LOAD, _load_step),
+    Operation("signal", "a per-vertex signal: mean curvature (Eq. 24), coordinates, colour, stored values",
+              (_SURFACE,), "signal", SIGNAL, _signal_step, _check_signal),
+    Operation("emd", "empirical mode decomposition with biharmonic envelopes (Sec. 4.1)",
+              (_SURFACE, _SIGNAL_IN), "emd", EMD, _emd_step),
+    Operation("eemd", "ensemble EMD: one task per noisy member, then the average",
+              (_SURFACE, _SIGNAL_IN), "emd", ENSEMBLE + EMD, _eemd_step),
+    Operation("hht", "Hilbert–Huang transform: EMD, Riesz transform, Hilbert spectra (Alg. 2)",
+              (_SURFACE, _SIGNAL_IN), "hht", HHT, _hht_step),
+    Operation("filter_signal", "the signal through a gain of the instantaneous frequency (Eq. 26)",
+              (_HHT,), "signal", (_GAIN,), _filter_signal_step),
+    Operation("filter_geometry", "Hilbert-spectrum filtering of the mean curvature and new positions "
+                                 "(Eqs. 26-27)",
+              (_HHT,), "surface", (_GAIN, *_WEIGHTS, _BACKEND), _filter_geometry_step),
+    Operation("reconstruct", "new positions whose mean curvature is the given signal (Eq. 27)",
+              (_SURFACE, _SIGNAL_IN), "surface", (*_WEIGHTS, _BACKEND), _reconstruct_step),
+    Operation("features", "prominent feature points from IMF extrema counts (Sec. 5.2)",
+              (_SURFACE, _IMFS), "features", FEATURES, _features_step),
+    Operation("hks_features", "baseline: maxima of the heat kernel signature (Sun et al. 2009)",
+              (_SURFACE,), "features", HKS, _hks_step),
+    Operation("imf_enhancement", "baseline: scale one IMF of the mean curvature (Hu et al. 2014)",
+              (_SURFACE, _IMFS), "surface", ENHANCE, _enhance_step),
+    Operation("manifold_harmonics_filter", "baseline: filter in the Laplacian eigenbasis (Vallet & Lévy 2008)",
+              (_SURFACE,), "surface", (_GAIN, *MHB), _mhb_step),
+)}
+
+
+def operation(name: str, where: str) -> Operation:
+    """The operation called ``name``; a :class:`PipelineError` with "did you mean" otherwise."""
+    if not isinstance(name, str) or name not in OPERATIONS:
+        raise PipelineError(f"{where}: unknown op {name!r}{did_you_mean(name, OPERATIONS)} "
+                            "(`hht3d ops` lists them)")
+    return OPERATIONS[name]

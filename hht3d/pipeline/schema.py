@@ -1,0 +1,514 @@
+"""Reading and validating pipeline YAML (schema version 1) into a :class:`~.plan.Pipeline`.
+
+::
+
+    version: 1                      # required
+    name: demo                      # optional; default the file's stem
+    execution:                      # optional
+      scheduler: threads            # synchronous | threads | processes | distributed
+      workers: 2                    # default one per core
+      address: tcp://host:8786      # an existing dask.distributed scheduler
+      progress: true
+      seed: 0                       # default seed of every randomised step (EEMD)
+    inputs: scans/                  # a file, a folder, a glob, a list of them,
+                                    # or {builtin: spot} (a model shipped in the package)
+    steps:                          # run per input file
+      - id: curvature               # optional; default the op name
+        op: signal                  # one of `hht3d ops`
+        params: {kind: mean_curvature}
+      - id: hht
+        op: hht
+        from: {signal: curvature}   # optional: a step id, or {slot: step id}
+        params: {max_imfs: 6}
+    outputs:
+      folder: out/demo              # default "out"
+      summary: true                 # summary.json / summary.csv (default true)
+      files:
+        - {from: hht, path: "{stem}_hht.ply"}
+        - {from: hht, path: "{stem}_frequency_1.ply", format: colored_ply, field: frequency_1}
+        # from: default the last step to run; format: default from the suffix
+        # (.ply with field or cmap: colored_ply); path placeholders {stem}, {parent}, {name}
+
+Steps without ``load`` get an implicit first step ``{id: load, op: load}``
+(``--set steps.load.params.laplacian=robust`` reaches it).
+A slot not named in ``from`` takes the result of the nearest earlier step
+of a kind it accepts, so a linear chain needs no references.  Relative paths
+are relative to the working directory.  Every error is a
+:class:`~hht3d.errors.PipelineError` naming the file and line (or the
+``--set`` override) and what to change.
+"""
+from __future__ import annotations
+
+import string
+from importlib import resources
+from pathlib import Path
+
+import yaml
+
+from ..errors import InputError, PipelineError
+from ..io import resolve_inputs
+from ..scheduling import SCHEDULERS
+from .outputs import FORMATS, SUFFIXES, check_options
+from .params import Param, did_you_mean
+from .plan import FILE, PLACEHOLDERS, Execution, Output, Pipeline, Step
+from .registry import OPERATIONS, operation
+
+__all__ = ["VERSION", "load_pipeline", "parse_pipeline", "builtin_models", "read_yaml", "apply_overrides"]
+
+#: The schema version this package reads.
+VERSION = 1
+
+_TOP = ("version", "name", "execution", "inputs", "steps", "outputs")
+_STEP = ("id", "op", "from", "params")
+_OUTPUTS = ("folder", "summary", "files")
+_FILE = ("from", "path", "format")
+_EXECUTION = (
+    Param("scheduler", "choice", "Dask scheduler", default="threads", choices=SCHEDULERS),
+    Param("workers", "int", "threads, processes or cluster workers (default: one per core)", default=None,
+          minimum=1),
+    Param("address", "str", "address of a running dask.distributed scheduler", default=None),
+    Param("progress", "bool", "progress bar on stderr", default=True),
+    Param("seed", "int", "default seed of randomised steps", default=0, minimum=0),
+)
+_ID_CHARS = set(string.ascii_letters + string.digits + "_-")
+
+
+# -- YAML with line numbers ------------------------------------------------------------------------
+class _Mapping(dict):
+    """A YAML mapping that remembers where it and each of its keys came from."""
+
+    def __init__(self, where: str):
+        super().__init__()
+        self.where = where
+        self.key_where: dict = {}
+
+    def at(self, key) -> str:
+        return self.key_where.get(key, self.where)
+
+
+def read_yaml(text: str, source: str):
+    """Parse YAML, keeping ``source:line`` of every mapping key; duplicate keys are errors.
+
+    Raises
+    ------
+    PipelineError
+        ``"source:LINE:COLUMN: YAML syntax error: ..."``.
+    """
+
+    class Loader(yaml.SafeLoader):
+        pass
+
+    def mapping(loader, node):
+        loader.flatten_mapping(node)
+        result = _Mapping(f"{source}:{node.start_mark.line + 1}")
+        for key_node, value_node in node.value:
+            key = loader.construct_object(key_node, deep=True)
+            at = f"{source}:{key_node.start_mark.line + 1}"
+            if not isinstance(key, (str, int, float, bool)) or key is None:
+                raise PipelineError(f"{at}: a mapping key must be a plain name, got {key!r}")
+            if key in result:
+                raise PipelineError(f"{at}: duplicate key {key!r} (first at {result.at(key)})")
+            result[key] = loader.construct_object(value_node, deep=True)
+            result.key_where[key] = at
+        return result
+
+    Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
+    try:
+        return yaml.load(text, Loader=Loader)  # a SafeLoader subclass
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        reason = ": ".join(filter(None, [exc.context, exc.problem]))
+        raise PipelineError(f"{source}:{mark.line + 1}:{mark.column + 1}: YAML syntax error: {reason}") from None
+    except yaml.YAMLError as exc:
+        raise PipelineError(f"{source}: YAML syntax error: {exc}") from None
+
+
+# -- --set overrides ---------------------------------------------------------------------------------
+def apply_overrides(document, overrides) -> None:
+    """Apply ``key.path=value`` overrides in place (values parsed as YAML).
+
+    A path component names a mapping key, a list index, or the ``id`` (or
+    ``op``) of a step in ``steps``: ``steps.hht.params.max_imfs=4``,
+    ``inputs=[a.ply, b.ply]``, ``outputs.folder=out/run1``.
+    """
+    for text in overrides:
+        where = f"--set {text}"
+        path, sep, raw = text.partition("=")
+        keys = path.strip().split(".")
+        if not sep or not all(keys):
+            raise PipelineError(f"{where}: expected KEY.PATH=VALUE, e.g. steps.hht.params.max_imfs=4")
+        try:
+            value = yaml.safe_load(raw) if raw.strip() else ""
+        except yaml.YAMLError:
+            value = raw
+        node = document
+        for depth, key in enumerate(keys[:-1]):
+            node = _child(node, key, ".".join(keys[:depth + 1]), where)
+        _assign(node, keys[-1], value, where)
+
+
+def _child(node, key: str, dotted: str, where: str):
+    if isinstance(node, list):
+        return node[_index(node, key, dotted, where)]
+    if not isinstance(node, dict):
+        raise PipelineError(f"{where}: {dotted.rpartition('.')[0] or 'the document'} is not a mapping")
+    if key not in node or node[key] is None:
+        _assign(node, key, _Mapping(where), where)
+    return node[key]
+
+
+def _index(items: list, key: str, dotted: str, where: str) -> int:
+    if key.isdigit() and int(key) < len(items):
+        return int(key)
+    names = [item.get("id", item.get("op")) if isinstance(item, dict) else None for item in items]
+    if key not in names:
+        raise PipelineError(f"{where}: {dotted} matches no list item (give an index < {len(items)} or a "
+                            f"step id){did_you_mean(key, [n for n in names if isinstance(n, str)])}")
+    return names.index(key)
+
+
+def _assign(node, key: str, value, where: str) -> None:
+    if isinstance(node, list):
+        node[_index(node, key, key, where)] = value
+    elif isinstance(node, dict):
+        node[key] = value
+        if isinstance(node, _Mapping):
+            node.key_where[key] = where
+    else:
+        raise PipelineError(f"{where}: cannot set {key!r} inside a {type(node).__name__}")
+
+
+# -- validation -----------------------------------------------------------------------------------
+def load_pipeline(path, overrides=()) -> Pipeline:
+    """Read, override and validate a pipeline file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A YAML file.
+    overrides : sequence of str
+        ``key.path=value`` assignments (the CLI's ``--set``).
+
+    Raises
+    ------
+    PipelineError
+        The first problem found, with its file and line.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise PipelineError(f"{path}: cannot read the pipeline ({exc.strerror or exc})") from None
+    return parse_pipeline(text, source=str(path), overrides=overrides)
+
+
+def parse_pipeline(text: str, *, source: str = "<pipeline>", overrides=()) -> Pipeline:
+    """Validate pipeline YAML given as text; see :func:`load_pipeline`."""
+    document = read_yaml(text, source)
+    if not isinstance(document, dict):
+        raise PipelineError(f"{source}: a pipeline is a YAML mapping with version, inputs, steps and "
+                            f"outputs; got {type(document).__name__ if document is not None else 'an empty file'}")
+    _add_implicit_load(document)
+    apply_overrides(document, overrides)
+    return _Validator(source).pipeline(document)
+
+
+def _add_implicit_load(document) -> None:
+    """Steps without a ``load`` start with ``{id: load, op: load}`` (which ``--set`` can then reach)."""
+    steps = document.get("steps")
+    if isinstance(steps, list) and not any(isinstance(e, dict) and e.get("op") == "load" for e in steps):
+        implicit = _Mapping(_at(document, "steps"))
+        implicit.update(id="load", op="load")
+        steps.insert(0, implicit)
+
+
+def builtin_models() -> dict[str, Path]:
+    """The models shipped in the package, by name (``spot``, ...)."""
+    folder = resources.files("hht3d") / "data"
+    return {Path(p.name).stem: Path(str(p)) for p in folder.iterdir() if p.name.endswith(".ply")}
+
+
+def _at(mapping, key=None) -> str:
+    if isinstance(mapping, _Mapping):
+        return mapping.at(key) if key is not None else mapping.where
+    return "--set"
+
+
+def _known_keys(mapping, known, what: str) -> None:
+    for key in mapping:
+        if key not in known:
+            raise PipelineError(f"{_at(mapping, key)}: unknown key {key!r} in {what}{did_you_mean(key, known)}")
+
+
+def _mapping(value, where: str, what: str) -> dict:
+    if not isinstance(value, dict):
+        raise PipelineError(f"{where}: {what} must be a mapping (key: value lines), got {value!r}")
+    return value
+
+
+class _Validator:
+    def __init__(self, source: str):
+        self.source = source
+
+    def pipeline(self, doc) -> Pipeline:
+        _known_keys(doc, _TOP, "the pipeline")
+        self._version(doc)
+        name = doc.get("name", Path(self.source).stem)
+        if not isinstance(name, str) or not name:
+            raise PipelineError(f"{_at(doc, 'name')}: name must be a non-empty string, got {name!r}")
+        execution = self._execution(doc.get("execution") or _Mapping(_at(doc, "execution")))
+        inputs = self._inputs(doc)
+        steps = self._steps(doc, execution)
+        folder, summary, outputs = self._outputs(doc, steps)
+        plan = Pipeline(name=name, source=self.source, execution=execution, inputs=inputs, steps=steps,
+                        outputs=outputs, folder=folder, summary=summary)
+        self._distinct_paths(plan, doc)
+        return plan
+
+    def _version(self, doc) -> None:
+        if "version" not in doc:
+            raise PipelineError(f"{self.source}: missing 'version: {VERSION}' (the schema version) at the top")
+        if doc["version"] != VERSION or isinstance(doc["version"], bool):
+            raise PipelineError(f"{_at(doc, 'version')}: unsupported pipeline version {doc['version']!r}; "
+                                f"this hht3d reads version {VERSION}")
+
+    def _execution(self, block) -> Execution:
+        block = _mapping(block, _at(block), "execution")
+        _known_keys(block, [p.name for p in _EXECUTION], "execution")
+        values = {p.name: p.check(block[p.name], f"{_at(block, p.name)}: execution") if p.name in block
+                  else p.default for p in _EXECUTION}
+        return Execution(**values)
+
+    def _inputs(self, doc) -> tuple[Path, ...]:
+        if "inputs" not in doc or doc["inputs"] in (None, [], ""):
+            raise PipelineError(f"{self.source}: missing inputs: give a file, a folder, a glob, a list of "
+                                "them, or {builtin: spot}")
+        spec, where = doc["inputs"], _at(doc, "inputs")
+        if isinstance(spec, dict):
+            _known_keys(spec, ["builtin"], "inputs")
+            models = builtin_models()
+            name = spec.get("builtin")
+            if name not in models:
+                raise PipelineError(f"{_at(spec, 'builtin')}: unknown builtin model {name!r}"
+                                    f"{did_you_mean(name, models)}")
+            return (models[name],)
+        items = spec if isinstance(spec, list) else [spec]
+        if not all(isinstance(item, str) and item for item in items):
+            raise PipelineError(f"{where}: inputs must be a path, a glob, a folder or a list of them, got {spec!r}")
+        try:
+            return tuple(resolve_inputs(items))
+        except InputError as exc:
+            raise PipelineError(f"{where}: inputs: {exc}") from None
+
+    # -- steps ----------------------------------------------------------------------------------
+    def _steps(self, doc, execution: Execution) -> tuple[Step, ...]:
+        raw = doc.get("steps")
+        if not isinstance(raw, list) or not raw:
+            raise PipelineError(f"{_at(doc, 'steps') if 'steps' in doc else self.source}: steps must be a "
+                                "non-empty list of {id, op, params} entries")
+        entries = [_mapping(e, _at(doc, "steps"), f"step {i + 1}") for i, e in enumerate(raw)]
+        parsed = [self._step(entry, execution) for entry in entries]
+        ids = [p[0] for p in parsed]
+        for i, step_id in enumerate(ids):
+            if step_id in ids[:i]:
+                raise PipelineError(f"{_at(entries[i], 'id')}: two steps have the id {step_id!r}; give each "
+                                    "step a distinct id")
+        steps = [Step(step_id, op, params, self._refs(entries, parsed, i), given)
+                 for i, (step_id, op, params, given) in enumerate(parsed)]
+        return _ordered(steps, entries)
+
+    def _step(self, entry, execution: Execution):
+        _known_keys(entry, _STEP, "a step")
+        where = _at(entry, "op")
+        if "op" not in entry:
+            raise PipelineError(f"{_at(entry)}: a step needs an op (`hht3d ops` lists them)")
+        op = operation(entry["op"], where)
+        step_id = entry.get("id", op.name)
+        if not isinstance(step_id, str) or not step_id or not set(step_id) <= _ID_CHARS:
+            raise PipelineError(f"{_at(entry, 'id')}: step id must be letters, digits, '_' or '-', "
+                                f"got {step_id!r}")
+        context = f"step {step_id!r} (op {op.name})"
+        raw = _mapping(entry.get("params") or _Mapping(_at(entry)), _at(entry, "params"), f"{context} params")
+        for key in raw:
+            if op.param(key) is None:
+                known = [p.name for p in op.params]
+                raise PipelineError(f"{_at(raw, key)}: {context}: unknown parameter {key!r}"
+                                    f"{did_you_mean(key, known)} (`hht3d ops {op.name}` lists them)")
+        params = {}
+        for p in op.params:
+            if p.name in raw:
+                params[p.name] = p.check(raw[p.name], f"{_at(raw, p.name)}: {context}")
+            elif p.required:
+                raise PipelineError(f"{_at(entry)}: {context}: missing required parameter {p.name} "
+                                    f"({p.describe()})")
+            else:
+                params[p.name] = p.default
+        if "seed" in params and params["seed"] is None:
+            params["seed"] = execution.seed
+        if op.check is not None:
+            op.check(params, f"{_at(entry)}: {context}")
+        return step_id, op, params, tuple(raw)
+
+    def _refs(self, entries, parsed, i: int) -> dict:
+        entry, (step_id, op, _, _) = entries[i], parsed[i]
+        kinds = {p[0]: p[1].output for p in parsed}
+        context = f"{_at(entry, 'from')}: step {step_id!r} (op {op.name})"
+        explicit = self._explicit_refs(entry, op, kinds, context)
+        refs = {}
+        for slot in op.slots:
+            if slot.kinds == ("file",):
+                refs[slot.name] = FILE
+            elif slot.name in explicit:
+                refs[slot.name] = explicit[slot.name]
+            else:
+                earlier = [p[0] for p in parsed[:i] if p[1].output in slot.kinds]
+                if not earlier:
+                    makers = sorted(o.name for o in OPERATIONS.values() if o.output in slot.kinds)
+                    raise PipelineError(
+                        f"{_at(entry)}: step {step_id!r} (op {op.name}) needs {' or '.join(slot.kinds)} input "
+                        f"{slot.name!r}, and no earlier step makes one; add a step with op "
+                        f"{' or '.join(makers)} before it, or name one with from: {{{slot.name}: STEP_ID}}")
+                refs[slot.name] = earlier[-1]
+        return refs
+
+    def _explicit_refs(self, entry, op, kinds: dict, context: str) -> dict:
+        given = entry.get("from")
+        if given is None:
+            return {}
+        slots = {s.name: s for s in op.slots if s.kinds != ("file",)}
+        if isinstance(given, str):
+            self._known_step(given, kinds, context, "from")
+            matching = [s for s in slots.values() if kinds[given] in s.kinds]
+            if not matching:
+                raise PipelineError(f"{context}: from: {given!r} makes {kinds[given]}, which op {op.name} does "
+                                    f"not take; it takes {self._takes(slots)}")
+            return {matching[0].name: given}
+        if not isinstance(given, dict):
+            raise PipelineError(f"{context}: from must be a step id or a mapping {{slot: step id}}, got {given!r}")
+        refs = {}
+        for slot, ref in given.items():
+            if slot not in slots:
+                raise PipelineError(f"{context}: op {op.name} has no input {slot!r}"
+                                    f"{did_you_mean(slot, slots, listing=False)} (it takes {self._takes(slots)})")
+            self._known_step(ref, kinds, context, f"from.{slot}")
+            if kinds[ref] not in slots[slot].kinds:
+                raise PipelineError(f"{context}: from.{slot}: step {ref!r} makes {kinds[ref]}, but {slot} "
+                                    f"needs {' or '.join(slots[slot].kinds)}")
+            refs[slot] = ref
+        return refs
+
+    @staticmethod
+    def _takes(slots: dict) -> str:
+        return ", ".join(f"{name} ({' or '.join(s.kinds)})" for name, s in slots.items()) or "no step results"
+
+    @staticmethod
+    def _known_step(ref, kinds: dict, context: str, what: str) -> None:
+        if ref not in kinds:
+            raise PipelineError(f"{context}: {what} refers to unknown step {ref!r}{did_you_mean(ref, kinds)}")
+
+    # -- outputs --------------------------------------------------------------------------------
+    def _outputs(self, doc, steps: tuple[Step, ...]):
+        block = doc.get("outputs")
+        if not isinstance(block, dict) or not block.get("files"):
+            raise PipelineError(f"{_at(doc, 'outputs') if 'outputs' in doc else self.source}: outputs must be a "
+                                "mapping with files: a list of {from: STEP, path: PATTERN} entries")
+        _known_keys(block, _OUTPUTS, "outputs")
+        folder = block.get("folder", "out")
+        if not isinstance(folder, str) or not folder:
+            raise PipelineError(f"{_at(block, 'folder')}: outputs.folder must be a path, got {folder!r}")
+        summary = Param("summary", "bool", "").check(block.get("summary", True), f"{_at(block, 'summary')}: outputs")
+        if not isinstance(block["files"], list):
+            raise PipelineError(f"{_at(block, 'files')}: outputs.files must be a list of {{from, path}} entries")
+        by_id = {s.id: s for s in steps}
+        last = next(s.id for s in reversed(steps))
+        files = tuple(self._output(_mapping(e, _at(block, "files"), "an output"), by_id, last)
+                      for e in block["files"])
+        return Path(folder), summary, files
+
+    def _output(self, entry, steps: dict, last: str) -> Output:
+        step_id = entry.get("from", last)
+        if step_id not in steps:
+            raise PipelineError(f"{_at(entry, 'from')}: output from unknown step {step_id!r}"
+                                f"{did_you_mean(step_id, steps)}")
+        kind = steps[step_id].kind
+        formats = FORMATS.get(kind, {})
+        path = entry.get("path")
+        if not isinstance(path, str) or not path:
+            raise PipelineError(f"{_at(entry)}: an output needs a path pattern, e.g. path: \"{{stem}}_hht.ply\"")
+        self._placeholders(path, _at(entry, "path"))
+        name = entry.get("format") or self._format_from(path, entry, formats)
+        context = f"{_at(entry, 'format' if 'format' in entry else 'path')}: output {path!r} of step {step_id!r}"
+        if name not in formats:
+            raise PipelineError(f"{context}: step {step_id!r} makes {kind}, which can be written as "
+                                f"{', '.join(formats) or 'nothing'}, not {name!r}")
+        fmt = formats[name]
+        if not path.lower().endswith(fmt.suffix):
+            raise PipelineError(f"{context}: format {name} writes {fmt.suffix} files; end the path with {fmt.suffix}")
+        known = [p.name for p in fmt.params]
+        for key in entry:
+            if key not in _FILE and key not in known:
+                raise PipelineError(f"{_at(entry, key)}: output {path!r}: unknown option {key!r} for format "
+                                    f"{name}{did_you_mean(key, [*_FILE, *known])}")
+        options = {p.name: p.check(entry[p.name], f"{_at(entry, p.name)}: output {path!r}") if p.name in entry
+                   else p.default for p in fmt.params}
+        check_options(options, context)
+        return Output(step_id, path, fmt, options, tuple(k for k in entry if k in known))
+
+    @staticmethod
+    def _format_from(path: str, entry, formats: dict) -> str:
+        suffix = Path(path).suffix.lower()
+        if suffix == ".ply" and ("field" in entry or "cmap" in entry):
+            return "colored_ply"
+        names = [n for n, s in SUFFIXES.items() if s == suffix]
+        if not names:
+            raise PipelineError(f"{_at(entry, 'path')}: cannot tell the format of {path!r}; end it with "
+                                f"{', '.join(sorted(set(SUFFIXES.values())))} or give format:")
+        return names[0]
+
+    @staticmethod
+    def _placeholders(path: str, where: str) -> None:
+        try:
+            fields = [f for _, f, _, _ in string.Formatter().parse(path) if f is not None]
+        except ValueError as exc:
+            raise PipelineError(f"{where}: bad path pattern {path!r}: {exc}") from None
+        for f in fields:
+            if f not in PLACEHOLDERS:
+                raise PipelineError(f"{where}: unknown placeholder {{{f}}} in {path!r}{did_you_mean(f, PLACEHOLDERS)}"
+                                    f" (use {', '.join('{' + p + '}' for p in PLACEHOLDERS)})")
+
+    def _distinct_paths(self, plan: Pipeline, doc) -> None:
+        seen: dict[Path, Path] = {}
+        for source in plan.inputs:
+            for path in plan.output_paths(source):
+                if path in seen:
+                    other = seen[path]
+                    clash = ("two outputs" if other == source else f"inputs {other} and {source}")
+                    raise PipelineError(f"{_at(doc, 'outputs')}: {clash} would both write {path}; make the path "
+                                        "patterns distinct (use {stem} or {parent})")
+                seen[path] = source
+
+
+def _ordered(steps: list[Step], entries) -> tuple[Step, ...]:
+    """Steps in list order, each moved after the steps it uses; a cycle is an error."""
+    by_id = {s.id: s for s in steps}
+    done: dict[str, bool] = {}  # False while on the current path
+    order: list[Step] = []
+
+    def visit(step: Step, path: list[str]) -> None:
+        if done.get(step.id) is False:
+            cycle = path[path.index(step.id):] + [step.id]
+            entry = entries[steps.index(step)]
+            raise PipelineError(f"{_at(entry, 'from')}: steps {' -> '.join(map(repr, cycle))} form a cycle (each uses the "
+                                "next); a step can only use results of steps that do not use its own")
+        if step.id in done:
+            return
+        done[step.id] = False
+        for ref in step.refs.values():
+            if ref != FILE:
+                visit(by_id[ref], path + [step.id])
+        done[step.id] = True
+        order.append(step)
+
+    for step in steps:
+        visit(step, [])
+    return tuple(order)

@@ -1,0 +1,346 @@
+"""YAML pipelines: the examples run, invalid pipelines say what to fix, numbers match the graph API."""
+import json
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+from meshes import fibonacci_sphere, icosphere
+
+from hht3d import Surface, graph
+from hht3d.cli import main
+from hht3d.io import load, write_ply
+from hht3d.pipeline import OPERATIONS, load_pipeline, parse_pipeline, run_pipeline
+
+EXAMPLES = sorted((Path(__file__).resolve().parents[1] / "pipelines").glob("*.yaml"))
+FAST = ["--scheduler", "synchronous", "--quiet"]
+
+
+def _bumpy(subdivisions=2, waves=5, scale=1.0):
+    v, f = icosphere(subdivisions)
+    return scale * v * (1 + 0.06 * np.sin(waves * v[:, [0]]) * np.cos(4 * v[:, [1]])), f
+
+
+@pytest.fixture
+def mesh_file(tmp_path):
+    path = tmp_path / "in" / "bumpy.ply"
+    path.parent.mkdir(exist_ok=True)
+    write_ply(path, Surface(*_bumpy(), name="bumpy"))
+    return path
+
+
+@pytest.fixture
+def cloud_file(tmp_path):
+    path = tmp_path / "in" / "cloud.ply"
+    path.parent.mkdir(exist_ok=True)
+    points = fibonacci_sphere(300)
+    write_ply(path, Surface(points * (1 + 0.06 * np.sin(5 * points[:, [0]])), name="cloud"))
+    return path
+
+
+@pytest.fixture
+def folder(tmp_path):
+    path = tmp_path / "scans"
+    path.mkdir()
+    for i in range(2):
+        write_ply(path / f"part{i}.ply", Surface(*_bumpy(waves=5 + i, scale=1 + i)))
+    return path
+
+
+def _run(pipeline, *options):
+    return main(["run", str(pipeline), *FAST, *options])
+
+
+def _fast_overrides(path) -> list[str]:
+    """Few IMFs for every decomposition of an example, to keep the tests short."""
+    plan = load_pipeline(path, ["inputs=" + str(path)])  # inputs only need to exist here
+    return [f"steps.{s.id}.params.max_imfs=2" for s in plan.steps if s.op.name in ("emd", "eemd", "hht")]
+
+
+# -- the examples ------------------------------------------------------------------------------
+def test_examples_are_there():
+    assert {p.name for p in EXAMPLES} >= {"demo.yaml", "dataset_features.yaml", "filtering.yaml",
+                                          "point_cloud.yaml"}
+
+
+@pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
+def test_example_runs_and_writes_its_outputs(example, tmp_path, mesh_file, cloud_file, folder):
+    inputs = {"point_cloud": cloud_file, "dataset_features": folder}.get(example.stem, mesh_file)
+    out = tmp_path / "out"
+    overrides = [f"inputs={inputs}", f"outputs.folder={out}", *_fast_overrides(example)]
+    assert _run(example, *[a for o in overrides for a in ("--set", o)]) == 0
+    plan = load_pipeline(example, overrides)
+    sources = sorted(inputs.iterdir()) if inputs.is_dir() else [inputs]
+    for source in sources:
+        for path in plan.output_paths(source):
+            assert path.is_file() and path.stat().st_size > 0, path
+    if plan.summary:
+        rows = json.loads((out / "summary.json").read_text())
+        assert [r["status"] for r in rows] == ["ok"] * len(sources)
+    assert not list(out.rglob("*.part"))
+
+
+def test_point_cloud_example_keeps_points_and_fields(tmp_path, cloud_file):
+    out = tmp_path / "out"
+    example = next(p for p in EXAMPLES if p.stem == "point_cloud")
+    _run(example, "--set", f"inputs={cloud_file}", "--set", f"outputs.folder={out}",
+         "--set", "steps.hht.params.max_imfs=2")
+    result = load(out / "cloud_hht.ply", clean=False)
+    assert result.faces is None and result.n_vertices == 300
+    assert {"signal", "imf_1", "frequency_1", "residue"} <= set(result.attributes)
+
+
+def test_filtering_example_moves_vertices_and_keeps_faces(tmp_path, mesh_file):
+    out = tmp_path / "out"
+    example = next(p for p in EXAMPLES if p.stem == "filtering")
+    _run(example, "--set", f"inputs={mesh_file}", "--set", f"outputs.folder={out}",
+         "--set", "steps.smooth.params.gain={kind: low_pass, cutoff: 1.0}")  # the bumps are at ~5 rad/unit
+    original, smooth = load(mesh_file, clean=False), load(out / "bumpy_smooth.ply", clean=False)
+    np.testing.assert_array_equal(smooth.faces, original.faces)
+    assert np.abs(smooth.vertices - original.vertices).max() > 1e-4
+
+
+# -- same numbers through the CLI, the Python pipeline API and the graph API ------------------------
+def test_cli_pipeline_and_graph_api_give_the_same_numbers(tmp_path, mesh_file):
+    demo = next(p for p in EXAMPLES if p.stem == "demo")
+    overrides = [f"inputs={mesh_file}", "steps.hht.params.max_imfs=3", "outputs.files=[{path: x.npz}]"]
+    cli = [*overrides, f"outputs.folder={tmp_path / 'cli'}"]
+    assert _run(demo, *[a for o in cli for a in ("--set", o)]) == 0
+    plan = load_pipeline(demo, [*overrides, f"outputs.folder={tmp_path / 'api'}"])
+    (row,) = run_pipeline(plan, scheduler="synchronous", progress=False)
+
+    surface = graph.load(mesh_file)
+    lazy = graph.hht(surface, graph.signal(surface, "mean_curvature"), emd_options={"max_imfs": 3})
+    (expected,) = graph.compute(lazy, scheduler="synchronous", progress=False)
+    assert row.status == "ok" and row.imfs == expected.n_imfs >= 2
+    mono = expected.monogenic
+    arrays = {"signal": expected.signal, "imfs": expected.imfs, "residue": expected.residue, "riesz": mono.riesz,
+              "amplitude": mono.amplitude, "frequency": mono.frequency}
+    for folder in ("cli", "api"):
+        got = np.load(tmp_path / folder / "x.npz")
+        for name, values in arrays.items():
+            np.testing.assert_array_equal(got[name], values)
+
+
+# -- invalid pipelines: a specific message, nothing written ------------------------------------------
+GOOD = """\
+version: 1
+inputs: {mesh}
+steps:
+  - id: curvature
+    op: signal
+    params: {{kind: mean_curvature}}
+  - id: emd
+    op: emd
+    params: {{max_imfs: 2}}
+outputs:
+  folder: {out}
+  files:
+    - {{from: emd, path: "{{stem}}_imfs.npz"}}
+"""
+
+EMD_STEP = "    op: emd\n"
+MORE_STEPS = "  - {id: hht, op: hht}\n  - {id: smooth, op: filter_geometry, params: {gain: {kind: constant}}}\noutputs:"
+
+#: case: (edits of GOOD as (old, new) pairs, expected part of the message)
+INVALID = {
+    "yaml syntax": ([(EMD_STEP, EMD_STEP + "   params: [\n")], "pipeline.yaml:9:4: YAML syntax error"),
+    "unknown op": ([("op: emd", "op: emdd")], "unknown op 'emdd'; did you mean 'emd'?"),
+    "unknown parameter": ([("max_imfs: 2", "max_imf: 2")],
+                          ("pipeline.yaml:9: step 'emd' (op emd): unknown parameter 'max_imf'; did you mean "
+                           "'max_imfs'?")),
+    "unknown top-level key": ([("steps:", "step:")], "unknown key 'step' in the pipeline; did you mean 'steps'?"),
+    "wrong type": ([("max_imfs: 2", "max_imfs: two")],
+                   "parameter max_imfs must be an integer >= 0; got 'two' (a string)"),
+    "out of range": ([("max_imfs: 2", "ratio: 1.5")], "parameter ratio must be a number in (0.5, 1]; got 1.5"),
+    "bad choice": ([("kind: mean_curvature", "kind: mean_curvatur")],
+                   "parameter kind must be one of mean_curvature, gaussian_curvature"),
+    "missing reference": ([(EMD_STEP, EMD_STEP + "    from: {signal: curvture}\n")],
+                          "from.signal refers to unknown step 'curvture'; did you mean 'curvature'?"),
+    "reference of the wrong kind": ([(EMD_STEP, EMD_STEP + "    from: {signal: load}\n")],
+                                    "from.signal: step 'load' makes surface, but signal needs signal"),
+    "cyclic reference": ([("    op: signal\n", "    op: signal\n    from: {surface: smooth}\n"),
+                          ("outputs:", MORE_STEPS)],
+                         "steps 'curvature' -> 'smooth' -> 'hht' -> 'curvature' form a cycle (each uses the next)"),
+    "no earlier input": ([("  - id: curvature\n    op: signal\n    params: {kind: mean_curvature}\n", "")],
+                         ("step 'emd' (op emd) needs signal input 'signal', and no earlier step makes one; add a "
+                          "step with op filter_signal or signal before it")),
+    "duplicate id": ([("id: emd", "id: curvature")], "two steps have the id 'curvature'"),
+    "missing input file": ([("inputs: ", "inputs: missing_")], "no such file or folder"),
+    "unsupported version": ([("version: 1", "version: 2")],
+                            "unsupported pipeline version 2; this hht3d reads version 1"),
+    "bad gain": ([("outputs:", MORE_STEPS), ("kind: constant", "kind: band_stop, low: 5, hihg: 9")],
+                 "gain band_stop has no parameter 'hihg'; did you mean 'high'?"),
+    "output of the wrong kind": ([("_imfs.npz", "_imfs.png")],
+                                 "step 'emd' makes emd, which can be written as npz, ply, not 'png'"),
+    "unknown output field": ([("outputs:", MORE_STEPS), ('{from: emd, path: "{stem}_imfs.npz"}',
+                                                         '{from: hht, path: "{stem}.ply", field: frequncy_1}')],
+                             "unknown field 'frequncy_1'"),
+    "unknown placeholder": ([("{stem}_imfs", "{steam}_imfs")], "unknown placeholder {steam}"),
+}
+
+
+@pytest.mark.parametrize("case", INVALID)
+def test_invalid_pipeline_names_the_problem_and_writes_nothing(case, tmp_path, mesh_file, capsys):
+    edits, message = INVALID[case]
+    text = GOOD.format(mesh=mesh_file, out=tmp_path / "out")
+    for old, new in edits:
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(text)
+    assert _run(path) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("hht3d: error: ") and err.count("\n") == 1, err
+    assert message in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_colliding_output_paths_are_rejected(tmp_path, folder):
+    text = GOOD.format(mesh=folder, out=tmp_path / "out").replace("{stem}_imfs", "imfs")
+    with pytest.raises(Exception, match=r"inputs .*part0.ply and .*part1.ply would both write .*imfs.npz"):
+        parse_pipeline(text)
+
+
+def test_bad_override_path_says_what_exists(tmp_path, mesh_file):
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(GOOD.format(mesh=mesh_file, out=tmp_path / "out"))
+    with pytest.raises(Exception, match="--set steps.emdd.params.max_imfs=3: steps.emdd matches no list item.*"
+                                        "did you mean 'emd'"):
+        load_pipeline(path, ["steps.emdd.params.max_imfs=3"])
+    with pytest.raises(Exception, match=r"--set steps.emd.params.max_imfs=-1: step 'emd' \(op emd\): parameter "
+                                        "max_imfs must be an integer >= 0"):
+        load_pipeline(path, ["steps.emd.params.max_imfs=-1"])
+
+
+# -- runtime errors name the step and the input file -----------------------------------------------------
+def test_failed_file_is_reported_with_step_and_file_while_others_finish(tmp_path, folder, capsys):
+    (folder / "broken.ply").write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 9\n")
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(GOOD.format(mesh=folder, out=tmp_path / "out"))
+    assert _run(path) == 1
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1
+    assert f"1 of 3 inputs failed; first: step load failed on {folder / 'broken.ply'}: InputError" in captured.err
+    produced = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert produced == ["part0_imfs.npz", "part1_imfs.npz", "summary.csv", "summary.json"]
+    rows = {Path(r["source"]).name: r for r in json.loads((tmp_path / "out" / "summary.json").read_text())}
+    assert rows["broken.ply"]["status"] == "failed" and rows["broken.ply"]["step"] == "load"
+    assert rows["part1.ply"]["status"] == "ok" and rows["part1.ply"]["imfs"] == 2
+
+
+def test_failure_inside_a_step_names_that_step(tmp_path, mesh_file, capsys):
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(GOOD.format(mesh=mesh_file, out=tmp_path / "out").replace("mean_curvature", "luminance"))
+    assert _run(path) == 1
+    err = capsys.readouterr().err
+    assert f"step curvature failed on {mesh_file}: InputError: bumpy: has no vertex colours" in err
+    assert not list((tmp_path / "out").glob("*.npz"))
+
+
+def test_resume_skips_finished_inputs(tmp_path, folder):
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(GOOD.format(mesh=folder, out=tmp_path / "out"))
+    plan = load_pipeline(path)
+    run_pipeline(plan, scheduler="synchronous", progress=False)
+    (tmp_path / "out" / "part1_imfs.npz").unlink()
+    rows = run_pipeline(plan, scheduler="synchronous", progress=False, resume=True)
+    assert [r.status for r in rows] == ["skipped", "ok"]
+
+
+# -- the plan -----------------------------------------------------------------------------------
+def test_linear_chain_wires_itself_and_explicit_references_win(tmp_path, mesh_file):
+    text = textwrap.dedent(f"""\
+        version: 1
+        execution: {{seed: 7}}
+        inputs: {mesh_file}
+        steps:
+          - {{id: curvature, op: signal, params: {{kind: mean_curvature}}}}
+          - {{id: height, op: signal, params: {{kind: z}}}}
+          - {{id: decompose, op: eemd, from: curvature, params: {{ensemble_size: 2, max_imfs: 1}}}}
+          - {{id: hht, op: hht}}
+          - {{id: peaks, op: features}}
+          - {{id: flat, op: filter_signal, params: {{gain: {{kind: low_pass, cutoff: 2.0}}}}}}
+          - {{id: rebuilt, op: reconstruct}}
+        outputs:
+          files: [{{from: rebuilt, path: "{{stem}}.ply"}}]
+        """)
+    plan = parse_pipeline(text)
+    refs = {s.id: s.refs for s in plan.steps}
+    assert plan.steps[0].id == "load"  # implicit first step
+    assert refs["decompose"] == {"surface": "load", "signal": "curvature"}
+    assert refs["hht"] == {"surface": "load", "signal": "height"}  # the nearest earlier signal
+    assert refs["peaks"] == {"surface": "load", "imfs": "hht"}
+    assert refs["rebuilt"] == {"surface": "load", "signal": "flat"}
+    assert plan.step("decompose").params["seed"] == 7  # execution.seed
+    assert plan.outputs[0].format.name == "ply" and plan.folder == Path("out")
+    text = plan.describe()
+    assert "hht        hht(surface=load, signal=height) -> hht" in text
+    assert "ensemble_size=2, max_imfs=1" in text
+
+
+def test_forward_references_are_ordered(mesh_file):
+    text = textwrap.dedent(f"""\
+        version: 1
+        inputs: {mesh_file}
+        steps:
+          - {{id: hht, op: hht, from: {{signal: curvature}}}}
+          - {{id: curvature, op: signal, params: {{kind: mean_curvature}}}}
+        outputs:
+          files: [{{path: "{{stem}}.npz"}}]
+        """)
+    plan = parse_pipeline(text)
+    assert [s.id for s in plan.steps] == ["load", "curvature", "hht"]
+    assert plan.outputs[0].step == "hht"  # default: the last step to run
+
+
+def test_builtin_demo_model_is_an_input():
+    plan = parse_pipeline("version: 1\ninputs: {builtin: spot}\nsteps: [{op: signal, params: {kind: x}}]\n"
+                          "outputs: {files: [{path: a.npz}]}")
+    assert plan.inputs[0].name == "spot.ply" and plan.inputs[0].is_file()
+    with pytest.raises(Exception, match="unknown builtin model 'spott'; did you mean 'spot'"):
+        parse_pipeline("version: 1\ninputs: {builtin: spott}\nsteps: [{op: signal}]\n")
+
+
+def test_every_operation_and_output_format_runs(tmp_path, mesh_file):
+    text = textwrap.dedent(f"""\
+        version: 1
+        execution: {{scheduler: synchronous, progress: false}}
+        inputs: {mesh_file}
+        steps:
+          - {{id: curvature, op: signal, params: {{kind: mean_curvature}}}}
+          - {{id: ensemble, op: eemd, params: {{ensemble_size: 2, max_imfs: 2}}}}
+          - {{id: decompose, op: emd, params: {{max_imfs: 2}}}}
+          - {{id: hht, op: hht, params: {{max_imfs: 2, ensemble_size: 2}}}}
+          - {{id: flat, op: filter_signal, params: {{gain: {{kind: piecewise_linear, points: [[0, 1], [9, 0.5]]}}}}}}
+          - {{id: rebuilt, op: reconstruct, params: {{interior_weight: 0.1}}}}
+          - {{id: band, op: filter_geometry, from: hht, params: {{gain: {{kind: band_boost, low: 1, high: 9}}}}}}
+          - {{id: peaks, op: features, from: {{imfs: decompose}}}}
+          - {{id: hks, op: hks_features, from: {{surface: load}}, params: {{eigenpairs: 20}}}}
+          - {{id: boosted, op: imf_enhancement, from: {{surface: load, imfs: ensemble}}}}
+          - {{id: harmonics, op: manifold_harmonics_filter, from: {{surface: load}},
+              params: {{eigenpairs: 20, gain: {{kind: low_pass, cutoff: 3}}}}}}
+        outputs:
+          folder: {tmp_path / "out"}
+          files:
+            - {{from: flat, path: flat.npz}}
+            - {{from: flat, path: flat.ply, cmap: magma}}
+            - {{from: flat, path: flat.png, title: filtered}}
+            - {{from: ensemble, path: eemd.npz}}
+            - {{from: decompose, path: emd.ply}}
+            - {{from: peaks, path: peaks.ply}}
+            - {{from: hks, path: hks.npz}}
+            - {{from: rebuilt, path: rebuilt.ply}}
+            - {{from: band, path: band.png, view: top}}
+            - {{from: boosted, path: boosted.ply}}
+            - {{from: harmonics, path: harmonics.ply}}
+            - {{from: hht, path: amplitude_1.ply, field: amplitude_1}}
+            - {{from: hht, path: phase_1.png, figure: field, field: phase_1}}
+        """)
+    plan = parse_pipeline(text)
+    assert {s.op.name for s in plan.steps} == set(OPERATIONS)
+    (row,) = run_pipeline(plan)
+    assert row.status == "ok", row.error
+    assert all(Path(p).stat().st_size > 0 for p in row.outputs) and len(row.outputs) == 13
+    assert np.load(tmp_path / "out" / "eemd.npz")["imfs"].shape[0] == 2
+    assert load(tmp_path / "out" / "peaks.ply", clean=False).attributes["feature"].max() == 1.0
