@@ -66,7 +66,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import DATA, PAPER_TABLE1, RESULTS, machine, mkl_environment, model_path, peak_rss_mb, table, write_results
+from common import (DATA, PAPER_TABLE1, RESULTS, machine, mkl_environment, model_path,  # noqa: E402
+                    peak_rss_mb, status_mb, table, write_results)
 
 SCRATCH = RESULTS / "scratch"
 LADDER = ["spot", "sphere_oct4098", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti",
@@ -79,13 +80,6 @@ TARGET_FACTOR = 5  # ours <= paper total / 5
 
 
 # -- measurement helpers (worker side) ---------------------------------------------------------------
-
-def _status_mb(field: str) -> float:
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith(field + ":"):
-            return int(line.split()[1]) / 1024.0
-    return float("nan")
-
 
 def _reset_peak() -> bool:
     """Reset the peak-RSS high-water mark (and so ru_maxrss) to the current RSS."""
@@ -117,7 +111,7 @@ class Recorder:
 
     @contextlib.contextmanager
     def stage(self, name: str):
-        rss_start = _status_mb("VmRSS")
+        rss_start = status_mb("VmRSS")
         self._stage_peak = 0.0
         self.peak_resets &= _reset_peak()
         self.label = name
@@ -126,7 +120,7 @@ class Recorder:
         seconds, cpu = time.perf_counter() - start, time.process_time() - cpu_start
         self.peaks[f"{name}:tail"] = peak_rss_mb()  # since the last checkpoint of the stage
         self.stages[name] = {"seconds": seconds, "cpu_seconds": cpu, "rss_start_mb": rss_start,
-                             "rss_end_mb": _status_mb("VmRSS"), "peak_mb": max(self._stage_peak, peak_rss_mb())}
+                             "rss_end_mb": status_mb("VmRSS"), "peak_mb": max(self._stage_peak, peak_rss_mb())}
         self.label = "between"
 
     @contextlib.contextmanager
@@ -210,7 +204,7 @@ def run_case(name: str, path: Path, max_imfs: int | None) -> dict:
 
     rec = Recorder()
     rec.instrument()
-    baseline_mb = _status_mb("VmRSS")
+    baseline_mb = status_mb("VmRSS")
     started = time.strftime("%Y-%m-%d %H:%M:%S")
     load_before = os.getloadavg()[0]
     with rec.stage("load"):

@@ -62,17 +62,10 @@ PAPER_RT = [(4098, 3, 5.13), (13424, 5, 24.37), (31124, 8, 110.81), (61563, 13, 
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from benchmarks.common import mkl_environment  # noqa: E402
+from benchmarks.common import mkl_environment, status_mb  # noqa: E402
 
 
 # -- measurement helpers ---------------------------------------------------------------------------
-
-def _status_mb(field: str) -> float:
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith(field + ":"):
-            return int(line.split()[1]) / 1024.0
-    return float("nan")
-
 
 def _reset_peak() -> float:
     """Reset the peak RSS (VmHWM) to the current RSS; return the current RSS in MB."""
@@ -80,7 +73,7 @@ def _reset_peak() -> float:
         Path("/proc/self/clear_refs").write_text("5")
     except OSError:
         pass
-    return _status_mb("VmRSS")
+    return status_mb("VmRSS")
 
 
 def _m_error(mass, approx, exact) -> np.ndarray:
@@ -178,7 +171,7 @@ def run_worker(name: str, method: str) -> dict:
     t1 = time.perf_counter()
     result = monogenic(surface, signals, method=method, eigenpairs=SPECTRAL_EIGENPAIRS)
     t2 = time.perf_counter()
-    peak = _status_mb("VmHWM")
+    peak = status_mb("VmHWM")
     arrays = {"u": fractional_laplacian(surface, signals, method=method, eigenpairs=SPECTRAL_EIGENPAIRS),
               "riesz": result.riesz, "amplitude": result.amplitude, "frequency": result.frequency,
               "mass": surface.mass_diagonal}

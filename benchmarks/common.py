@@ -55,6 +55,14 @@ def peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
+def status_mb(field: str) -> float:
+    """A memory field of /proc/self/status in MB (``VmRSS`` now, ``VmHWM`` peak)."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(field + ":"):
+            return int(line.split()[1]) / 1024.0
+    return float("nan")
+
+
 def machine() -> dict:
     """What the numbers were measured on."""
     from hht3d import linalg
