@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +19,7 @@ from . import io
 from .emd import emd
 from .errors import InputError
 from .monogenic import MonogenicSignal, monogenic
+from .quality import Quality, decomposition_quality
 from .signals import check_signal
 from .spectrum import HilbertSpectrum
 from .surface import Surface
@@ -65,6 +67,11 @@ class HHTResult:
     @property
     def n_imfs(self) -> int:
         return len(self.imfs)
+
+    @cached_property
+    def quality(self) -> Quality:
+        """Energy ratio, index of orthogonality, energy shares and warnings (:mod:`hht3d.quality`)."""
+        return decomposition_quality(self.surface, self.signal, self.imfs, self.residue)
 
     @property
     def spectrum(self) -> HilbertSpectrum:
