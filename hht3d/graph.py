@@ -145,7 +145,7 @@ def eemd(surface, signal, *, ensemble_size: int = 100, noise_std: float = 0.2, s
     """Lazy ensemble EMD: one task per member (:func:`hht3d.emd.eemd_member`), one averaging task."""
     member = builder.task("eemd_member", eemd_member)
     members = [member(surface, signal, i, seed, noise_std, **options) for i in range(ensemble_size)]
-    return builder.task("eemd_combine", combine_eemd)(signal, members)
+    return builder.task("eemd_combine", combine_eemd)(surface, signal, members)
 
 
 def _imfs(decomposition) -> object:

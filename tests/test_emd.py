@@ -172,7 +172,10 @@ def test_sphere_harmonics_separate(sphere, fine_order, coarse_order):
     assert np.corrcoef(result.imfs[1:].sum(axis=0) + result.residue, coarse)[0, 1] >= 0.9
     assert_sums_to_signal(result, fine + coarse)
     assert result.info["max_constraint_error"] <= 1e-8
-    assert result.info["factorizations"] == 2 * result.info["sifts"]
+    # two envelopes, hence two numeric factorizations, per sift; more when the guard retried
+    per_imf = result.info["imfs"]
+    assert result.info["factorizations"] >= sum(d["factorizations"] for d in per_imf)
+    assert all(d["factorizations"] == 2 * d["sifts"] for d in per_imf if d["attempts"] == 1 and d["stop"] != "guard")
 
 
 def axial_signal(z):
@@ -189,7 +192,8 @@ def test_cylinder_reduces_to_1d_emd():
     z = np.linspace(0.0, 10.0, n_axial)
     # Same sifting rule on both sides (10 sifts per IMF); PyEMD mirrors extrema at the ends,
     # the surface envelopes have zero slope there, so the ends differ slightly.
-    result = emd(surface, axial_signal(surface.vertices[:, 2]), stopping="fixed", fixed_sifts=10)
+    result = emd(surface, axial_signal(surface.vertices[:, 2]), stopping="fixed", fixed_sifts=10,
+                 envelope="biharmonic", cancellation_tolerance=None)
     reference = EMD(FIXE=10).emd(axial_signal(z), z)
     rings = result.imfs.reshape(result.n_imfs, n_axial, n_around)
     assert np.ptp(rings, axis=2).max() < 1e-9  # every IMF stays constant around the rings
@@ -224,7 +228,8 @@ def test_open_scan_mean_curvature(shared_model):
     assert counts == sorted(counts, reverse=True)  # finest first: fewer extrema in later IMFs
 
 
-@pytest.mark.parametrize("options", [dict(stopping="s_number"), dict(stopping="fixed", fixed_sifts=3),
+@pytest.mark.parametrize("options", [dict(stopping="s_number"), dict(stopping="fixed", fixed_sifts=3,
+                                                                    cancellation_tolerance=None),
                                      dict(envelope="harmonic"), dict(extrema="ring")])
 def test_options_sum_to_signal(small_sphere, options):
     rng = np.random.default_rng(3)
@@ -315,7 +320,7 @@ def test_eemd_seeded(small_sphere):
 def test_eemd_members_are_independent_tasks(small_sphere):
     f = real_sph_harm(5, np.arange(11.0), small_sphere.vertices)
     members = [eemd_member(small_sphere, f, i, seed=5, noise_std=0.2, max_imfs=2) for i in (1, 0)]
-    combined = combine_eemd(f, members[::-1])
+    combined = combine_eemd(small_sphere, f, members[::-1])
     direct = eemd(small_sphere, f, ensemble_size=2, seed=5, max_imfs=2)
     np.testing.assert_array_equal(combined.imfs, direct.imfs)
     # each member decomposes signal + its own noise, of std 0.2 * std(f)
