@@ -96,9 +96,21 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
         raise InputError(f"{path}: the file holds no vertices (empty or unreadable geometry)")
     options = dict(laplacian=laplacian, n_neighbors=n_neighbors, name=name or path.stem)
     try:
-        if clean:
-            return Surface.cleaned(**data, **options)
-        return Surface(**data, **options)
+        surface = Surface.cleaned(**data, **options) if clean else Surface(**data, **options)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    if not surface.is_mesh:
+        _check_cloud(surface, n_neighbors, path)
+    return surface
+
+
+def _check_cloud(surface: Surface, n_neighbors: int, path: Path) -> None:
+    """What the point-cloud Laplacian needs: more points than neighbours, not all on a line."""
+    if surface.n_vertices <= n_neighbors:
+        raise InputError(f"{path}: a point cloud of {surface.n_vertices} points cannot give each point "
+                         f"n_neighbors={n_neighbors} neighbours; lower n_neighbors below {surface.n_vertices}")
+    try:
+        _principal_axes(surface.vertices - surface.vertices.mean(axis=0))
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
 
@@ -352,6 +364,15 @@ def surface_to_open3d(surface: Surface, attributes: dict):
     return geometry
 
 
+def _principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Singular values (descending) and principal axes of centred points; collinear points are an error."""
+    _, spread, axes = np.linalg.svd(centered, full_matrices=False)
+    if spread[1] <= FLAT * spread[0]:
+        raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two "
+                         "directions")
+    return spread, axes
+
+
 def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
     """Unit normals of a point cloud: PCA over ``k`` neighbours, consistently oriented.
 
@@ -368,10 +389,7 @@ def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
     """
     points = np.asarray(points, dtype=np.float64)
     centered = points - points.mean(axis=0)
-    _, spread, axes = np.linalg.svd(centered, full_matrices=False)
-    if spread[1] <= FLAT * spread[0]:
-        raise InputError(f"the {len(points)} points lie on a line; a surface needs points spread in two "
-                         "directions")
+    spread, axes = _principal_axes(centered)
     if spread[2] <= FLAT * spread[0]:
         normal = axes[2] * np.sign(axes[2][np.argmax(np.abs(axes[2]))])
         return np.tile(normal, (len(points), 1))

@@ -132,14 +132,15 @@ def _local_progress():
 class ProgressLines(Callback):
     """Progress of a local scheduler as plain lines, ``hht3d: 40% of 125 tasks done, 12 s``.
 
-    At most one line per ``interval`` seconds, and a last one when the run
-    took longer than that: a log of a long run gets a few lines, not a
-    redrawn bar's thousands of updates.
+    At most one line per ``interval`` seconds (default
+    :data:`PROGRESS_INTERVAL`), and a last one when the run took longer than
+    that: a log of a long run gets a few lines, not a redrawn bar's thousands
+    of updates.
     """
 
-    def __init__(self, out, interval: float = PROGRESS_INTERVAL):
+    def __init__(self, out, interval: float | None = None):
         super().__init__()
-        self.out, self.interval = out, interval
+        self.out, self.interval = out, PROGRESS_INTERVAL if interval is None else interval
         self.start = self.last = time.monotonic()
 
     def _start_state(self, dsk, state):

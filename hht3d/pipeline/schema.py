@@ -260,6 +260,9 @@ def load_pipeline(path, overrides=()) -> Pipeline:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise PipelineError(f"{path}: cannot read the pipeline ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise PipelineError(f"{path}: cannot read the pipeline: byte {exc.start} is not UTF-8 text; save the "
+                            "file as UTF-8") from None
     return parse_pipeline(text, source=str(path), overrides=overrides)
 
 
