@@ -235,14 +235,14 @@ _NATIVE_OUTPUT = threading.Lock()
 
 @contextlib.contextmanager
 def _captured_native_output():
-    """Send what C and C++ code writes to file descriptors 1 and 2 to a temporary file.
+    """Send what C and C++ code writes to file descriptors 1 and 2 to a temporary file, then drop it.
 
     Qhull (inside Open3D) prints warnings and 25-line error reports there,
-    below Python's ``sys.stdout``/``sys.stderr``.  Yields a list that holds
-    the captured text on exit, for messages.  The redirection is process-wide,
-    so it is serialised by a lock and kept to the native call it wraps.
+    below Python's ``sys.stdout``/``sys.stderr``; its errors also reach
+    Python as exceptions, which are reported instead.  The redirection is
+    process-wide, so it is serialised by a lock and kept to the native call
+    it wraps.
     """
-    captured: list[str] = []
     with _NATIVE_OUTPUT, tempfile.TemporaryFile() as sink:
         for stream in (sys.stdout, sys.stderr):
             with contextlib.suppress(Exception):
@@ -250,19 +250,17 @@ def _captured_native_output():
         try:
             saved = [os.dup(1), os.dup(2)]
         except OSError:  # no standard descriptors (a daemon): nothing can leak
-            yield captured
+            yield
             return
         try:
             os.dup2(sink.fileno(), 1)
             os.dup2(sink.fileno(), 2)
-            yield captured
+            yield
         finally:
             _flush_c_streams()
             for fd, copy in zip((1, 2), saved):
                 os.dup2(copy, fd)
                 os.close(copy)
-            sink.seek(0)
-            captured.append(sink.read().decode("utf-8", "replace"))
 
 
 def _flush_c_streams() -> None:
