@@ -34,7 +34,8 @@ from plyfile import PlyData, PlyElement
 from hht3d.cli import main
 from hht3d.errors import HHT3DError
 from hht3d.io import load
-from hht3d.pipeline import parse_pipeline
+from hht3d.pipeline import OPERATIONS, parse_pipeline
+from hht3d.pipeline.schema import EXECUTION
 from hht3d.scheduling import compute
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -556,6 +557,17 @@ def test_bad_input(name, inputs, tmp_path, capfd, monkeypatch):
     assert not _leftovers(tmp_path, inputs)
     if case.check is not None:
         case.check(Ran(inputs, tmp_path / "out", out))
+
+
+#: Numeric parameters in model units, which scale with the model: only required to be finite.
+MODEL_UNITS = {"merge_radius", "time"}
+
+
+def test_every_numeric_parameter_has_an_upper_bound():
+    """Issue 15: a typo such as riesz_tasks: 100000 must be refused, so every new parameter needs a maximum."""
+    params = [p for op in OPERATIONS.values() for p in op.params] + list(EXECUTION)
+    unbounded = {p.name for p in params if p.kind in ("int", "float") and p.maximum is None} - MODEL_UNITS
+    assert not unbounded, f"give these parameters a maximum (hht3d/pipeline/registry.py): {sorted(unbounded)}"
 
 
 def test_progress_into_a_log_is_a_few_plain_lines(monkeypatch, capfd):
