@@ -17,13 +17,15 @@ import sys
 from importlib import resources
 from pathlib import Path
 
-from .errors import HHT3DError, PipelineError
+from .errors import HHT3DError, PipelineError, one_line, shown
 from .scheduling import SCHEDULERS
 
 #: The demo model shipped in the package: Keenan Crane's "spot" (CC0).
 DEMO_MODEL = "spot.ply"
 #: The demo pipeline shipped in the package (also ``pipelines/demo.yaml``).
 DEMO_PIPELINE = "demo.yaml"
+#: Characters of an error message printed (the values it echoes are cut shorter already).
+MAX_MESSAGE = 2000
 
 
 def demo_model_path() -> Path:
@@ -42,23 +44,33 @@ def _plan(path, overrides):
     return load_pipeline(path, overrides)
 
 
+def _row_lines(row) -> list[str]:
+    """How the CLI reports one input: a status line, then its warnings and the files written."""
+    size = "".join([f", {row.vertices} vertices" if row.vertices is not None else "",
+                    f", {row.imfs} IMFs" if row.imfs is not None else ""])
+    if row.status == "ok":
+        quality = f", energy ratio {row.energy_ratio:.3g}" if row.energy_ratio is not None else ""
+        lines = [f"{row.source}: ok{size}, {row.seconds:.1f} s{quality}"]
+    elif row.status == "skipped":
+        lines = [f"{row.source}: skipped (outputs exist){size}; not re-run"]
+    else:
+        lines = [f"{row.source}: FAILED in step {row.step}: {row.error}"]
+    lines += [f"  warning: {w}" for w in row.warnings]
+    verb = "kept" if row.status == "skipped" else "wrote"
+    return lines + [f"  {verb} {path}" for path in row.outputs]
+
+
 def _execute(plan, args) -> int:
+    from .dataset import summary_paths, write_summary
     from .pipeline import failures, run_pipeline
 
     rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
-                        progress=False if args.quiet else None, resume=args.resume)
+                        progress=False if args.quiet else None, resume=args.resume, summary=False)
     for row in rows:
-        if row.status == "ok":
-            print(f"{row.source}: ok, {row.vertices} vertices"
-                  + (f", {row.imfs} IMFs" if row.imfs is not None else "") + f", {row.seconds:.2f} s")
-        elif row.status == "skipped":
-            print(f"{row.source}: skipped (outputs exist)")
-        else:
-            print(f"{row.source}: FAILED in step {row.step}: {row.error}")
-        for path in row.outputs if row.status == "ok" else ():
-            print(f"  wrote {path}")
+        print("\n".join(_row_lines(row)), flush=True)
     if plan.summary:
-        print(f"summary: {plan.folder / 'summary.json'}, {plan.folder / 'summary.csv'}")
+        write_summary(rows, plan.folder)
+        print(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}")
     failed = failures(rows)
     if failed:
         raise PipelineError(f"{len(failed)} of {len(rows)} inputs failed; first: {failed[0]}")
@@ -74,13 +86,9 @@ def _demo(args) -> int:
 
 
 def _validate(args) -> int:
-    from .pipeline import pipeline_graph
-
     plan = _plan(args.pipeline, args.set)
     print(plan.describe())
-    tasks = len(dict(pipeline_graph(plan).__dask_graph__()))
-    print(f"dask graph: {tasks} tasks for {len(plan.inputs)} input file{'' if len(plan.inputs) == 1 else 's'}")
-    print("valid; nothing was run")
+    print("valid: parameters, inputs and output locations checked; nothing was run")
     return 0
 
 
@@ -91,7 +99,7 @@ def _ops(args) -> int:
     names = args.op or list(OPERATIONS)
     for name in names:
         if name not in OPERATIONS:
-            raise PipelineError(f"unknown op {name!r}{did_you_mean(name, OPERATIONS)}")
+            raise PipelineError(f"unknown op {shown(name)}{did_you_mean(name, OPERATIONS)}")
     for name in names:
         op = OPERATIONS[name]
         takes = ", ".join(f"{s.name}: {'|'.join(s.kinds)}" for s in op.slots)
@@ -172,7 +180,7 @@ def main(argv=None) -> int:
     try:
         return args.run(args)
     except HHT3DError as exc:
-        print(f"hht3d: error: {exc}", file=sys.stderr)
+        print(f"hht3d: error: {one_line(exc, MAX_MESSAGE)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print("hht3d: interrupted", file=sys.stderr)

@@ -1,9 +1,19 @@
-"""Exception hierarchy of hht3d.
+"""Exception hierarchy of hht3d, and how messages show user values.
 
 Every error raised for bad user input is an :class:`HHT3DError`, so callers
 (the CLI, the pipeline runner, a notebook) can catch one type and show its
 message, which names the file or parameter at fault and what to change.
+Messages echo user values through :func:`shown` and exception texts through
+:func:`one_line`, so a huge value (a YAML alias bomb, a megabyte string)
+never floods the terminal and every message stays on one line.
 """
+import reprlib
+
+__all__ = ["HHT3DError", "InputError", "NumericalError", "PipelineError", "OutputError", "shown", "one_line",
+           "MAX_SHOWN"]
+
+#: Characters of a user value a message echoes before cutting it short.
+MAX_SHOWN = 80
 
 
 class HHT3DError(Exception):
@@ -20,3 +30,40 @@ class NumericalError(HHT3DError, RuntimeError):
 
 class PipelineError(HHT3DError):
     """An invalid pipeline description or a failed pipeline step."""
+
+
+class OutputError(HHT3DError):
+    """An output location cannot be written: no permission, a file in the way, a full disk."""
+
+
+def _cut(text: str, limit: int) -> str:
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(text)} characters)"
+
+
+def _short_repr() -> reprlib.Repr:
+    """A :class:`reprlib.Repr` that abbreviates nested and long values (keywords need Python 3.12)."""
+    short = reprlib.Repr()
+    short.maxlevel, short.maxstring, short.maxother = 3, MAX_SHOWN, MAX_SHOWN
+    short.maxtuple = short.maxlist = short.maxset = 6
+    short.maxdict = 4
+    return short
+
+
+_REPR = _short_repr()
+
+
+def shown(value, limit: int = MAX_SHOWN) -> str:
+    """``repr(value)`` for a message, cut to about ``limit`` characters.
+
+    Nested containers are abbreviated while they are formatted
+    (:mod:`reprlib`), so an alias-expanded YAML value of millions of items
+    costs no more than a short one.
+    """
+    return _cut(_REPR.repr(value), limit)
+
+
+def one_line(text, limit: int = 4 * MAX_SHOWN) -> str:
+    """``text`` with its whitespace runs (newlines included) made single spaces, cut to ``limit``."""
+    return _cut(" ".join(str(text).split()), limit)

@@ -13,12 +13,15 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import sys
 import tempfile
+import threading
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
+from .errors import MAX_SHOWN, InputError, OutputError, one_line
 from .surface import Surface
 
 __all__ = [
@@ -29,6 +32,10 @@ __all__ = [
     "surface_to_open3d",
     "estimate_point_normals",
     "atomic_path",
+    "check_output_paths",
+    "read_ply_header",
+    "read_npz_shapes",
+    "PlyHeader",
     "write_ply",
     "write_npz",
     "write_colored_ply",
@@ -40,6 +47,8 @@ MESH_EXTENSIONS = (".ply", ".obj", ".off", ".stl", ".glb", ".gltf")
 POINT_CLOUD_EXTENSIONS = (".ply", ".pcd", ".xyz", ".xyzn", ".pts")
 _PLY_RESERVED = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha"}
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.\-]*$")
+#: A point cloud thinner than this fraction of its extent is treated as planar.
+FLAT = 1e-9
 
 
 # -- reading -------------------------------------------------------------------------------
@@ -66,12 +75,17 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
         Missing or unreadable file, unknown extension, empty or invalid geometry.
     """
     path = Path(path)
-    if not path.is_file():
+    try:
+        is_dir, is_file = path.is_dir(), path.is_file()
+    except OSError as exc:
+        raise InputError(f"{_short(path)}: cannot read ({exc.strerror or one_line(exc)})") from None
+    if is_dir:
+        raise InputError(f"{path}: is a folder, not a mesh or point-cloud file; give one file "
+                         "(pipeline inputs take folders)")
+    if not is_file:
         raise InputError(f"{path}: no such file; check the path")
+    _check_extension(path)
     ext = path.suffix.lower()
-    if ext not in MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS:
-        raise InputError(f"{path}: unknown extension {ext!r}; meshes: {', '.join(MESH_EXTENSIONS)}; "
-                         f"point clouds: {', '.join(POINT_CLOUD_EXTENSIONS)}")
     if ext == ".ply":
         data = _read_ply(path)
     elif ext in MESH_EXTENSIONS:
@@ -82,11 +96,30 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
         raise InputError(f"{path}: the file holds no vertices (empty or unreadable geometry)")
     options = dict(laplacian=laplacian, n_neighbors=n_neighbors, name=name or path.stem)
     try:
-        if clean:
-            return Surface.cleaned(**data, **options)
-        return Surface(**data, **options)
+        surface = Surface.cleaned(**data, **options) if clean else Surface(**data, **options)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
+    if not surface.is_mesh:
+        _check_cloud(surface, n_neighbors, path)
+    return surface
+
+
+def _check_cloud(surface: Surface, n_neighbors: int, path: Path) -> None:
+    """What the point-cloud Laplacian needs: more points than neighbours, not all on a line."""
+    if surface.n_vertices <= n_neighbors:
+        raise InputError(f"{path}: a point cloud of {surface.n_vertices} points cannot give each point "
+                         f"n_neighbors={n_neighbors} neighbours; lower n_neighbors below {surface.n_vertices}")
+    try:
+        _principal_axes(surface.vertices - surface.vertices.mean(axis=0))
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+
+
+def _check_extension(path: Path) -> None:
+    """Raise :class:`InputError` unless ``path`` has a mesh or point-cloud extension."""
+    if path.suffix.lower() not in MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS:
+        raise InputError(f"{path}: unknown extension {path.suffix.lower() or '(none)'!r}; meshes: "
+                         f"{', '.join(MESH_EXTENSIONS)}; point clouds: {', '.join(POINT_CLOUD_EXTENSIONS)}")
 
 
 def _read_ply(path: Path) -> dict:
@@ -112,6 +145,72 @@ def _read_ply(path: Path) -> dict:
     return data
 
 
+@dataclass(frozen=True)
+class PlyHeader:
+    """What the header of a PLY file declares: element counts and vertex property names."""
+
+    counts: dict
+    vertex_properties: tuple[str, ...]
+
+
+#: The longest PLY header :func:`read_ply_header` reads.
+_MAX_HEADER = 1 << 20
+
+
+def read_ply_header(path) -> PlyHeader:
+    """The header of a PLY file, without reading its data (cheap for any file size).
+
+    Raises
+    ------
+    InputError
+        Not a PLY header (no ``ply`` line or no ``end_header`` in the first megabyte).
+    """
+    path = Path(path)
+    counts, properties, element = {}, [], None
+    try:
+        with open(path, "rb") as handle:
+            lines = handle.read(_MAX_HEADER).split(b"\n")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror or one_line(exc)})") from None
+    if lines[0].strip() != b"ply":
+        raise InputError(f"{path}: not a PLY file (it does not start with 'ply')")
+    for line in lines[1:]:
+        words = line.decode("ascii", "replace").split()
+        if words[:1] == ["end_header"]:
+            return PlyHeader(counts, tuple(properties))
+        if words[:1] == ["element"] and len(words) == 3 and words[2].isdigit():
+            element = words[1]
+            counts[element] = int(words[2])
+        elif words[:1] == ["property"] and element == "vertex" and len(words) >= 3:
+            properties.append(words[-1])
+    raise InputError(f"{path}: not a readable PLY file (no end_header)")
+
+
+def read_npz_shapes(path) -> dict[str, tuple[int, ...]]:
+    """The shape of every array in a ``.npz`` file, from the array headers alone (no data is read).
+
+    Raises
+    ------
+    InputError
+        Not a readable ``.npz`` file.
+    """
+    import zipfile
+
+    path = Path(path)
+    shapes = {}
+    try:
+        with zipfile.ZipFile(path) as archive:
+            for name in archive.namelist():
+                with archive.open(name) as member:
+                    version = np.lib.format.read_magic(member)
+                    read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                            else np.lib.format.read_array_header_2_0)
+                    shapes[name.removesuffix(".npy")] = read(member)[0]
+    except (OSError, ValueError, zipfile.BadZipFile) as exc:
+        raise InputError(f"{path}: not a readable .npz file ({one_line(exc)})") from None
+    return shapes
+
+
 def _ply_faces(ply, path: Path):
     if "face" not in ply or ply["face"].count == 0:
         return None
@@ -130,11 +229,54 @@ def _ply_faces(ply, path: Path):
                     dtype=np.int64)
 
 
+#: Serialises the redirection of the process's stdout/stderr (see :func:`_captured_native_output`).
+_NATIVE_OUTPUT = threading.Lock()
+
+
+@contextlib.contextmanager
+def _captured_native_output():
+    """Send what C and C++ code writes to file descriptors 1 and 2 to a temporary file, then drop it.
+
+    Qhull (inside Open3D) prints warnings and 25-line error reports there,
+    below Python's ``sys.stdout``/``sys.stderr``; its errors also reach
+    Python as exceptions, which are reported instead.  The redirection is
+    process-wide, so it is serialised by a lock and kept to the native call
+    it wraps.
+    """
+    with _NATIVE_OUTPUT, tempfile.TemporaryFile() as sink:
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        try:
+            saved = [os.dup(1), os.dup(2)]
+        except OSError:  # no standard descriptors (a daemon): nothing can leak
+            yield
+            return
+        try:
+            os.dup2(sink.fileno(), 1)
+            os.dup2(sink.fileno(), 2)
+            yield
+        finally:
+            _flush_c_streams()
+            for fd, copy in zip((1, 2), saved):
+                os.dup2(copy, fd)
+                os.close(copy)
+
+
+def _flush_c_streams() -> None:
+    """``fflush(NULL)``: write out C stdio buffers before the descriptors are restored."""
+    import ctypes
+
+    with contextlib.suppress(Exception):
+        ctypes.CDLL(None).fflush(None)
+
+
 @contextlib.contextmanager
 def _quiet_open3d():
+    """Open3D with its log at error level and its native output (Qhull's too) captured."""
     import open3d as o3d
 
-    with o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):
+    with o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error), _captured_native_output():
         yield o3d
 
 
@@ -220,19 +362,46 @@ def surface_to_open3d(surface: Surface, attributes: dict):
     return geometry
 
 
+def _principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Singular values (descending) and principal axes of centred points; collinear points are an error."""
+    _, spread, axes = np.linalg.svd(centered, full_matrices=False)
+    if spread[1] <= FLAT * spread[0]:
+        raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two "
+                         "directions")
+    return spread, axes
+
+
 def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
     """Unit normals of a point cloud: PCA over ``k`` neighbours, consistently oriented.
 
     Open3D orients them along a minimum spanning tree over tangent planes;
     the whole set is then flipped, if needed, to point away from the centroid
-    on average (outward for closed scans).
+    on average (outward for closed scans).  A planar cloud (thinner than
+    :data:`FLAT` times its extent, where Open3D's Delaunay step fails) gets
+    the plane's normal everywhere, its largest component positive.
+
+    Raises
+    ------
+    InputError
+        The points lie on a line, or Open3D cannot orient the normals.
     """
+    points = np.asarray(points, dtype=np.float64)
+    centered = points - points.mean(axis=0)
+    spread, axes = _principal_axes(centered)
+    if spread[2] <= FLAT * spread[0]:
+        normal = axes[2] * np.sign(axes[2][np.argmax(np.abs(axes[2]))])
+        return np.tile(normal, (len(points), 1))
     with _quiet_open3d() as o3d:
-        pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
-        pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(knn=k))
-        pcd.orient_normals_consistent_tangent_plane(k)
+        try:
+            pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+            pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(knn=k))
+            pcd.orient_normals_consistent_tangent_plane(k)
+        except RuntimeError as exc:
+            reason = one_line(str(exc).split("\n", 1)[0])
+            raise InputError(f"cannot orient the point normals ({reason}); the cloud may be degenerate: "
+                             "check it with `hht3d info`, or store normals (nx, ny, nz) in the file") from None
         normals = np.asarray(pcd.normals, dtype=np.float64)
-    if np.einsum("ij,ij->", normals, points - points.mean(axis=0)) < 0:
+    if np.einsum("ij,ij->", normals, centered) < 0:
         normals = -normals
     return normals
 
@@ -243,19 +412,78 @@ def atomic_path(path):
     """Yield a temporary path beside ``path``; rename it to ``path`` on success.
 
     On any exception the temporary file is removed and ``path`` is untouched.
+
+    Raises
+    ------
+    OutputError
+        The folder cannot be made, or writing failed (no permission, full
+        disk, a folder in the way); names ``path`` and the reason.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    except OSError as exc:
+        raise _cannot_write(path, exc) from None
     os.close(fd)
     try:
         yield Path(tmp)
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; match an ordinary write
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise _cannot_write(path, exc) from None
         raise
+
+
+def _cannot_write(path: Path, exc: OSError) -> OutputError:
+    return OutputError(f"{path}: cannot write ({exc.strerror or one_line(exc)}); free space, fix the "
+                       "permissions or choose another output folder")
+
+
+def check_output_paths(paths) -> None:
+    """Check, creating nothing, that files can be written at ``paths`` (their folders may not exist yet).
+
+    For each path: it must not be a folder; the nearest existing folder
+    above it must be a folder (not a file such as ``/dev/full``) in which a
+    probe (a temporary folder, made and removed at once) succeeds, which
+    catches read-only and pseudo file systems (``/proc``) and missing
+    permissions before anything is computed.
+
+    Raises
+    ------
+    OutputError
+        Naming the path, the folder at fault and the reason.
+    """
+    probed: set[Path] = set()
+    for path in map(Path, paths):
+        try:
+            _check_output_path(path, probed)
+        except OSError as exc:
+            raise OutputError(f"{_short(path)}: cannot write ({exc.strerror or one_line(exc)}); choose another "
+                              "output path") from None
+
+
+def _check_output_path(path: Path, probed: set) -> None:
+    """:func:`check_output_paths` of one path; ``probed`` holds the folders already found writable."""
+    if path.is_dir():
+        raise OutputError(f"{path}: cannot write: a folder of that name is in the way; remove it or change "
+                          "the output path")
+    existing = path.parent
+    while not os.path.lexists(existing) and existing != existing.parent:
+        existing = existing.parent
+    if existing in probed:
+        return
+    if not existing.is_dir():
+        raise OutputError(f"{path}: cannot write: {existing} is not a folder; choose another output folder")
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".hht3d-probe-", dir=existing))
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write: creating anything in {existing} fails "
+                          f"({exc.strerror or one_line(exc)}); choose another output folder") from None
+    probed.add(existing)
 
 
 def _umask() -> int:
@@ -346,29 +574,47 @@ def resolve_inputs(spec) -> list[Path]:
     """Expand an input spec into files: a file, a folder (its mesh/point files),
     a glob pattern, or a list of these.  Order is sorted and duplicates dropped.
 
+    Folders and globs yield only the files with a mesh or point-cloud
+    extension; a file named explicitly must have one.
+
     Raises
     ------
     InputError
-        A named file is missing, or a folder/glob matches no usable file.
+        A named file is missing or has an unknown extension, or a folder/glob
+        matches no usable file.
     """
-    import glob
-
     specs = [spec] if isinstance(spec, (str, Path)) else list(spec)
     found: list[Path] = []
     usable = set(MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS)
     for item in specs:
         text = str(item)
-        path = Path(text)
-        if path.is_dir():
-            matches = sorted(p for p in path.iterdir() if p.suffix.lower() in usable and p.is_file())
-        elif any(ch in text for ch in "*?["):
-            matches = sorted(Path(p) for p in glob.glob(text, recursive=True))
-        elif path.is_file():
-            matches = [path]
-        else:
-            raise InputError(f"{text}: no such file or folder")
+        try:
+            matches = _input_files(text, usable)
+        except OSError as exc:
+            raise InputError(f"{_short(text)}: cannot read ({exc.strerror or one_line(exc)})") from None
         if not matches:
             raise InputError(f"{text}: matches no mesh or point-cloud file "
                              f"({', '.join(sorted(usable))})")
         found.extend(matches)
     return list(dict.fromkeys(found))
+
+
+def _input_files(text: str, usable) -> list[Path]:
+    """The usable files of one input spec: a folder's, a glob's, or the named file."""
+    import glob
+
+    path = Path(text)
+    if path.is_dir():
+        return sorted(p for p in path.iterdir() if p.suffix.lower() in usable and p.is_file())
+    if any(ch in text for ch in "*?["):
+        return sorted(p for p in map(Path, glob.glob(text, recursive=True)) if p.suffix.lower() in usable
+                      and p.is_file())
+    if path.is_file():
+        _check_extension(path)
+        return [path]
+    raise InputError(f"{text}: no such file or folder")
+
+
+def _short(path) -> str:
+    """A path for a message, cut if absurdly long."""
+    return one_line(path, MAX_SHOWN)

@@ -11,20 +11,29 @@ graph runs unchanged on
   ``LocalCluster`` started on demand with ``workers`` single-threaded worker
   processes, or an existing scheduler given by ``address``
   (``"tcp://host:8786"``).
+
+Progress goes to stderr: a bar on a terminal; in a log file or pipe, one
+plain line at most every :data:`PROGRESS_INTERVAL` seconds.
 """
 from __future__ import annotations
 
 import contextlib
 import os
 import sys
+import time
 
 import dask
+from dask.callbacks import Callback
 
 from .errors import InputError
 
-__all__ = ["SCHEDULERS", "compute", "open_client"]
+__all__ = ["SCHEDULERS", "MAX_WORKERS", "PROGRESS_INTERVAL", "ProgressLines", "compute", "open_client"]
 
 SCHEDULERS = ("synchronous", "threads", "processes", "distributed")
+#: The most workers a run may ask for: threads, processes or local-cluster workers.
+MAX_WORKERS = 256
+#: Seconds between progress lines when stderr is not a terminal.
+PROGRESS_INTERVAL = 10.0
 
 #: Environment that keeps each worker process's BLAS/OpenMP/MKL to one thread.
 SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
@@ -79,7 +88,7 @@ def compute(*graphs, scheduler: str = "threads", workers: int | None = None, add
     address : str, optional
         Scheduler address of an existing cluster (implies ``"distributed"``).
     progress : bool
-        Show a progress bar on stderr.
+        Show progress on stderr (a bar, or plain lines when it is not a terminal).
     client : distributed.Client, optional
         Reuse a client instead of opening one.
     """
@@ -87,8 +96,8 @@ def compute(*graphs, scheduler: str = "threads", workers: int | None = None, add
         scheduler = "distributed"
     if scheduler not in SCHEDULERS:
         raise InputError(f"unknown scheduler {scheduler!r}; choose one of {SCHEDULERS}")
-    if workers is not None and workers < 1:
-        raise InputError(f"workers must be >= 1, got {workers}")
+    if workers is not None and not 1 <= workers <= MAX_WORKERS:
+        raise InputError(f"workers must be in [1, {MAX_WORKERS}], got {workers}")
     if scheduler == "distributed":
         if client is not None:
             return _compute_distributed(client, graphs, progress)
@@ -104,17 +113,62 @@ def compute(*graphs, scheduler: str = "threads", workers: int | None = None, add
         return dask.compute(*graphs, **options)
 
 
-def _local_progress():
-    from dask.diagnostics import ProgressBar
+def _is_terminal(stream) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):  # no isatty, or closed
+        return False
 
-    return ProgressBar(minimum=1.0, out=sys.stderr)
+
+def _local_progress():
+    """A redrawn bar on a terminal; rate-limited plain lines otherwise."""
+    if _is_terminal(sys.stderr):
+        from dask.diagnostics import ProgressBar
+
+        return ProgressBar(minimum=1.0, out=sys.stderr)
+    return ProgressLines(sys.stderr)
+
+
+class ProgressLines(Callback):
+    """Progress of a local scheduler as plain lines, ``hht3d: 40% of 125 tasks done, 12 s``.
+
+    At most one line per ``interval`` seconds (default
+    :data:`PROGRESS_INTERVAL`), and a last one when the run took longer than
+    that: a log of a long run gets a few lines, not a redrawn bar's thousands
+    of updates.
+    """
+
+    def __init__(self, out, interval: float | None = None):
+        super().__init__()
+        self.out, self.interval = out, PROGRESS_INTERVAL if interval is None else interval
+        self.start = self.last = time.monotonic()
+
+    def _start_state(self, dsk, state):
+        self.start = self.last = time.monotonic()
+
+    def _posttask(self, key, result, dsk, state, worker_id):
+        now = time.monotonic()
+        if now - self.last >= self.interval:
+            self.last = now
+            self._line(state, now)
+
+    def _finish(self, dsk, state, errored):
+        now = time.monotonic()
+        if now - self.start >= self.interval and not errored:
+            self._line(state, now)
+
+    def _line(self, state, now: float) -> None:
+        done = len(state["finished"])
+        total = done + sum(len(state[k]) for k in ("ready", "waiting", "running"))
+        print(f"hht3d: {100 * done // max(total, 1)}% of {total} tasks done, {now - self.start:.0f} s",
+              file=self.out, flush=True)
 
 
 def _compute_distributed(client, graphs, progress: bool):
     from distributed import progress as show_progress
 
     futures = client.compute(list(graphs))
-    if progress:
+    if progress and _is_terminal(sys.stderr):
         show_progress(futures, notebook=False)
         print(file=sys.stderr)
     return tuple(client.gather(futures))

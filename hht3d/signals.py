@@ -22,6 +22,7 @@ __all__ = [
     "stored",
     "check_signal",
     "load_signal",
+    "check_signal_path",
     "signal",
     "SIGNALS",
 ]
@@ -92,7 +93,13 @@ def stored(surface: Surface, name: str) -> np.ndarray:
 
 
 def check_signal(surface: Surface, values, what: str = "signal") -> np.ndarray:
-    """Validate a user signal: one finite float per vertex."""
+    """Validate a user signal: one finite real float per vertex.
+
+    Complex values are refused rather than cut to their real part.
+    """
+    if np.iscomplexobj(values):
+        raise InputError(f"{what} is complex; pass a real signal, e.g. its real part (values.real) or its "
+                         "magnitude (abs(values))")
     try:
         a = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError):
@@ -110,13 +117,27 @@ def check_signal(surface: Surface, values, what: str = "signal") -> np.ndarray:
     return a
 
 
-def load_signal(surface: Surface, path) -> np.ndarray:
-    """A user signal from a ``.npy`` file (one value per vertex)."""
+def check_signal_path(path) -> Path:
+    """``path`` if it names an existing ``.npy`` file; else an :class:`InputError` saying what it is."""
     path = Path(path)
+    if path.suffix.lower() != ".npy":
+        raise InputError(f"{path}: a signal file must be a .npy file written by numpy.save(path, values), "
+                         f"not {path.suffix or 'a file without extension'}")
+    if not path.is_file():
+        raise InputError(f"{path}: no such signal file" + (" (it is a folder)" if path.is_dir() else ""))
+    return path
+
+
+def load_signal(surface: Surface, path) -> np.ndarray:
+    """A user signal from a ``.npy`` file (one value per vertex), as written by ``numpy.save``."""
+    path = check_signal_path(path)
     try:
         values = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{path}: cannot read a .npy signal ({exc})") from None
+    except ValueError:  # numpy's message on object arrays recommends allow_pickle; we never unpickle
+        raise InputError(f"{path}: not a .npy file of numbers (it holds Python objects or is not a .npy "
+                         "file); save a float array with numpy.save") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the signal ({exc.strerror or exc})") from None
     return check_signal(surface, values, f"signal {path}")
 
 

@@ -4,8 +4,11 @@ import shutil
 
 import numpy as np
 
+import pytest
+
 from hht3d import Surface, load
 from hht3d.dataset import run_dataset
+from hht3d.errors import OutputError
 from hht3d.io import write_ply
 from meshes import icosphere
 
@@ -53,3 +56,19 @@ def test_resume_skips_complete_items(tmp_path):
                        emd_options={"max_imfs": 1})
     assert [r.status for r in rows] == ["skipped", "ok"]
     shutil.rmtree(out)
+
+
+def test_summary_rows_carry_the_quality(tmp_path):
+    inputs = _make_inputs(tmp_path / "in")
+    rows = run_dataset(inputs / "good0.ply", tmp_path / "out", scheduler="synchronous", progress=False,
+                       emd_options={"max_imfs": 2}, riesz_tasks=1)
+    (row,) = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert row["energy_ratio"] == rows[0].energy_ratio > 0 and isinstance(row["warnings"], list)
+    assert "energy_ratio,orthogonality_index,warnings" in (tmp_path / "out" / "summary.csv").read_text()
+
+
+def test_unwritable_output_folder_fails_before_computing(tmp_path, monkeypatch):
+    inputs = _make_inputs(tmp_path / "in")
+    monkeypatch.setattr("hht3d.graph.transform_file", lambda *a, **k: pytest.fail("computed anyway"))
+    with pytest.raises(OutputError, match="good0.ply is not a folder"):
+        run_dataset(inputs, inputs / "good0.ply", scheduler="synchronous", progress=False)

@@ -4,7 +4,9 @@ import open3d as o3d
 import pytest
 
 from hht3d import InputError, Surface, load
-from hht3d.io import atomic_path, write_colored_ply, write_npz, write_ply
+from hht3d.errors import OutputError
+from hht3d.io import (atomic_path, check_output_paths, read_npz_shapes, read_ply_header, write_colored_ply, write_npz,
+                      write_ply)
 from meshes import gltf_to_glb, icosphere
 
 
@@ -147,3 +149,40 @@ def test_colored_ply_uses_colormap(tmp_path, sphere):
     lo, hi = np.argmin(z), np.argmax(z)
     assert back.colors[hi, 0] > 0.8 and back.colors[hi, 2] < 0.3
     assert back.colors[lo, 2] > back.colors[lo, 0]
+
+
+def test_headers_give_sizes_without_the_data(tmp_path, sphere):
+    write_ply(tmp_path / "s.ply", sphere, {"height": sphere.vertices[:, 2]})
+    header = read_ply_header(tmp_path / "s.ply")
+    assert header.counts == {"vertex": 162, "face": 320} and header.vertex_properties[-1] == "height"
+    write_npz(tmp_path / "s.npz", {"imfs": np.zeros((3, 162)), "faces": sphere.faces})
+    assert read_npz_shapes(tmp_path / "s.npz") == {"imfs": (3, 162), "faces": (320, 3)}
+    with pytest.raises(InputError, match="not a PLY file"):
+        read_ply_header(tmp_path / "s.npz")
+    with pytest.raises(InputError, match="not a readable .npz file"):
+        read_npz_shapes(tmp_path / "s.ply")
+
+
+def test_output_paths_are_probed_without_leaving_anything(tmp_path):
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "dir.npz").mkdir()
+    check_output_paths([tmp_path / "new" / "deeper" / "a.npz", tmp_path / "b.npz"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dir.npz", "file"]
+    for path, message in [(tmp_path / "file" / "a.npz", "file is not a folder"),
+                          (tmp_path / "dir.npz", "a folder of that name is in the way"),
+                          (tmp_path / ("x" * 300) / "a.npz", "File name too long")]:
+        with pytest.raises(OutputError, match=message):
+            check_output_paths([path])
+
+
+def test_planar_point_clouds_get_the_plane_normal_and_no_qhull_output(capfd):
+    rng = np.random.default_rng(0)
+    rotation = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    plane = np.c_[rng.uniform(size=(300, 2)), np.zeros(300)] @ rotation.T
+    normals = Surface(plane, name="plane").normals
+    np.testing.assert_allclose(np.abs(normals @ rotation[:, 2]), 1.0, atol=1e-12)
+    nearly = np.c_[rng.uniform(size=(300, 2)), 1e-12 * rng.normal(size=300)]
+    assert np.abs(Surface(nearly, name="nearly").normals[:, 2]).min() > 0.999  # Qhull warns here
+    assert capfd.readouterr() == ("", "")
+    with pytest.raises(InputError, match="lie on a line"):
+        _ = Surface(np.c_[np.arange(20.0), np.zeros(20), np.zeros(20)], name="line").normals

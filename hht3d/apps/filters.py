@@ -41,6 +41,7 @@ parameters (as a pipeline description would give them).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -288,10 +289,19 @@ def make_gain(kind: str, **parameters) -> Gain:
     """
     if kind not in GAINS:
         raise InputError(f"unknown gain {kind!r}; choose one of {sorted(GAINS)}")
-    try:
-        return GAINS[kind](**parameters)
-    except TypeError as exc:
-        raise InputError(f"gain {kind!r}: {exc}") from None
+    fields = dataclasses.fields(GAINS[kind])
+    unknown = sorted(set(parameters) - {f.name for f in fields})
+    if unknown:
+        raise InputError(f"gain {kind} has no parameter {unknown[0]!r}; it takes "
+                         f"{', '.join(f.name for f in fields)}")
+    required = [f.name for f in fields
+                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+    missing = [name for name in required if name not in parameters]
+    if missing:
+        example = ", ".join(f"{name}: ..." for name in required)
+        raise InputError(f"gain {kind} needs {' and '.join(missing)}: {{kind: {kind}, {example}}} "
+                         f"(see help(hht3d.apps.{GAINS[kind].__name__}))")
+    return GAINS[kind](**parameters)
 
 
 def _decomposition_parts(decomposition) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

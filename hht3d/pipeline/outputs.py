@@ -24,17 +24,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError, PipelineError
+from ..errors import InputError, PipelineError, shown
 from ..io import write_colored_ply, write_npz, write_ply
 from ..render import UP_AXES, VIEWS
 from .params import Param, did_you_mean
 
-__all__ = ["Format", "FORMATS", "SUFFIXES", "check_options"]
+__all__ = ["Format", "FORMATS", "SUFFIXES", "check_options", "field_imf"]
 
 #: File suffix of each format.
 SUFFIXES = {"ply": ".ply", "colored_ply": ".ply", "npz": ".npz", "png": ".png"}
 
-_FIELD = re.compile(r"^(signal|residue|(imf|amplitude|phase|frequency)_[1-9][0-9]*)$")
+_FIELD = re.compile(r"^(signal|residue|(imf|amplitude|phase|frequency)_([1-9][0-9]*))$")
 _FEATURE_RED = np.array([0.85, 0.1, 0.1])
 _FEATURE_GREY = np.array([0.75, 0.75, 0.73])
 
@@ -66,20 +66,27 @@ def check_options(options: dict, where: str) -> None:
     """Reject field names no HHT result has (``imf_0``, ``frequncy_1``) and unknown colour maps."""
     name = options.get("field")
     if name is not None and not _FIELD.match(name):
-        raise PipelineError(f"{where}: unknown field {name!r}; use signal, residue, imf_K, amplitude_K, "
+        raise PipelineError(f"{where}: unknown field {shown(name)}; use signal, residue, imf_K, amplitude_K, "
                             "phase_K or frequency_K (K = 1 for the finest IMF)")
     cmap = options.get("cmap")
     if cmap is not None:
         import matplotlib
 
         if cmap not in matplotlib.colormaps:
-            raise PipelineError(f"{where}: unknown colour map {cmap!r}{did_you_mean(cmap, matplotlib.colormaps, listing=False)}")
+            raise PipelineError(f"{where}: unknown colour map {shown(cmap)}"
+                                f"{did_you_mean(cmap, matplotlib.colormaps, listing=False)}")
+
+
+def field_imf(name) -> int | None:
+    """The IMF number K of a field ``imf_K``, ``amplitude_K``, ``phase_K`` or ``frequency_K`` (else None)."""
+    match = _FIELD.match(name) if isinstance(name, str) else None
+    return int(match.group(3)) if match and match.group(3) else None
 
 
 def _hht_field(result, name: str) -> np.ndarray:
     fields = result.vertex_attributes()
     if name not in fields:
-        raise InputError(f"{result.surface.name} has no field {name!r} ({result.n_imfs} IMFs); "
+        raise InputError(f"{result.surface.name} has no field {shown(name)} ({result.n_imfs} IMFs); "
                          f"available: {', '.join(fields)}")
     return fields[name]
 

@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass
 
 from ..apps.filters import GAINS, make_gain
-from ..errors import InputError, PipelineError
+from ..errors import InputError, PipelineError, one_line, shown
 
 __all__ = ["Param", "REQUIRED", "did_you_mean", "with_defaults", "yaml_text"]
 
@@ -37,7 +37,8 @@ def did_you_mean(word, known, *, listing: bool = True) -> str:
     """``"; did you mean 'x'?"`` for the closest of ``known``; else the list of ``known``
     (with ``listing``) or nothing."""
     known = [str(k) for k in known]
-    close = difflib.get_close_matches(str(word), known, n=1, cutoff=0.6)
+    plausible = isinstance(word, str) and len(word) <= 100  # never format a huge or nested value
+    close = difflib.get_close_matches(word, known, n=1, cutoff=0.6) if plausible else []
     if close:
         return f"; did you mean {close[0]!r}?"
     return f"; known: {', '.join(sorted(known))}" if known and listing else ""
@@ -57,7 +58,7 @@ def _what(value) -> str:
     names = {str: "a string", bool: "a boolean", int: "an integer", float: "a number", list: "a list",
              dict: "a mapping"}
     kind = next((n for t, n in names.items() if isinstance(value, t)), type(value).__name__)
-    return "null" if value is None else f"{value!r} ({kind})"
+    return "null" if value is None else f"{shown(value)} ({kind})"
 
 
 @dataclass(frozen=True)
@@ -98,13 +99,14 @@ class Param:
         return f"{text} or null" if self.default is None else text
 
     def _range(self) -> str:
-        lo, hi = self.minimum, self.maximum
+        lo, hi = (None if x is None else f"{x:d}" if isinstance(x, int) else f"{x:g}"
+                  for x in (self.minimum, self.maximum))
         if lo is not None and hi is not None:
-            return f" in {'(' if self.open_minimum else '['}{lo:g}, {hi:g}{')' if self.open_maximum else ']'}"
+            return f" in {'(' if self.open_minimum else '['}{lo}, {hi}{')' if self.open_maximum else ']'}"
         if lo is not None:
-            return f" {'>' if self.open_minimum else '>='} {lo:g}"
+            return f" {'>' if self.open_minimum else '>='} {lo}"
         if hi is not None:
-            return f" {'<' if self.open_maximum else '<='} {hi:g}"
+            return f" {'<' if self.open_maximum else '<='} {hi}"
         return ""
 
     def check(self, value, where: str):
@@ -115,15 +117,13 @@ class Param:
         PipelineError
             ``"{where}: parameter NAME must be ..., got ..."``.
         """
-        if value is None:
-            if self.default is None:
-                return None
-            self._fail(where, value)
+        if value is None and self.default is None:
+            return None
         if self.kind == "choice":
             if value not in self.choices:
                 raise PipelineError(f"{where}: parameter {self.name} must be one of "
                                     f"{', '.join(map(str, self.choices))}; got {_what(value)}"
-                                    f"{did_you_mean(value, self.choices, listing=False) if isinstance(value, str) else ''}")
+                                    f"{did_you_mean(value, self.choices, listing=False)}")
             return value
         if self.kind == "gain":
             return _gain(value, f"{where}: parameter {self.name}")
@@ -162,16 +162,16 @@ def _gain(value, where: str):
                             f"parameters, e.g. {{kind: band_stop, low: 8, high: 20}}; got {_what(value)}")
     options = dict(value)
     kind = options.pop("kind")
-    if kind not in GAINS:
-        raise PipelineError(f"{where}: unknown gain kind {kind!r}{did_you_mean(kind, GAINS)}")
+    if not isinstance(kind, str) or kind not in GAINS:
+        raise PipelineError(f"{where}: unknown gain kind {shown(kind)}{did_you_mean(kind, GAINS)}")
     fields = [f.name for f in dataclasses.fields(GAINS[kind])]
     for key in options:
         if key not in fields:
-            raise PipelineError(f"{where}: gain {kind} has no parameter {key!r}{did_you_mean(key, fields)}")
+            raise PipelineError(f"{where}: gain {kind} has no parameter {shown(key)}{did_you_mean(key, fields)}")
     try:
         return make_gain(kind, **options)
     except InputError as exc:
-        raise PipelineError(f"{where}: {exc}") from None
+        raise PipelineError(f"{where}: {one_line(exc)}") from None
 
 
 def with_defaults(func, *params: Param) -> tuple[Param, ...]:

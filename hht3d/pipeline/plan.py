@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..dataset import summary_paths
 from .outputs import Format
 from .params import yaml_text
 from .registry import Operation
@@ -108,6 +109,11 @@ class Pipeline:
     def output_paths(self, source: Path) -> list[Path]:
         """The files the pipeline writes for one input, in the order of :attr:`outputs`."""
         return [o.resolve(self.folder, source, self.name) for o in self.outputs]
+
+    def written_paths(self) -> list[Path]:
+        """Every file a run writes: the outputs of every input, then the summary files if any."""
+        outputs = [path for source in self.inputs for path in self.output_paths(source)]
+        return outputs + (summary_paths(self.folder) if self.summary else [])
 
     def surface_of(self, step_id: str) -> str:
         """Id of the step whose surface a step's result lives on (itself for a surface)."""

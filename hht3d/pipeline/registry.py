@@ -22,17 +22,16 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 
 from .. import graph
 from ..apps import hks_features, imf_enhancement, manifold_harmonics_filter, prominent_features
 from ..apps import reconstruct as _reconstruct
 from ..emd import ENVELOPES, EXTREMA_RULES, STOPPING_RULES
 from ..emd import emd as _emd
-from ..errors import PipelineError
+from ..errors import InputError, PipelineError, shown
 from ..io import load as _load
 from ..riesz import GRADIENTS, METHODS, MIN_TOL
-from ..signals import SIGNALS
+from ..signals import SIGNALS, check_signal_path
 from ..signals import signal as _signal
 from ..surface import LAPLACIANS
 from .params import REQUIRED, Param, did_you_mean, with_defaults
@@ -62,9 +61,42 @@ class Operation:
     params: tuple[Param, ...]
     build: Callable = field(repr=False)
     check: Callable | None = field(default=None, repr=False)
+    vertices: Callable | None = field(default=None, repr=False)
 
     def param(self, name: str) -> Param | None:
         return next((p for p in self.params if p.name == name), None)
+
+    def fewest_vertices(self, params: dict) -> tuple[str, int] | None:
+        """``(parameter, count)``: the fewest vertices an input needs for these parameters, if any."""
+        return None if self.vertices is None else self.vertices(params)
+
+
+# -- upper bounds -----------------------------------------------------------------------------------
+# Every numeric parameter has a range, which `hht3d ops` prints.  The upper bounds lie far above
+# useful values; they stop a typo from hanging validation or a run (a billion EEMD tasks, 100,000
+# shift-group tasks, a dense block of a million eigenvectors).  Parameters in model units
+# (merge_radius, time, gain frequencies) scale with the model and are only required to be finite.
+
+#: IMFs: more than log2 of the vertex count of any mesh that fits in memory.
+MAX_IMFS = 64
+#: EEMD members (Wu & Huang 2009 use 100); one graph task each.
+MAX_ENSEMBLE = 1000
+#: Shift-group tasks of the Riesz quadrature, which has about 60 shifts even at the finest tol.
+MAX_RIESZ_TASKS = 64
+#: Laplacian eigenpairs (the paper uses 300); the eigenvectors are a dense (vertices, eigenpairs) block.
+MAX_EIGENPAIRS = 2000
+#: Sifts per IMF (each solves one envelope system per extremum kind).
+MAX_SIFTS = 1000
+#: Neighbourhood rings of extrema and features.
+MAX_RING = 16
+#: Neighbours of the point-cloud Laplacian and normals.
+MAX_NEIGHBORS = 256
+#: Position weights μ of Eq. 27 (the paper's are 0.01 and 1).
+MAX_WEIGHT = 1e6
+#: IMF factor of the enhancement baseline.
+MAX_FACTOR = 1e3
+#: Random seeds.
+MAX_SEED = 2**32 - 1
 
 
 # -- parameters -------------------------------------------------------------------------------------
@@ -75,7 +107,8 @@ LOAD = with_defaults(
     _load,
     Param("clean", "bool", "weld duplicate vertices, drop degenerate faces and unused vertices"),
     Param("laplacian", "choice", "mesh Laplacian (point clouds always use the robust one)", choices=LAPLACIANS),
-    Param("n_neighbors", "int", "neighbours of the point-cloud Laplacian and normals", minimum=3),
+    Param("n_neighbors", "int", "neighbours of the point-cloud Laplacian and normals", minimum=3,
+          maximum=MAX_NEIGHBORS),
 )
 
 SIGNAL = (
@@ -87,39 +120,40 @@ SIGNAL = (
 
 EMD = with_defaults(
     _emd,
-    Param("max_imfs", "int", "at most this many IMFs", minimum=0),
+    Param("max_imfs", "int", "at most this many IMFs", minimum=0, maximum=MAX_IMFS),
     Param("stopping", "choice", "sifting stop rule", choices=STOPPING_RULES),
-    Param("sd_threshold", "float", "SD stopping threshold", minimum=0),
-    Param("s_number", "int", "S-number: unchanged extrema counts in a row", minimum=1),
-    Param("fixed_sifts", "int", "sifts per IMF with stopping: fixed", minimum=1),
-    Param("max_sifts", "int", "cap on sifts per IMF", minimum=1),
+    Param("sd_threshold", "float", "SD stopping threshold", minimum=0, maximum=10),
+    Param("s_number", "int", "S-number: unchanged extrema counts in a row", minimum=1, maximum=100),
+    Param("fixed_sifts", "int", "sifts per IMF with stopping: fixed", minimum=1, maximum=MAX_SIFTS),
+    Param("max_sifts", "int", "cap on sifts per IMF", minimum=1, maximum=MAX_SIFTS),
     Param("envelope", "choice", "envelope interpolant (Eqs. 8, 11)", choices=ENVELOPES),
     Param("extrema", "choice", "extremum rule: 1-ring, or ratio of the ring-ring", choices=EXTREMA_RULES),
-    Param("ring", "int", "neighbourhood of extrema: ring", minimum=1),
+    Param("ring", "int", "neighbourhood of extrema: ring", minimum=1, maximum=MAX_RING),
     Param("ratio", "float", "fraction of extrema: ring", minimum=0.5, maximum=1, open_minimum=True),
-    Param("energy_threshold", "float", "stop when the residue keeps less of the energy", minimum=0),
+    Param("energy_threshold", "float", "stop when the residue keeps less of the energy", minimum=0, maximum=1),
     _BACKEND,
 )
 
 ENSEMBLE = with_defaults(
     graph.eemd,
-    Param("ensemble_size", "int", "EEMD members", minimum=1),
-    Param("noise_std", "float", "EEMD noise, relative to the signal's standard deviation", minimum=0),
-) + (Param("seed", "int", "EEMD noise seed (default: execution.seed)", default=None, minimum=0),)
+    Param("ensemble_size", "int", "EEMD members", minimum=1, maximum=MAX_ENSEMBLE),
+    Param("noise_std", "float", "EEMD noise, relative to the signal's standard deviation", minimum=0, maximum=10),
+) + (Param("seed", "int", "EEMD noise seed (default: execution.seed)", default=None, minimum=0,
+           maximum=MAX_SEED),)
 
 SPECTRA = with_defaults(
     graph.transform,
     Param("gradient", "choice", "tangent gradient of the monogenic signal", choices=GRADIENTS),
     Param("method", "choice", "L^{-1/2}: exact quadrature, spectral truncation or dense", choices=METHODS),
     Param("tol", "float", "relative accuracy of the quadrature", minimum=MIN_TOL, maximum=1, open_maximum=True),
-    Param("eigenpairs", "int", "eigenpairs of method: spectral", minimum=1),
-    Param("riesz_tasks", "int", "parallel shift-group tasks of the quadrature", minimum=1),
+    Param("eigenpairs", "int", "eigenpairs of method: spectral", minimum=1, maximum=MAX_EIGENPAIRS),
+    Param("riesz_tasks", "int", "parallel shift-group tasks of the quadrature", minimum=1, maximum=MAX_RIESZ_TASKS),
 )
 
 HHT = (
     *(p for p in EMD if p.name != "backend"),
     Param("ensemble_size", "int", "use EEMD with this many members (default: plain EMD)", default=None,
-          minimum=1),
+          minimum=1, maximum=MAX_ENSEMBLE),
     *ENSEMBLE[1:],
     *SPECTRA,
     _BACKEND,
@@ -128,9 +162,9 @@ HHT = (
 _WEIGHTS = with_defaults(
     _reconstruct,
     Param("interior_weight", "float", "position weight μ of interior vertices (Eq. 27)", minimum=0,
-          open_minimum=True),
+          maximum=MAX_WEIGHT, open_minimum=True),
     Param("boundary_weight", "float", "position weight μ of boundary vertices (Eq. 27)", minimum=0,
-          open_minimum=True),
+          maximum=MAX_WEIGHT, open_minimum=True),
     Param("preserve_scale", "bool", "remove the mean curvature change per component"),
 )
 _GAIN = Param("gain", "gain", "μ(ω) of the instantaneous frequency, e.g. {kind: band_stop, low: 8, high: 20}",
@@ -140,7 +174,7 @@ FEATURES = with_defaults(
     prominent_features,
     Param("ratio", "float", "a maximum is >= this fraction of its ring", minimum=0.5, maximum=1,
           open_minimum=True),
-    Param("ring", "int", "neighbourhood in edges", minimum=1),
+    Param("ring", "int", "neighbourhood in edges", minimum=1, maximum=MAX_RING),
     Param("fraction", "float", "hit: extremum of at least this fraction of the IMFs", minimum=0, maximum=1,
           open_minimum=True),
     Param("merge_radius", "float", "merge hits closer than this (model units)", minimum=0),
@@ -150,20 +184,20 @@ HKS = with_defaults(
     hks_features,
     Param("time", "float", "diffusion time (default: a fraction of 4 ln 10 / λ1)", minimum=0,
           open_minimum=True),
-    Param("eigenpairs", "int", "eigenpairs in the heat-kernel sum", minimum=1),
-    Param("ring", "int", "neighbourhood in edges", minimum=1),
+    Param("eigenpairs", "int", "eigenpairs in the heat-kernel sum", minimum=1, maximum=MAX_EIGENPAIRS),
+    Param("ring", "int", "neighbourhood in edges", minimum=1, maximum=MAX_RING),
     Param("merge_radius", "float", "merge maxima closer than this (model units)", minimum=0),
 ) + (_BACKEND,)
 
 ENHANCE = with_defaults(
     imf_enhancement,
-    Param("factor", "float", "multiply the IMF by this"),
-    Param("index", "int", "which IMF, from 0 (the finest)", minimum=0),
+    Param("factor", "float", "multiply the IMF by this", minimum=-MAX_FACTOR, maximum=MAX_FACTOR),
+    Param("index", "int", "which IMF, from 0 (the finest)", minimum=0, maximum=MAX_IMFS - 1),
 ) + _WEIGHTS + (_BACKEND,)
 
 MHB = with_defaults(
     manifold_harmonics_filter,
-    Param("eigenpairs", "int", "Laplacian eigenpairs of the basis", minimum=1),
+    Param("eigenpairs", "int", "Laplacian eigenpairs of the basis", minimum=1, maximum=MAX_EIGENPAIRS),
     Param("keep_remainder", "bool", "keep the part of the shape beyond the basis"),
 ) + (_BACKEND,)
 
@@ -186,8 +220,18 @@ def _check_signal(params, where):
                                 f"{'stored' if name == 'attribute' else 'file'} (kind is {kind})")
     if kind in needs and params[needs[kind]] is None:
         raise PipelineError(f"{where}: kind: {kind} needs the parameter {needs[kind]}")
-    if kind == "file" and not Path(params["path"]).is_file():
-        raise PipelineError(f"{where}: signal file {params['path']}: no such file")
+    if kind == "file":
+        try:
+            check_signal_path(params["path"])
+        except InputError as exc:
+            raise PipelineError(f"{where}: {exc}") from None
+
+
+def _eigenpair_vertices(params) -> tuple[str, int] | None:
+    """``k`` eigenpairs exclude the constant mode, so need ``k + 1`` vertices (with method spectral)."""
+    if params.get("method", "spectral") != "spectral":
+        return None
+    return "eigenpairs", params["eigenpairs"] + 1
 
 
 def _emd_step(builder, inputs, params):
@@ -252,7 +296,7 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("eemd", "ensemble EMD: one task per noisy member, then the average",
               (_SURFACE, _SIGNAL_IN), "emd", ENSEMBLE + EMD, _eemd_step),
     Operation("hht", "Hilbert–Huang transform: EMD, Riesz transform, Hilbert spectra (Alg. 2)",
-              (_SURFACE, _SIGNAL_IN), "hht", HHT, _hht_step),
+              (_SURFACE, _SIGNAL_IN), "hht", HHT, _hht_step, vertices=_eigenpair_vertices),
     Operation("filter_signal", "the signal through a gain of the instantaneous frequency (Eq. 26)",
               (_HHT,), "signal", (_GAIN,), _filter_signal_step),
     Operation("filter_geometry", "Hilbert-spectrum filtering of the mean curvature and new positions "
@@ -263,17 +307,17 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("features", "prominent feature points from IMF extrema counts (Sec. 5.2)",
               (_SURFACE, _IMFS), "features", FEATURES, _features_step),
     Operation("hks_features", "baseline: maxima of the heat kernel signature (Sun et al. 2009)",
-              (_SURFACE,), "features", HKS, _hks_step),
+              (_SURFACE,), "features", HKS, _hks_step, vertices=_eigenpair_vertices),
     Operation("imf_enhancement", "baseline: scale one IMF of the mean curvature (Hu et al. 2014)",
               (_SURFACE, _IMFS), "surface", ENHANCE, _enhance_step),
     Operation("manifold_harmonics_filter", "baseline: filter in the Laplacian eigenbasis (Vallet & Lévy 2008)",
-              (_SURFACE,), "surface", (_GAIN, *MHB), _mhb_step),
+              (_SURFACE,), "surface", (_GAIN, *MHB), _mhb_step, vertices=_eigenpair_vertices),
 )}
 
 
 def operation(name: str, where: str) -> Operation:
     """The operation called ``name``; a :class:`PipelineError` with "did you mean" otherwise."""
     if not isinstance(name, str) or name not in OPERATIONS:
-        raise PipelineError(f"{where}: unknown op {name!r}{did_you_mean(name, OPERATIONS)} "
+        raise PipelineError(f"{where}: unknown op {shown(name)}{did_you_mean(name, OPERATIONS)} "
                             "(`hht3d ops` lists them)")
     return OPERATIONS[name]

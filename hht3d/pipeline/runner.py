@@ -6,7 +6,8 @@ Every input file becomes an independent subgraph of its steps' tasks
 input file that the item's later tasks pass along, so one bad file is
 reported while the others finish.  An output is written once the step it
 comes from is done, atomically: a failed item may have the outputs of its
-earlier steps, never a half-written file.
+earlier steps, which its summary row lists, never a half-written file.
+Output locations are checked before anything is computed.
 """
 from __future__ import annotations
 
@@ -16,53 +17,46 @@ from pathlib import Path
 from dask import delayed
 from dask.base import tokenize
 
-from ..dataset import Failure, ItemSummary, Guarded, write_summary
+from ..dataset import Guarded, ItemSummary, item_summary, quality_fields, skipped_summary, write_summary
 from ..graph import Builder
+from ..io import check_output_paths
 from ..scheduling import compute
 from .plan import FILE, Pipeline
+from .schema import EXECUTION
 
 __all__ = ["pipeline_graph", "run_pipeline", "failures"]
 
 
-def _step_builder(step_id: str, op_name: str, source: str) -> Builder:
-    """Tasks guarded with the input file; a step's inner tasks are labelled ``"id (task)"``."""
-
-    def guard(task: str, func):
-        label = step_id if task in (op_name, step_id) else f"{step_id} ({task})"
-        return Guarded(label, func, source)
-
-    return Builder(guard=guard)
-
-
-def _summarize(source: str, paths: list[str], surface, sizes: list, parts: list, writes: list) -> ItemSummary:
-    failure = next((v for v in [*parts, *writes] if isinstance(v, Failure)), None)
-    if failure is not None:
-        return ItemSummary(source, "failed", step=failure.step, error=failure.error)
-    imfs = next((v.value.imfs.shape[0] for v in reversed(sizes)), None)
-    seconds = sum(v.seconds for v in [*parts, *writes])
-    return ItemSummary(source, "ok", vertices=surface.value.n_vertices, imfs=imfs, seconds=round(seconds, 3),
-                       outputs=tuple(paths))
+def _guarded(source: Path, label):
+    """A task builder whose tasks are guarded with the input file; ``label(task)`` names the step."""
+    return Builder(guard=lambda task, func: Guarded(label(task), func, str(source)))
 
 
 def _item(plan: Pipeline, source: Path, paths: list[Path]):
     """The lazy :class:`~hht3d.dataset.ItemSummary` of one input file."""
     results, parts = {}, {}
     for step in plan.steps:
-        builder = _step_builder(step.id, step.op.name, str(source))
+        builder = _guarded(source, lambda task, s=step: s.id if task in (s.op.name, s.id) else f"{s.id} ({task})")
         inputs = {slot: source if ref == FILE else results[ref] for slot, ref in step.refs.items()}
         tasks = step.op.build(builder, inputs, dict(step.params))
         results[step.id] = tasks["result"]
         parts.update({t.key: t for t in tasks.values()})
     writes = []
     for output, path in zip(plan.outputs, paths):
-        write = Builder(guard=lambda task, func, label=f"write {path.name}": Guarded(label, func, str(source)))
+        write = _guarded(source, lambda task, label=f"write {path.name}": label)
         writes.append(write.task("write", output.format.write)(
             results[output.step], results[plan.surface_of(output.step)], str(path), **output.options))
-    first_load = next(s.id for s in plan.steps if s.op.name == "load")
-    sizes = [results[s.id] for s in plan.steps if s.kind in ("emd", "hht")]
+    surface = results[next(s.id for s in plan.steps if s.op.name == "load")]
+    last = next((s.id for s in reversed(plan.steps) if s.kind in ("emd", "hht")), None)
+    decomposition = quality = None
+    if last is not None:
+        decomposition = results[last]
+        quality = _guarded(source, lambda task: f"{last} (quality)").task("quality", quality_fields)(
+            decomposition, results[plan.surface_of(last)])
+        parts[quality.key] = quality
     name = f"pipeline-item-{tokenize(plan.name, str(source), [str(p) for p in paths])}"
-    return delayed(_summarize, pure=True, name=name)(str(source), [str(p) for p in paths], results[first_load],
-                                                     sizes, list(parts.values()), writes)
+    return delayed(item_summary, pure=True, name=name)(str(source), [str(p) for p in paths], surface,
+                                                       decomposition, quality, list(parts.values()), writes)
 
 
 def pipeline_graph(plan: Pipeline, *, resume: bool = False):
@@ -72,13 +66,14 @@ def pipeline_graph(plan: Pipeline, *, resume: bool = False):
     ----------
     plan : Pipeline
     resume : bool
-        Skip inputs whose outputs all exist (status ``"skipped"``).
+        Skip inputs whose outputs all exist (status ``"skipped"``, sizes read
+        from those outputs).
     """
     rows = []
     for source in plan.inputs:
         paths = plan.output_paths(source)
         if resume and all(p.is_file() for p in paths):
-            rows.append(ItemSummary(str(source), "skipped", outputs=tuple(map(str, paths))))
+            rows.append(skipped_summary(source, paths))
         else:
             rows.append(_item(plan, source, paths))
     return delayed(list, pure=True)(rows)
@@ -86,19 +81,32 @@ def pipeline_graph(plan: Pipeline, *, resume: bool = False):
 
 def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int | None = None,
                  address: str | None = None, progress: bool | None = None,
-                 resume: bool = False) -> list[ItemSummary]:
+                 resume: bool = False, summary: bool = True) -> list[ItemSummary]:
     """Run a pipeline; return one :class:`~hht3d.dataset.ItemSummary` per input file.
 
-    Arguments left as ``None`` take the pipeline's ``execution`` block.
-    Failed items are reported in the rows (see :func:`failures`), not
-    raised; with ``outputs.summary`` the rows are also written to
-    ``summary.json`` and ``summary.csv`` in the output folder.
+    Arguments left as ``None`` take the pipeline's ``execution`` block and
+    are checked like it.  The output locations are checked first, so a run
+    that could not write its results computes nothing.  Failed items are
+    reported in the rows (see :func:`failures`), not raised.  With
+    ``summary`` and the pipeline's ``outputs.summary``, the rows are also
+    written to ``summary.json`` and ``summary.csv`` in the output folder (the
+    CLI passes ``summary=False`` and writes them after printing the rows).
+
+    Raises
+    ------
+    OutputError
+        An output or the summary cannot be written.
+    PipelineError
+        A bad ``scheduler`` or ``workers``.
     """
     given = {"scheduler": scheduler, "workers": workers, "address": address, "progress": progress}
-    execution = dataclasses.replace(plan.execution, **{k: v for k, v in given.items() if v is not None})
+    checked = {p.name: p.check(given[p.name], f"{p.name}={given[p.name]}") for p in EXECUTION
+               if given.get(p.name) is not None}
+    execution = dataclasses.replace(plan.execution, **checked)
+    check_output_paths(plan.written_paths())
     (rows,) = compute(pipeline_graph(plan, resume=resume), scheduler=execution.scheduler,
                       workers=execution.workers, address=execution.address, progress=execution.progress)
-    if plan.summary:
+    if summary and plan.summary:
         write_summary(rows, plan.folder)
     return rows
 

@@ -36,24 +36,35 @@ of a kind it accepts, so a linear chain needs no references.  Relative paths
 are relative to the working directory.  Every error is a
 :class:`~hht3d.errors.PipelineError` naming the file and line (or the
 ``--set`` override) and what to change.
+
+Validation checks everything that is cheap to know before computing, and
+builds no task graph: every numeric parameter against its documented range
+(``hht3d ops`` prints them; the upper bounds are in
+:mod:`hht3d.pipeline.registry`), input extensions, ``eigenpairs`` against the
+vertex count in PLY headers, output fields against ``max_imfs``, and that
+every output can be written.  Floats are read as in YAML 1.2 (``1e-8`` is a
+number), and a document that aliases expand past :data:`MAX_YAML_VALUES`
+values is refused.
 """
 from __future__ import annotations
 
+import re
 import string
 from importlib import resources
 from pathlib import Path
 
 import yaml
 
-from ..errors import InputError, PipelineError
-from ..io import resolve_inputs
-from ..scheduling import SCHEDULERS
-from .outputs import FORMATS, SUFFIXES, check_options
+from ..errors import MAX_SHOWN, InputError, OutputError, PipelineError, one_line, shown
+from ..io import check_output_paths, read_ply_header, resolve_inputs
+from ..scheduling import MAX_WORKERS, SCHEDULERS
+from .outputs import FORMATS, SUFFIXES, check_options, field_imf
 from .params import Param, did_you_mean
 from .plan import FILE, PLACEHOLDERS, Execution, Output, Pipeline, Step
-from .registry import OPERATIONS, operation
+from .registry import MAX_SEED, OPERATIONS, operation
 
-__all__ = ["VERSION", "load_pipeline", "parse_pipeline", "builtin_models", "read_yaml", "apply_overrides"]
+__all__ = ["VERSION", "EXECUTION", "MAX_YAML_VALUES", "load_pipeline", "parse_pipeline", "builtin_models",
+           "read_yaml", "apply_overrides"]
 
 #: The schema version this package reads.
 VERSION = 1
@@ -62,15 +73,18 @@ _TOP = ("version", "name", "execution", "inputs", "steps", "outputs")
 _STEP = ("id", "op", "from", "params")
 _OUTPUTS = ("folder", "summary", "files")
 _FILE = ("from", "path", "format")
-_EXECUTION = (
+#: Parameters of the ``execution`` block (also the checks of the CLI's --scheduler and --workers).
+EXECUTION = (
     Param("scheduler", "choice", "Dask scheduler", default="threads", choices=SCHEDULERS),
     Param("workers", "int", "threads, processes or cluster workers (default: one per core)", default=None,
-          minimum=1),
+          minimum=1, maximum=MAX_WORKERS),
     Param("address", "str", "address of a running dask.distributed scheduler", default=None),
     Param("progress", "bool", "progress bar on stderr", default=True),
-    Param("seed", "int", "default seed of randomised steps", default=0, minimum=0),
+    Param("seed", "int", "default seed of randomised steps", default=0, minimum=0, maximum=MAX_SEED),
 )
 _ID_CHARS = set(string.ascii_letters + string.digits + "_-")
+#: The longest step id.
+MAX_ID = 64
 
 
 # -- YAML with line numbers ------------------------------------------------------------------------
@@ -86,41 +100,88 @@ class _Mapping(dict):
         return self.key_where.get(key, self.where)
 
 
+#: Most values a pipeline may expand to through YAML aliases (``&a`` ... ``*a``); real pipelines
+#: have a few hundred, an alias bomb billions.
+MAX_YAML_VALUES = 100_000
+
+#: YAML 1.2 floats (``1e9``, ``1e-8``), which YAML 1.1 and so PyYAML read as text.
+_FLOAT = re.compile(r"^[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?$|^[-+]?\.(inf|Inf|INF)$|^\.(nan|NaN|NAN)$")
+
+
+class _YAMLSyntaxError(PipelineError):
+    """Text that is not YAML (``--set`` then takes it as a plain string)."""
+
+
+def _expanded_size(node, sizes: dict, source: str) -> int:
+    """How many values ``node`` stands for once every alias is expanded (memoised by node)."""
+    key = id(node)
+    if key in sizes:
+        if sizes[key] is None:
+            raise PipelineError(f"{source}:{node.start_mark.line + 1}: an alias refers to its own anchor; "
+                                "a pipeline cannot be recursive")
+        return sizes[key]
+    sizes[key] = None
+    children = node.value if isinstance(node, yaml.SequenceNode) else \
+        [n for pair in node.value for n in pair] if isinstance(node, yaml.MappingNode) else []
+    sizes[key] = 1 + sum(_expanded_size(child, sizes, source) for child in children)
+    if sizes[key] > MAX_YAML_VALUES:
+        raise PipelineError(f"{source}:{node.start_mark.line + 1}: this YAML expands to more than "
+                            f"{MAX_YAML_VALUES} values through aliases (&anchor, *alias); write the pipeline "
+                            "out without them")
+    return sizes[key]
+
+
 def read_yaml(text: str, source: str):
     """Parse YAML, keeping ``source:line`` of every mapping key; duplicate keys are errors.
+
+    Floats are read as YAML 1.2 does (``1e-8`` is a number, not text).
+    Documents that aliases expand past :data:`MAX_YAML_VALUES` values are
+    refused before anything is built from them.  A one-line ``text`` (a
+    ``--set`` value) is located by ``source`` alone.
 
     Raises
     ------
     PipelineError
-        ``"source:LINE:COLUMN: YAML syntax error: ..."``.
+        ``"source:LINE:COLUMN: YAML syntax error: ..."``, an alias bomb, or
+        nesting too deep.
     """
+    def place(node) -> str:
+        return f"{source}:{node.start_mark.line + 1}" if "\n" in text.strip() else source
 
     class Loader(yaml.SafeLoader):
-        pass
+        def get_single_node(self):
+            node = super().get_single_node()
+            if node is not None:
+                _expanded_size(node, {}, source)
+            return node
 
     def mapping(loader, node):
         loader.flatten_mapping(node)
-        result = _Mapping(f"{source}:{node.start_mark.line + 1}")
+        result = _Mapping(place(node))
         for key_node, value_node in node.value:
             key = loader.construct_object(key_node, deep=True)
-            at = f"{source}:{key_node.start_mark.line + 1}"
+            at = place(key_node)
             if not isinstance(key, (str, int, float, bool)) or key is None:
-                raise PipelineError(f"{at}: a mapping key must be a plain name, got {key!r}")
+                raise PipelineError(f"{at}: a mapping key must be a plain name, got {shown(key)}")
             if key in result:
-                raise PipelineError(f"{at}: duplicate key {key!r} (first at {result.at(key)})")
+                raise PipelineError(f"{at}: duplicate key {shown(key)} (first at {result.at(key)})")
             result[key] = loader.construct_object(value_node, deep=True)
             result.key_where[key] = at
         return result
 
     Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0123456789."))
     try:
         return yaml.load(text, Loader=Loader)  # a SafeLoader subclass
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         reason = ": ".join(filter(None, [exc.context, exc.problem]))
-        raise PipelineError(f"{source}:{mark.line + 1}:{mark.column + 1}: YAML syntax error: {reason}") from None
+        raise _YAMLSyntaxError(f"{source}:{mark.line + 1}:{mark.column + 1}: YAML syntax error: "
+                               f"{one_line(reason)}") from None
     except yaml.YAMLError as exc:
-        raise PipelineError(f"{source}: YAML syntax error: {exc}") from None
+        raise _YAMLSyntaxError(f"{source}: YAML syntax error: {one_line(exc)}") from None
+    except RecursionError:
+        raise PipelineError(f"{source}: the YAML is nested too deeply") from None
 
 
 # -- --set overrides ---------------------------------------------------------------------------------
@@ -132,14 +193,14 @@ def apply_overrides(document, overrides) -> None:
     ``inputs=[a.ply, b.ply]``, ``outputs.folder=out/run1``.
     """
     for text in overrides:
-        where = f"--set {text}"
+        where = f"--set {one_line(text, MAX_SHOWN)}"
         path, sep, raw = text.partition("=")
         keys = path.strip().split(".")
         if not sep or not all(keys):
             raise PipelineError(f"{where}: expected KEY.PATH=VALUE, e.g. steps.hht.params.max_imfs=4")
         try:
-            value = yaml.safe_load(raw) if raw.strip() else ""
-        except yaml.YAMLError:
+            value = read_yaml(raw, where) if raw.strip() else ""
+        except _YAMLSyntaxError:
             value = raw
         node = document
         for depth, key in enumerate(keys[:-1]):
@@ -175,7 +236,7 @@ def _assign(node, key: str, value, where: str) -> None:
         if isinstance(node, _Mapping):
             node.key_where[key] = where
     else:
-        raise PipelineError(f"{where}: cannot set {key!r} inside a {type(node).__name__}")
+        raise PipelineError(f"{where}: cannot set {shown(key)} inside a {type(node).__name__}")
 
 
 # -- validation -----------------------------------------------------------------------------------
@@ -199,6 +260,9 @@ def load_pipeline(path, overrides=()) -> Pipeline:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise PipelineError(f"{path}: cannot read the pipeline ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise PipelineError(f"{path}: cannot read the pipeline: byte {exc.start} is not UTF-8 text; save the "
+                            "file as UTF-8") from None
     return parse_pipeline(text, source=str(path), overrides=overrides)
 
 
@@ -237,46 +301,53 @@ def _at(mapping, key=None) -> str:
 def _known_keys(mapping, known, what: str) -> None:
     for key in mapping:
         if key not in known:
-            raise PipelineError(f"{_at(mapping, key)}: unknown key {key!r} in {what}{did_you_mean(key, known)}")
+            raise PipelineError(f"{_at(mapping, key)}: unknown key {shown(key)} in {what}{did_you_mean(key, known)}")
 
 
 def _mapping(value, where: str, what: str) -> dict:
     if not isinstance(value, dict):
-        raise PipelineError(f"{where}: {what} must be a mapping (key: value lines), got {value!r}")
+        raise PipelineError(f"{where}: {what} must be a mapping (key: value lines), got {shown(value)}")
     return value
 
 
 class _Validator:
     def __init__(self, source: str):
         self.source = source
+        self.inputs: tuple[Path, ...] = ()
+        self._vertex_counts: dict[Path, int] | None = None
 
     def pipeline(self, doc) -> Pipeline:
         _known_keys(doc, _TOP, "the pipeline")
         self._version(doc)
         name = doc.get("name", Path(self.source).stem)
         if not isinstance(name, str) or not name:
-            raise PipelineError(f"{_at(doc, 'name')}: name must be a non-empty string, got {name!r}")
+            raise PipelineError(f"{_at(doc, 'name')}: name must be a non-empty string, got {shown(name)}")
         execution = self._execution(doc.get("execution") or _Mapping(_at(doc, "execution")))
-        inputs = self._inputs(doc)
+        inputs = self.inputs = self._inputs(doc)
         steps = self._steps(doc, execution)
         folder, summary, outputs = self._outputs(doc, steps)
         plan = Pipeline(name=name, source=self.source, execution=execution, inputs=inputs, steps=steps,
                         outputs=outputs, folder=folder, summary=summary)
         self._distinct_paths(plan, doc)
+        try:
+            check_output_paths(plan.written_paths())
+        except OutputError as exc:
+            block = doc.get("outputs")
+            raise PipelineError(f"{_at(block, 'folder')}: outputs: {exc}") from None
         return plan
 
     def _version(self, doc) -> None:
         if "version" not in doc:
             raise PipelineError(f"{self.source}: missing 'version: {VERSION}' (the schema version) at the top")
         if doc["version"] != VERSION or isinstance(doc["version"], bool):
-            raise PipelineError(f"{_at(doc, 'version')}: unsupported pipeline version {doc['version']!r}; "
+            raise PipelineError(f"{_at(doc, 'version')}: unsupported pipeline version {shown(doc['version'])}; "
                                 f"this hht3d reads version {VERSION}")
 
     def _execution(self, block) -> Execution:
         block = _mapping(block, _at(block), "execution")
-        _known_keys(block, [p.name for p in _EXECUTION], "execution")
+        _known_keys(block, [p.name for p in EXECUTION], "execution")
         values = {p.name: p.check(block[p.name], f"{_at(block, p.name)}: execution") if p.name in block
-                  else p.default for p in _EXECUTION}
+                  else p.default for p in EXECUTION}
         return Execution(**values)
 
     def _inputs(self, doc) -> tuple[Path, ...]:
@@ -289,12 +360,13 @@ class _Validator:
             models = builtin_models()
             name = spec.get("builtin")
             if name not in models:
-                raise PipelineError(f"{_at(spec, 'builtin')}: unknown builtin model {name!r}"
+                raise PipelineError(f"{_at(spec, 'builtin')}: unknown builtin model {shown(name)}"
                                     f"{did_you_mean(name, models)}")
             return (models[name],)
         items = spec if isinstance(spec, list) else [spec]
         if not all(isinstance(item, str) and item for item in items):
-            raise PipelineError(f"{where}: inputs must be a path, a glob, a folder or a list of them, got {spec!r}")
+            raise PipelineError(f"{where}: inputs must be a path, a glob, a folder or a list of them, "
+                                f"got {shown(spec)}")
         try:
             return tuple(resolve_inputs(items))
         except InputError as exc:
@@ -311,7 +383,7 @@ class _Validator:
         ids = [p[0] for p in parsed]
         for i, step_id in enumerate(ids):
             if step_id in ids[:i]:
-                raise PipelineError(f"{_at(entries[i], 'id')}: two steps have the id {step_id!r}; give each "
+                raise PipelineError(f"{_at(entries[i], 'id')}: two steps have the id {shown(step_id)}; give each "
                                     "step a distinct id")
         steps = [Step(step_id, op, params, self._refs(entries, parsed, i), given)
                  for i, (step_id, op, params, given) in enumerate(parsed)]
@@ -324,15 +396,15 @@ class _Validator:
             raise PipelineError(f"{_at(entry)}: a step needs an op (`hht3d ops` lists them)")
         op = operation(entry["op"], where)
         step_id = entry.get("id", op.name)
-        if not isinstance(step_id, str) or not step_id or not set(step_id) <= _ID_CHARS:
-            raise PipelineError(f"{_at(entry, 'id')}: step id must be letters, digits, '_' or '-', "
-                                f"got {step_id!r}")
-        context = f"step {step_id!r} (op {op.name})"
+        if not isinstance(step_id, str) or not 0 < len(step_id) <= MAX_ID or not set(step_id) <= _ID_CHARS:
+            raise PipelineError(f"{_at(entry, 'id')}: step id must be 1 to {MAX_ID} letters, digits, '_' or '-', "
+                                f"got {shown(step_id)}")
+        context = f"step {shown(step_id)} (op {op.name})"
         raw = _mapping(entry.get("params") or _Mapping(_at(entry)), _at(entry, "params"), f"{context} params")
         for key in raw:
             if op.param(key) is None:
                 known = [p.name for p in op.params]
-                raise PipelineError(f"{_at(raw, key)}: {context}: unknown parameter {key!r}"
+                raise PipelineError(f"{_at(raw, key)}: {context}: unknown parameter {shown(key)}"
                                     f"{did_you_mean(key, known)} (`hht3d ops {op.name}` lists them)")
         params = {}
         for p in op.params:
@@ -347,12 +419,35 @@ class _Validator:
             params["seed"] = execution.seed
         if op.check is not None:
             op.check(params, f"{_at(entry)}: {context}")
+        need = op.fewest_vertices(params)
+        if need is not None:
+            self._enough_vertices(*need, params, f"{_at(raw, need[0]) if need[0] in raw else _at(entry)}: {context}")
         return step_id, op, params, tuple(raw)
+
+    def _enough_vertices(self, name: str, fewest: int, params: dict, where: str) -> None:
+        """Refuse a parameter that needs more vertices than a PLY input declares in its header."""
+        for source, count in self._counts().items():
+            if count < fewest:
+                raise PipelineError(f"{where}: {name}: {params[name]} needs at least {fewest} vertices, but "
+                                    f"{source} has {count}; lower {name} below {count}")
+
+    def _counts(self) -> dict[Path, int]:
+        """Vertex counts of the PLY inputs, from their headers (others, and unreadable ones, are left out:
+        the load step reports those)."""
+        if self._vertex_counts is None:
+            self._vertex_counts = {}
+            for source in self.inputs:
+                if source.suffix.lower() == ".ply":
+                    try:
+                        self._vertex_counts[source] = read_ply_header(source).counts.get("vertex", 0)
+                    except InputError:
+                        continue
+        return self._vertex_counts
 
     def _refs(self, entries, parsed, i: int) -> dict:
         entry, (step_id, op, _, _) = entries[i], parsed[i]
         kinds = {p[0]: p[1].output for p in parsed}
-        context = f"{_at(entry, 'from')}: step {step_id!r} (op {op.name})"
+        context = f"{_at(entry, 'from')}: step {shown(step_id)} (op {op.name})"
         explicit = self._explicit_refs(entry, op, kinds, context)
         refs = {}
         for slot in op.slots:
@@ -365,8 +460,8 @@ class _Validator:
                 if not earlier:
                     makers = sorted(o.name for o in OPERATIONS.values() if o.output in slot.kinds)
                     raise PipelineError(
-                        f"{_at(entry)}: step {step_id!r} (op {op.name}) needs {' or '.join(slot.kinds)} input "
-                        f"{slot.name!r}, and no earlier step makes one; add a step with op "
+                        f"{_at(entry)}: step {shown(step_id)} (op {op.name}) needs {' or '.join(slot.kinds)} input "
+                        f"{shown(slot.name)}, and no earlier step makes one; add a step with op "
                         f"{' or '.join(makers)} before it, or name one with from: {{{slot.name}: STEP_ID}}")
                 refs[slot.name] = earlier[-1]
         return refs
@@ -380,19 +475,19 @@ class _Validator:
             self._known_step(given, kinds, context, "from")
             matching = [s for s in slots.values() if kinds[given] in s.kinds]
             if not matching:
-                raise PipelineError(f"{context}: from: {given!r} makes {kinds[given]}, which op {op.name} does "
+                raise PipelineError(f"{context}: from: {shown(given)} makes {kinds[given]}, which op {op.name} does "
                                     f"not take; it takes {self._takes(slots)}")
             return {matching[0].name: given}
         if not isinstance(given, dict):
-            raise PipelineError(f"{context}: from must be a step id or a mapping {{slot: step id}}, got {given!r}")
+            raise PipelineError(f"{context}: from must be a step id or a mapping {{slot: step id}}, got {shown(given)}")
         refs = {}
         for slot, ref in given.items():
             if slot not in slots:
-                raise PipelineError(f"{context}: op {op.name} has no input {slot!r}"
+                raise PipelineError(f"{context}: op {op.name} has no input {shown(slot)}"
                                     f"{did_you_mean(slot, slots, listing=False)} (it takes {self._takes(slots)})")
             self._known_step(ref, kinds, context, f"from.{slot}")
             if kinds[ref] not in slots[slot].kinds:
-                raise PipelineError(f"{context}: from.{slot}: step {ref!r} makes {kinds[ref]}, but {slot} "
+                raise PipelineError(f"{context}: from.{slot}: step {shown(ref)} makes {kinds[ref]}, but {slot} "
                                     f"needs {' or '.join(slots[slot].kinds)}")
             refs[slot] = ref
         return refs
@@ -403,8 +498,8 @@ class _Validator:
 
     @staticmethod
     def _known_step(ref, kinds: dict, context: str, what: str) -> None:
-        if ref not in kinds:
-            raise PipelineError(f"{context}: {what} refers to unknown step {ref!r}{did_you_mean(ref, kinds)}")
+        if not isinstance(ref, str) or ref not in kinds:
+            raise PipelineError(f"{context}: {what} refers to unknown step {shown(ref)}{did_you_mean(ref, kinds)}")
 
     # -- outputs --------------------------------------------------------------------------------
     def _outputs(self, doc, steps: tuple[Step, ...]):
@@ -415,7 +510,7 @@ class _Validator:
         _known_keys(block, _OUTPUTS, "outputs")
         folder = block.get("folder", "out")
         if not isinstance(folder, str) or not folder:
-            raise PipelineError(f"{_at(block, 'folder')}: outputs.folder must be a path, got {folder!r}")
+            raise PipelineError(f"{_at(block, 'folder')}: outputs.folder must be a path, got {shown(folder)}")
         summary = Param("summary", "bool", "").check(block.get("summary", True), f"{_at(block, 'summary')}: outputs")
         if not isinstance(block["files"], list):
             raise PipelineError(f"{_at(block, 'files')}: outputs.files must be a list of {{from, path}} entries")
@@ -427,8 +522,8 @@ class _Validator:
 
     def _output(self, entry, steps: dict, last: str) -> Output:
         step_id = entry.get("from", last)
-        if step_id not in steps:
-            raise PipelineError(f"{_at(entry, 'from')}: output from unknown step {step_id!r}"
+        if not isinstance(step_id, str) or step_id not in steps:
+            raise PipelineError(f"{_at(entry, 'from')}: output from unknown step {shown(step_id)}"
                                 f"{did_you_mean(step_id, steps)}")
         kind = steps[step_id].kind
         formats = FORMATS.get(kind, {})
@@ -437,22 +532,32 @@ class _Validator:
             raise PipelineError(f"{_at(entry)}: an output needs a path pattern, e.g. path: \"{{stem}}_hht.ply\"")
         self._placeholders(path, _at(entry, "path"))
         name = entry.get("format") or self._format_from(path, entry, formats)
-        context = f"{_at(entry, 'format' if 'format' in entry else 'path')}: output {path!r} of step {step_id!r}"
+        context = (f"{_at(entry, 'format' if 'format' in entry else 'path')}: output {shown(path)} "
+                   f"of step {shown(step_id)}")
         if name not in formats:
-            raise PipelineError(f"{context}: step {step_id!r} makes {kind}, which can be written as "
-                                f"{', '.join(formats) or 'nothing'}, not {name!r}")
+            raise PipelineError(f"{context}: step {shown(step_id)} makes {kind}, which can be written as "
+                                f"{', '.join(formats) or 'nothing'}, not {shown(name)}")
         fmt = formats[name]
         if not path.lower().endswith(fmt.suffix):
             raise PipelineError(f"{context}: format {name} writes {fmt.suffix} files; end the path with {fmt.suffix}")
         known = [p.name for p in fmt.params]
         for key in entry:
             if key not in _FILE and key not in known:
-                raise PipelineError(f"{_at(entry, key)}: output {path!r}: unknown option {key!r} for format "
+                raise PipelineError(f"{_at(entry, key)}: output {shown(path)}: unknown option {shown(key)} for format "
                                     f"{name}{did_you_mean(key, [*_FILE, *known])}")
-        options = {p.name: p.check(entry[p.name], f"{_at(entry, p.name)}: output {path!r}") if p.name in entry
+        options = {p.name: p.check(entry[p.name], f"{_at(entry, p.name)}: output {shown(path)}") if p.name in entry
                    else p.default for p in fmt.params}
         check_options(options, context)
+        self._imf_exists(options, steps[step_id], context)
         return Output(step_id, path, fmt, options, tuple(k for k in entry if k in known))
+
+    @staticmethod
+    def _imf_exists(options: dict, step: Step, where: str) -> None:
+        """Refuse a field ``imf_K`` (or amplitude_K, ...) of an IMF the step cannot make."""
+        number, most = field_imf(options.get("field")), step.params.get("max_imfs")
+        if number is not None and most is not None and number > most:
+            raise PipelineError(f"{where}: field {options['field']} needs {number} IMFs, but step {step.id!r} makes "
+                                f"at most max_imfs: {most}; use K <= {most} or raise max_imfs")
 
     @staticmethod
     def _format_from(path: str, entry, formats: dict) -> str:
@@ -461,7 +566,7 @@ class _Validator:
             return "colored_ply"
         names = [n for n, s in SUFFIXES.items() if s == suffix]
         if not names:
-            raise PipelineError(f"{_at(entry, 'path')}: cannot tell the format of {path!r}; end it with "
+            raise PipelineError(f"{_at(entry, 'path')}: cannot tell the format of {shown(path)}; end it with "
                                 f"{', '.join(sorted(set(SUFFIXES.values())))} or give format:")
         return names[0]
 
@@ -470,10 +575,11 @@ class _Validator:
         try:
             fields = [f for _, f, _, _ in string.Formatter().parse(path) if f is not None]
         except ValueError as exc:
-            raise PipelineError(f"{where}: bad path pattern {path!r}: {exc}") from None
+            raise PipelineError(f"{where}: bad path pattern {shown(path)}: {exc}") from None
         for f in fields:
             if f not in PLACEHOLDERS:
-                raise PipelineError(f"{where}: unknown placeholder {{{f}}} in {path!r}{did_you_mean(f, PLACEHOLDERS)}"
+                raise PipelineError(f"{where}: unknown placeholder {{{f}}} in {shown(path)}"
+                                    f"{did_you_mean(f, PLACEHOLDERS)}"
                                     f" (use {', '.join('{' + p + '}' for p in PLACEHOLDERS)})")
 
     def _distinct_paths(self, plan: Pipeline, doc) -> None:
