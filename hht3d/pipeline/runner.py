@@ -57,7 +57,7 @@ def _item(plan: Pipeline, source: Path, paths: list[Path]):
     for output, path in zip(plan.outputs, paths):
         write = Builder(guard=lambda task, func, label=f"write {path.name}": Guarded(label, func, str(source)))
         writes.append(write.task("write", output.format.write)(
-            results[output.step], results[plan.surface_of(output.step)], str(path), **output.options))
+            results[output.step], results[plan.origin_of(output.step)], str(path), **output.options))
     first_load = next(s.id for s in plan.steps if s.op.name == "load")
     sizes = [results[s.id] for s in plan.steps if s.kind in ("emd", "hht")]
     name = f"pipeline-item-{tokenize(plan.name, str(source), [str(p) for p in paths])}"
