@@ -118,8 +118,8 @@ class Shown:
 def shown_copy(surface: Surface, max_vertices: int = VERTEX_BUDGET) -> Shown:
     """What a page draws of ``surface``: itself, or a copy with at most ``max_vertices`` vertices.
 
-    A mesh is simplified by Open3D's quadric decimation to about
-    ``2 max_vertices`` triangles and each kept vertex takes its fields from
+    A mesh is simplified by Open3D's quadric decimation (about twice as
+    many triangles as vertices) and each kept vertex takes its fields from
     the nearest original vertex (``scipy.spatial.cKDTree``).  A point cloud
     keeps a random subset of its points (seed 0), which carry their own
     values.
@@ -142,9 +142,11 @@ def shown_copy(surface: Surface, max_vertices: int = VERTEX_BUDGET) -> Shown:
 
     mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(surface.vertices),
                                      o3d.utility.Vector3iVector(surface.faces))
-    target = int(len(surface.faces) * max_vertices / n)
-    small = mesh.simplify_quadric_decimation(target_number_of_triangles=target)
-    small.remove_unreferenced_vertices()
+    target, small = int(len(surface.faces) * max_vertices / n), mesh
+    while len(small.vertices) > max_vertices and target >= 4:  # triangles set the vertex count only roughly
+        small = small.simplify_quadric_decimation(target_number_of_triangles=target)
+        small.remove_unreferenced_vertices()
+        target = min(target - 1, int(target * max_vertices / len(small.vertices)))
     vertices = np.asarray(small.vertices)
     _, nearest = cKDTree(surface.vertices).query(vertices)
     return Shown(vertices, np.asarray(small.triangles), nearest, n)
@@ -228,7 +230,7 @@ def _figure_json(shown: list[Shown], labels: list[str], view, up) -> str:
     import plotly.io as pio
 
     cam = camera(view, up)
-    eye = dict(zip("xyz", (1.5 * cam.toward).tolist()))
+    eye = dict(zip("xyz", (1.75 * cam.toward).tolist()))
     cam_up = dict(zip("xyz", cam.up.tolist()))
     hidden = {"visible": False, "showspikes": False}
     layout = {"margin": {"l": 0, "r": 0, "t": 28, "b": 0}, "uirevision": "hht3d", "annotations": []}
@@ -366,9 +368,11 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
             raise InputError(f"{path.name}: field {name!r}: {exc}") from None
         entries.append({"name": name, "label": label, "group": group, **limits,
                         "values": [_typed(c.carry(arrays[name])) for c in copies]})
-    notices = [f"{label}: {s.n_original:,} vertices, more than {max_vertices:,}: showing a decimated copy with "
-               f"{len(s.source):,} vertices, each carrying the fields of the nearest original vertex. Colour "
-               "limits, spectrum and quality figures use every vertex."
+    notices = [f"{label}: {s.n_original:,} vertices, more than {max_vertices:,}: showing "
+               + (f"a random subset of {len(s.source):,} points. " if s.faces is None else
+                  f"a decimated copy with {len(s.source):,} vertices, each carrying the fields of the nearest "
+                  "original vertex. ")
+               + "Colour limits, spectrum and quality figures use every vertex."
                for s, label in zip(shown, labels) if s.decimated]
     meta = {"title": title, "size": "; ".join(f"{label}: {_size_text(s)}" if len(surfaces) > 1 else _size_text(s)
                                               for s, label in zip(surfaces, labels)),

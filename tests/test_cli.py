@@ -112,7 +112,7 @@ def test_demo_runs_the_shipped_pipeline_into_out(tmp_path, capsys):
     out = tmp_path / "demo"
     assert main(["demo", "--out", str(out), "--scheduler", "synchronous", "--quiet"]) == 0
     expected = {f"spot_{name}" for name in ("hht.ply", "hht.npz", "signal.ply", "imf_1.ply", "frequency_1.ply",
-                                            "hht.png", "spectrum.png")}
+                                            "hht.png", "spectrum.png", "hht.html")}
     assert {p.name for p in out.iterdir()} == expected
     assert "spot.ply: ok, 2930 vertices" in capsys.readouterr().out
 
