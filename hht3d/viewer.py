@@ -185,18 +185,13 @@ def _colorscale(name: str) -> list:
     return [[float(t), "rgb({},{},{})".format(*(int(round(255 * c)) for c in cmap(t)[:3]))] for t in stops]
 
 
-def _label(name: str, shares: dict) -> tuple[str, str]:
-    """Selector label and group of a field."""
+def _title(name: str) -> tuple[str, str]:
+    """Display name and selector group of a field."""
     match = _GROUPED.match(name)
     if match is None:
-        group = "decomposition" if name in ("signal", "residue") else "other"
-        share = f" — {shares[name]:.1%} of the energy" if name in shares else ""
-        return name + share, group
+        return name, "decomposition" if name in ("signal", "residue") else "other"
     kind, k = match.groups()
-    if kind == "imf":
-        share = f" — {shares[name]:.1%} of the energy" if name in shares else ""
-        return f"IMF {k}{share}", _GROUPS[kind]
-    return f"{kind} {k}", _GROUPS[kind]
+    return f"IMF {k}" if kind == "imf" else f"{kind} {k}", _GROUPS[kind]
 
 
 def _order(names) -> list[str]:
@@ -260,9 +255,9 @@ def _spectrum_data(spectrum: HilbertSpectrum) -> dict | None:
                for k in range(len(spectrum.frequency))]
     limit = getattr(spectrum, "resolvable_frequency", None)
     limit = limit() if callable(limit) else limit
-    shown = 100 * marginal.sum() / total
+    within = 100 * marginal.sum() / total
     caption = (f"Share of the IMF energy ∫a²dA per log-spaced frequency bin ({_SPECTRUM_BINS} bins, "
-               f"{shown:.1f}% of the energy in the plotted range); the selected frequency field's colour "
+               f"{within:.1f}% of the energy in the plotted range); the selected frequency field's colour "
                "range is shaded.")
     return {"edges": edges.tolist(), "marginal": (100 * marginal / total).tolist(),
             "imfs": [row.tolist() for row in per_imf], "scale": "log", "caption": caption,
@@ -361,12 +356,13 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
         shares["residue"] = quality.energy_share[-1]
     entries = []
     for name in _order(arrays):
-        label, group = _label(name, shares)
+        title, group = _title(name)
+        label = title + (f" — {shares[name]:.1%} of the energy" if name in shares else "")
         try:
             limits = color_limits(arrays[name], percentiles)
         except InputError as exc:
             raise InputError(f"{path.name}: field {name!r}: {exc}") from None
-        entries.append({"name": name, "label": label, "group": group, **limits,
+        entries.append({"name": name, "title": title, "label": label, "group": group, **limits,
                         "values": [_typed(c.carry(arrays[name])) for c in copies]})
     notices = [f"{label}: {s.n_original:,} vertices, more than {max_vertices:,}: showing "
                + (f"a random subset of {len(s.source):,} points. " if s.faces is None else

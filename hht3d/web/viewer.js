@@ -142,13 +142,13 @@
       var limits = field[scale];
       var colour = {cmin: limits[0], cmax: limits[1], colorscale: data.colorscales[scale],
                     showscale: index === data.figure.data.length - 1,
-                    colorbar: {title: {text: field.label}, len: 0.8}};
+                    colorbar: {title: {text: field.title}, len: 0.8}};
       if (surface.points) {
         trace.marker = Object.assign({}, base.marker, colour, {color: values(field, surface.copy)});
       } else {
         Object.assign(trace, colour, {intensity: values(field, surface.copy)});
       }
-      trace.hovertemplate = field.label + " %{" + (surface.points ? "marker.color" : "intensity") +
+      trace.hovertemplate = field.title + " %{" + (surface.points ? "marker.color" : "intensity") +
         ":.4g}<extra>" + surface.label + "</extra>";
       return trace;
     });
