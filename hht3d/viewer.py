@@ -356,13 +356,13 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
         shares["residue"] = quality.energy_share[-1]
     entries = []
     for name in _order(arrays):
-        title, group = _title(name)
-        label = title + (f" — {shares[name]:.1%} of the energy" if name in shares else "")
+        short, group = _title(name)
+        label = short + (f" — {shares[name]:.1%} of the energy" if name in shares else "")
         try:
             limits = color_limits(arrays[name], percentiles)
         except InputError as exc:
             raise InputError(f"{path.name}: field {name!r}: {exc}") from None
-        entries.append({"name": name, "title": title, "label": label, "group": group, **limits,
+        entries.append({"name": name, "title": short, "label": label, "group": group, **limits,
                         "values": [_typed(c.carry(arrays[name])) for c in copies]})
     notices = [f"{label}: {s.n_original:,} vertices, more than {max_vertices:,}: showing "
                + (f"a random subset of {len(s.source):,} points. " if s.faces is None else

@@ -18,7 +18,7 @@ import pytest
 from meshes import fibonacci_sphere, icosphere
 
 import hht3d
-from hht3d import Surface, signals
+from hht3d import HilbertSpectrum, Surface, signals
 from hht3d.apps import filter_geometry
 from hht3d.apps.filters import LowPass
 from hht3d.cli import demo_model_path, main
@@ -156,7 +156,7 @@ def test_page_holds_every_field_of_the_result_as_float32(result, result_page):
         np.testing.assert_array_equal(field_values(data, name), values.astype(np.float32))
     names = [f["name"] for f in data["fields"]]
     assert names[:4] == ["signal", "imf_1", "imf_2", "residue"]
-    assert data["initial"] == "signal"
+    assert data["initial"] == "signal" and data["title"] == "spot: HHT"
     assert data["size"] == "2,930 vertices, 5,856 triangles" and data["notices"] == []
 
 
@@ -348,10 +348,33 @@ def test_side_by_side_surfaces_share_the_camera(browser, opened, result, tmp_pat
     assert page.errors == []
 
 
-def test_point_cloud_page_renders(browser, opened, tmp_path):
+class _Limited(HilbertSpectrum):
+    """A spectrum that reports the frequency above which its surface resolves nothing."""
+
+    @property
+    def resolvable_frequency(self):
+        return 12.0
+
+
+def cloud_with_spectrum(tmp_path):
     points = fibonacci_sphere(4000)
-    page = opened(write_page(tmp_path / "cloud.html", [Surface(points, name="cloud")], {"z": points[:, 2]},
-                             title="cloud"))
+    cloud = Surface(points, name="cloud")
+    frequency = np.vstack([20 + 5 * points[:, 0], 4 + points[:, 1]])
+    spectrum = _Limited(frequency, np.ones_like(frequency), np.full(len(points), 1 / len(points)))
+    return write_page(tmp_path / "cloud.html", [cloud], {"z": points[:, 2]}, title="cloud", spectrum=spectrum)
+
+
+def test_resolution_limit_of_the_spectrum_is_marked(tmp_path):
+    spectrum = page_data(cloud_with_spectrum(tmp_path))["spectrum"]
+    assert spectrum["resolvable_frequency"] == 12.0 and spectrum["edges"][0] < 12.0 < spectrum["edges"][-1]
+
+
+def test_point_cloud_page_renders(browser, opened, tmp_path):
+    page = opened(cloud_with_spectrum(tmp_path))
     share, colours = not_blank(page.picture())
     assert share > 0.03 and colours > 10, (share, colours)
+    assert "resolution limit" in page.page.text_content("#hht3d-spectrum")
+    assert page.page.text_content("#hht3d-title") == "cloud"
+    low, high = page.page.evaluate("document.getElementById('hht3d-spectrum').layout.xaxis.range")
+    assert 0 < low < np.log10(12.0) < high < 2   # the log axis spans the spectrum, not the marker's log10
     assert page.errors == []

@@ -112,7 +112,9 @@
     if (s.resolvable_frequency !== null) {
       shapes.push({type: "line", xref: "x", yref: "paper", x0: s.resolvable_frequency, x1: s.resolvable_frequency,
                    y0: 0, y1: 1, line: {color: "#b00020", dash: "dash", width: 1.5}});
-      annotations.push({xref: "x", yref: "paper", x: s.resolvable_frequency, y: 1, yanchor: "bottom",
+      // annotations on a log axis take log10 of the value (shapes take the value itself)
+      var at = s.scale === "log" ? Math.log10(s.resolvable_frequency) : s.resolvable_frequency;
+      annotations.push({xref: "x", yref: "paper", x: at, y: 1, yanchor: "bottom",
                         text: "resolution limit", showarrow: false, font: {color: "#b00020", size: 11}});
     }
     return {
