@@ -4,6 +4,7 @@
 ``hht3d validate PIPELINE.yaml``  validate it and print the planned graph, running nothing;
 ``hht3d ops [OP]``                list the operations, their parameters and defaults;
 ``hht3d info FILE``               what a mesh or point cloud holds;
+``hht3d view FILE.npz|FILE.ply``  write the interactive HTML page of a saved result and print its path;
 ``hht3d demo``                    run the demo pipeline shipped in the package.
 
 Exit codes: 0 on success; 1 with a one-line ``hht3d: error: ...`` reason for
@@ -19,6 +20,8 @@ from pathlib import Path
 
 from .errors import HHT3DError, PipelineError, one_line, shown
 from .scheduling import SCHEDULERS
+from .render import UP_AXES, VIEWS
+from .viewer import VERTEX_BUDGET
 
 #: The demo model shipped in the package: Keenan Crane's "spot" (CC0).
 DEMO_MODEL = "spot.ply"
@@ -130,6 +133,14 @@ def _info(args) -> int:
     return 0
 
 
+def _view(args) -> int:
+    from .viewer import file_html
+
+    print(file_html(args.file, args.out, field=args.field, max_vertices=args.max_vertices, view=args.view,
+                    up=args.up))
+    return 0
+
+
 def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -> None:
     parser.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
                         help="override a pipeline value, e.g. steps.hht.params.max_imfs=4 or inputs=scans/ "
@@ -167,6 +178,17 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--json", action="store_true", help="print JSON")
     info.add_argument("--no-clean", action="store_true", help="describe the file as stored, before cleaning")
     info.set_defaults(run=_info)
+
+    view = sub.add_parser("view", help="write the interactive HTML page of a saved result (.npz or .ply) "
+                                       "or surface file, and print its path")
+    view.add_argument("file", help="a result saved by HHTResult.save or a pipeline, or any mesh or point cloud")
+    view.add_argument("--out", default=None, help="the page to write (default: FILE with the suffix .html)")
+    view.add_argument("--field", default=None, help="the field shown first (default: signal)")
+    view.add_argument("--max-vertices", type=int, default=VERTEX_BUDGET,
+                      help=f"show a decimated copy of larger surfaces (default: {VERTEX_BUDGET:,})")
+    view.add_argument("--view", default="front", choices=tuple(VIEWS), help="initial camera (default: front)")
+    view.add_argument("--up", default="y", choices=UP_AXES, help="the model's up axis (default: y)")
+    view.set_defaults(run=_view)
 
     demo = sub.add_parser("demo", help="run the demo pipeline: HHT of the shipped model spot (CC0)")
     demo.add_argument("--out", default="out/demo", help="output folder (default: out/demo)")

@@ -111,6 +111,14 @@ class HHTResult:
             return io.write_npz(path, arrays)
         raise InputError(f"cannot save an HHT result as {path.name!r}: use a .ply or .npz file name")
 
+    def to_html(self, path, **options) -> Path:
+        """Write an interactive page of every field, the marginal spectrum and the quality
+        figures as one self-contained HTML file (:func:`hht3d.viewer.result_html`, whose
+        keyword arguments ``options`` takes: ``beside``, ``field``, ``max_vertices``, ...)."""
+        from .viewer import result_html
+
+        return result_html(self, path, **options)
+
     def to_open3d(self):
         """An Open3D tensor ``TriangleMesh`` (or ``PointCloud``) carrying
         :meth:`vertex_attributes` as named (n, 1) float vertex attributes."""

@@ -91,7 +91,7 @@ def test_ops_lists_every_operation_with_parameters_and_defaults(capsys):
     out = capsys.readouterr().out
     for name in OPERATIONS:
         assert f"\n{name}(" in f"\n{out}"
-    assert "max_imfs" in out and "sd | s_number | fixed" in out
+    assert "max_imfs" in out and "sd | rfg | s_number | fixed" in out
     assert "hht       png" in out  # the output formats
     assert main(["ops", "emd"]) == 0
     lines = capsys.readouterr().out.splitlines()
@@ -113,7 +113,7 @@ def test_demo_runs_the_shipped_pipeline_into_out(tmp_path, capsys):
     out = tmp_path / "demo"
     assert main(["demo", "--out", str(out), "--scheduler", "synchronous", "--quiet"]) == 0
     expected = {f"spot_{name}" for name in ("hht.ply", "hht.npz", "signal.ply", "imf_1.ply", "frequency_1.ply",
-                                            "hht.png", "spectrum.png")}
+                                            "hht.png", "spectrum.png", "hht.html")}
     assert {p.name for p in out.iterdir()} == expected
     assert "spot.ply: ok, 2930 vertices" in capsys.readouterr().out
 

@@ -5,16 +5,21 @@ kind        formats
 ==========  ==========================================================================
 hht         ``ply`` (mesh + every field as a vertex property), ``npz`` (every array),
             ``colored_ply`` (one field as vertex colours), ``png`` (figure: the
-            paper's Fig. 4 layout, the Hilbert spectrum, or one field)
+            paper's Fig. 4 layout, the Hilbert spectrum, or one field), ``html``
+            (interactive page of every field, the spectrum and the quality figures)
 emd         ``npz`` (imfs, residue), ``ply`` (imf_K and residue as vertex properties)
 signal      ``npz``, ``colored_ply``, ``png``
-surface     ``ply``, ``png`` (shaded)
+surface     ``ply``, ``png`` (shaded), ``html`` (interactive page; a filtered or
+            reconstructed surface beside the one it was made from)
 features    ``ply`` (the surface with ``feature_count`` and ``feature``, features red),
             ``npz`` (vertices, counts, points, vertex_counts, min_count)
 ==========  ==========================================================================
 
-Every writer is ``write(value, surface, path, **options) -> Path`` (``surface``
-is the surface the result lives on) and writes atomically.
+Every writer is ``write(value, surface, path, **options) -> Path`` and writes
+atomically; ``surface`` is the surface the result was computed from
+(:meth:`Pipeline.origin_of <hht3d.pipeline.plan.Pipeline.origin_of>`): the one
+it lives on, or for a surface made from another (``filter_geometry``,
+``reconstruct``, ...) that other surface.
 """
 from __future__ import annotations
 
@@ -27,12 +32,13 @@ import numpy as np
 from ..errors import InputError, PipelineError, shown
 from ..io import write_colored_ply, write_npz, write_ply
 from ..render import UP_AXES, VIEWS
+from ..viewer import VERTEX_BUDGET
 from .params import Param, did_you_mean
 
 __all__ = ["Format", "FORMATS", "SUFFIXES", "check_options", "field_imf"]
 
 #: File suffix of each format.
-SUFFIXES = {"ply": ".ply", "colored_ply": ".ply", "npz": ".npz", "png": ".png"}
+SUFFIXES = {"ply": ".ply", "colored_ply": ".ply", "npz": ".npz", "png": ".png", "html": ".html"}
 
 _FIELD = re.compile(r"^(signal|residue|(imf|amplitude|phase|frequency)_([1-9][0-9]*))$")
 _FEATURE_RED = np.array([0.85, 0.1, 0.1])
@@ -60,6 +66,8 @@ _TITLE = Param("title", "str", "figure title (default: the surface name)", defau
 _AUTO_CMAP = Param("cmap", "str", "Matplotlib colour map (default: diverging for signed fields)", default=None)
 _HHT_FIELD = Param("field", "str", "signal, residue, imf_K, amplitude_K, phase_K or frequency_K",
                    default="signal")
+_MAX_VERTICES = Param("max_vertices", "int", "larger surfaces are shown as a decimated copy carrying the fields",
+                      default=VERTEX_BUDGET, minimum=4)
 
 
 def check_options(options: dict, where: str) -> None:
@@ -113,6 +121,10 @@ def _hht_png(result, surface, path, *, figure, field, signal_name, view, up):
     return save_figure(fig, path)
 
 
+def _hht_html(result, surface, path, *, field, view, up, max_vertices):
+    return result.to_html(path, field=field, view=view, up=up, max_vertices=max_vertices)
+
+
 def _emd_npz(decomposition, surface, path):
     return write_npz(path, {"imfs": decomposition.imfs, "residue": decomposition.residue})
 
@@ -146,6 +158,15 @@ def _surface_png(surface, _, path, *, view, up, title):
     return render_png(path, surface, None, view=view, up=up, title=title)
 
 
+def _surface_html(surface, origin, path, *, view, up, max_vertices):
+    from ..viewer import SHAPE, surfaces_html, write_page
+
+    if origin is surface:
+        return write_page(path, [surface], surface.attributes, title=surface.name, field=SHAPE, view=view, up=up,
+                          max_vertices=max_vertices)
+    return surfaces_html(path, origin, surface, view=view, up=up, max_vertices=max_vertices)
+
+
 def _features_ply(features, surface, path):
     is_feature = np.zeros(surface.n_vertices)
     is_feature[features.vertices] = 1.0
@@ -170,6 +191,8 @@ FORMATS: dict[str, dict[str, Format]] = {
                (Param("figure", "choice", "which figure", default="hht", choices=("hht", "spectrum", "field")),
                 _HHT_FIELD, Param("signal_name", "str", "name of the signal in titles", default="signal"),
                 *_VIEW)),
+        Format("html", "an interactive page: every field, the spectrum and the quality figures", _hht_html,
+               (_HHT_FIELD, *_VIEW, _MAX_VERTICES)),
     )},
     "emd": {f.name: f for f in (
         Format("npz", "imfs and residue", _emd_npz),
@@ -183,6 +206,8 @@ FORMATS: dict[str, dict[str, Format]] = {
     "surface": {f.name: f for f in (
         Format("ply", "the surface", _surface_ply),
         Format("png", "a shaded rendering", _surface_png, (*_VIEW, _TITLE)),
+        Format("html", "an interactive page; a filtered or reconstructed surface beside its original",
+               _surface_html, (*_VIEW, _MAX_VERTICES)),
     )},
     "features": {f.name: f for f in (
         Format("ply", "the surface with feature_count and feature properties, features in red", _features_ply),

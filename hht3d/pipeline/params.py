@@ -67,8 +67,9 @@ class Param:
 
     ``kind`` is ``"int"``, ``"float"``, ``"bool"``, ``"str"``, ``"choice"``
     (one of ``choices``) or ``"gain"`` (a mapping ``{kind: band_stop, ...}``
-    of :func:`hht3d.apps.make_gain`).  A default of ``None`` makes ``null``
-    an allowed value; :data:`REQUIRED` makes the parameter mandatory.
+    of :func:`hht3d.apps.make_gain`).  A default of ``None`` or ``nullable``
+    makes ``null`` an allowed value; :data:`REQUIRED` makes the parameter
+    mandatory.
     """
 
     name: str
@@ -80,6 +81,7 @@ class Param:
     maximum: float | None = None
     open_minimum: bool = False
     open_maximum: bool = False
+    nullable: bool = False
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -96,7 +98,7 @@ class Param:
         if self.kind == "gain":
             return f"gain {{kind: {' | '.join(GAINS)}, ...}}"
         text = self.kind + self._range()
-        return f"{text} or null" if self.default is None else text
+        return f"{text} or null" if self.default is None or self.nullable else text
 
     def _range(self) -> str:
         lo, hi = (None if x is None else f"{x:d}" if isinstance(x, int) else f"{x:g}"
@@ -117,7 +119,7 @@ class Param:
         PipelineError
             ``"{where}: parameter NAME must be ..., got ..."``.
         """
-        if value is None and self.default is None:
+        if value is None and (self.default is None or self.nullable):
             return None
         if self.kind == "choice":
             if value not in self.choices:

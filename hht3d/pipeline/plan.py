@@ -118,10 +118,16 @@ class Pipeline:
     def surface_of(self, step_id: str) -> str:
         """Id of the step whose surface a step's result lives on (itself for a surface)."""
         step = self.step(step_id)
-        if step.kind == "surface":
-            return step.id
+        return step.id if step.kind == "surface" else self.origin_of(step_id)
+
+    def origin_of(self, step_id: str) -> str:
+        """Id of the surface a step's result was computed from: the one it lives on, or for a
+        surface made from another (``filter_geometry``, ``reconstruct``, ...) that other one;
+        a ``load`` step is its own origin."""
+        step = self.step(step_id)
         slot = "surface" if "surface" in step.refs else next(iter(step.refs))
-        return self.surface_of(step.refs[slot])
+        ref = step.refs[slot]
+        return step.id if ref == FILE else self.surface_of(ref)
 
     def describe(self) -> str:
         """The planned graph as text (``hht3d validate``)."""

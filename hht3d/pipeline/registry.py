@@ -85,6 +85,8 @@ MAX_ENSEMBLE = 1000
 MAX_RIESZ_TASKS = 64
 #: Laplacian eigenpairs (the paper uses 300); the eigenvectors are a dense (vertices, eigenpairs) block.
 MAX_EIGENPAIRS = 2000
+#: Envelope tension (scale-free; the cancellation guard stops at 48, then goes harmonic).
+MAX_TENSION = 1000
 #: Sifts per IMF (each solves one envelope system per extremum kind).
 MAX_SIFTS = 1000
 #: Neighbourhood rings of extrema and features.
@@ -126,7 +128,12 @@ EMD = with_defaults(
     Param("s_number", "int", "S-number: unchanged extrema counts in a row", minimum=1, maximum=100),
     Param("fixed_sifts", "int", "sifts per IMF with stopping: fixed", minimum=1, maximum=MAX_SIFTS),
     Param("max_sifts", "int", "cap on sifts per IMF", minimum=1, maximum=MAX_SIFTS),
-    Param("envelope", "choice", "envelope interpolant (Eqs. 8, 11)", choices=ENVELOPES),
+    Param("envelope", "choice", "envelope interpolant: thin plate in tension, the paper's thin plate (Eqs. 8, 11) "
+          "or membrane", choices=ENVELOPES),
+    Param("tension", "float", "tension of the envelope, relative to the extrema spacing", minimum=0,
+          maximum=MAX_TENSION),
+    Param("cancellation_tolerance", "float", "largest energy increase one IMF may cause before more tension "
+          "is tried (null: no guard)", minimum=0, maximum=1, nullable=True),
     Param("extrema", "choice", "extremum rule: 1-ring, or ratio of the ring-ring", choices=EXTREMA_RULES),
     Param("ring", "int", "neighbourhood of extrema: ring", minimum=1, maximum=MAX_RING),
     Param("ratio", "float", "fraction of extrema: ring", minimum=0.5, maximum=1, open_minimum=True),
@@ -291,7 +298,7 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
               (Slot("file", ("file",)),), "surface", LOAD, _load_step),
     Operation("signal", "a per-vertex signal: mean curvature (Eq. 24), coordinates, colour, stored values",
               (_SURFACE,), "signal", SIGNAL, _signal_step, _check_signal),
-    Operation("emd", "empirical mode decomposition with biharmonic envelopes (Sec. 4.1)",
+    Operation("emd", "empirical mode decomposition with thin-plate envelopes (Sec. 4.1)",
               (_SURFACE, _SIGNAL_IN), "emd", EMD, _emd_step),
     Operation("eemd", "ensemble EMD: one task per noisy member, then the average",
               (_SURFACE, _SIGNAL_IN), "emd", ENSEMBLE + EMD, _eemd_step),

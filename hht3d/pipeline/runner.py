@@ -45,7 +45,7 @@ def _item(plan: Pipeline, source: Path, paths: list[Path]):
     for output, path in zip(plan.outputs, paths):
         write = _guarded(source, lambda task, label=f"write {path.name}": label)
         writes.append(write.task("write", output.format.write)(
-            results[output.step], results[plan.surface_of(output.step)], str(path), **output.options))
+            results[output.step], results[plan.origin_of(output.step)], str(path), **output.options))
     surface = results[next(s.id for s in plan.steps if s.op.name == "load")]
     last = next((s.id for s in reversed(plan.steps) if s.kind in ("emd", "hht")), None)
     decomposition = quality = None

@@ -1,0 +1,380 @@
+"""The interactive HTML viewer (hht3d.viewer): what the page holds, and how it renders in a real browser.
+
+The browser tests drive Debian's chromium (installed by ``bash .ci/setup``) through Playwright; they
+skip only where chromium is not installed and this is not CI.
+"""
+from __future__ import annotations
+
+import base64
+import io
+import json
+import os
+import re
+import shutil
+from html.parser import HTMLParser
+
+import numpy as np
+import pytest
+from meshes import fibonacci_sphere, icosphere
+
+import hht3d
+from hht3d import HilbertSpectrum, Surface, signals
+from hht3d.apps import filter_geometry
+from hht3d.apps.filters import LowPass
+from hht3d.cli import demo_model_path, main
+from hht3d.errors import InputError
+from hht3d.viewer import (PERCENTILES, SHAPE, color_limits, file_html, read_fields, shown_copy, surfaces_html,
+                          write_page)
+
+CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+# -- reading a page back -----------------------------------------------------------------------------
+def page_data(path) -> dict:
+    """The JSON the page's script reads."""
+    text = path.read_text(encoding="utf-8")
+    match = re.search(r'<script type="application/json" id="hht3d-data">(.*?)</script>', text, re.S)
+    return json.loads(match.group(1))
+
+
+def decoded(spec) -> np.ndarray:
+    assert spec["dtype"] == "f4"
+    return np.frombuffer(base64.b64decode(spec["bdata"]), dtype="<f4")
+
+
+def field_values(data: dict, name: str, copy: int = 0) -> np.ndarray:
+    return decoded(next(f for f in data["fields"] if f["name"] == name)["values"][copy])
+
+
+class _References(HTMLParser):
+    """Every script source, stylesheet link and CSS import/url() of a page."""
+
+    def __init__(self):
+        super().__init__()
+        self.found, self._in_style = [], False
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if tag == "script" and attrs.get("src"):
+            self.found.append(f"script src={attrs['src']}")
+        if tag == "link" and attrs.get("href"):
+            self.found.append(f"link href={attrs['href']}")
+        self._in_style = tag == "style"
+
+    def handle_endtag(self, tag):
+        self._in_style = False
+
+    def handle_data(self, data):
+        if self._in_style:
+            self.found += [f"css {m}" for m in re.findall(r"@import[^;]*|url\([^)]*\)", data)]
+
+
+# -- fixtures ------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def result():
+    """The HHT of the shipped demo model's mean curvature, two IMFs."""
+    surface = hht3d.load(demo_model_path())
+    return hht3d.hht(surface, signals.mean_curvature(surface), emd_options={"max_imfs": 2})
+
+
+@pytest.fixture(scope="module")
+def result_page(result, tmp_path_factory):
+    return result.to_html(tmp_path_factory.mktemp("page") / "spot.html", view="back")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright (the dev extra) drives chromium")
+    executable = shutil.which("chromium")
+    if executable is None:
+        message = "Debian's chromium is not installed; `bash .ci/setup` installs it (as root)"
+        if os.environ.get("CI"):
+            pytest.fail(message)
+        pytest.skip(message)
+    with sync_api.sync_playwright() as playwright:
+        chromium = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS, headless=True)
+        yield chromium
+        chromium.close()
+
+
+class Opened:
+    """A page loaded in chromium, with what it logged and requested."""
+
+    def __init__(self, browser, path):
+        self.page = browser.new_page(viewport={"width": 1280, "height": 760})
+        self.errors, self.requests = [], []
+        self.page.on("console", lambda m: self.errors.append(f"console {m.type}: {m.text}")
+                     if m.type == "error" else None)
+        self.page.on("pageerror", lambda e: self.errors.append(f"page error: {e}"))
+        self.page.on("request", lambda r: self.requests.append(r.url))
+        self.page.goto(path.as_uri())
+        self.page.wait_for_selector("body[data-ready=true]", timeout=90_000)
+        self.url = path.as_uri()
+
+    def select(self, control: str, value: str) -> None:
+        """Choose an option of the page's own <select> and wait until it is drawn."""
+        self.page.select_option(control, value)
+        attribute = "field" if control == "#hht3d-field" else "scale"
+        self.page.wait_for_selector(f"body[data-{attribute}='{value}']", timeout=30_000)
+        self.page.evaluate("() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+
+    def picture(self) -> np.ndarray:
+        """The surface panel as an (h, w, 3) array."""
+        from PIL import Image
+
+        png = self.page.locator("#hht3d-surface").screenshot()
+        return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=np.float64)
+
+
+@pytest.fixture
+def opened(browser):
+    pages = []
+
+    def open_page(path):
+        pages.append(Opened(browser, path))
+        return pages[-1]
+
+    yield open_page
+    for p in pages:
+        p.page.close()
+
+
+def not_blank(picture: np.ndarray) -> tuple[float, int]:
+    """Share of pixels that differ from the white background, and distinct colours."""
+    covered = np.any(np.abs(picture - 255) > 12, axis=2)
+    colours = len(np.unique((picture[covered] // 8).astype(int) @ np.array([1024, 32, 1])))
+    return float(covered.mean()), colours
+
+
+# -- what the page holds -------------------------------------------------------------------------
+def test_page_holds_every_field_of_the_result_as_float32(result, result_page):
+    data = page_data(result_page)
+    attributes = result.vertex_attributes()
+    assert {f["name"] for f in data["fields"]} == set(attributes)
+    for name, values in attributes.items():
+        np.testing.assert_array_equal(field_values(data, name), values.astype(np.float32))
+    names = [f["name"] for f in data["fields"]]
+    assert names[:4] == ["signal", "imf_1", "imf_2", "residue"]
+    assert data["initial"] == "signal" and data["title"] == "spot: HHT"
+    assert data["size"] == "2,930 vertices, 5,856 triangles" and data["notices"] == []
+
+
+def test_page_geometry_is_shared_by_all_fields(result, result_page):
+    data = page_data(result_page)
+    (trace,) = data["figure"]["data"]
+    assert trace["type"] == "mesh3d" and "intensity" not in trace
+    np.testing.assert_array_equal(decoded(trace["x"]), result.surface.vertices[:, 0].astype(np.float32))
+    faces = np.column_stack([np.frombuffer(base64.b64decode(trace[c]["bdata"]), dtype=trace[c]["dtype"])
+                             for c in "ijk"])
+    np.testing.assert_array_equal(faces, result.surface.faces)
+
+
+def test_page_shows_spectrum_and_quality(result, result_page):
+    data = page_data(result_page)
+    spectrum, quality = data["spectrum"], data["quality"]
+    assert len(spectrum["imfs"]) == 2 and len(spectrum["edges"]) == len(spectrum["marginal"]) + 1
+    np.testing.assert_allclose(np.sum(spectrum["imfs"], axis=0), spectrum["marginal"], rtol=1e-9, atol=1e-12)
+    assert 99 <= sum(spectrum["marginal"]) <= 100
+    assert spectrum["resolvable_frequency"] is None or spectrum["resolvable_frequency"] > 0
+    q = result.quality
+    assert quality["rows"][0][1] == f"{q.energy_ratio:.3g}" and quality["warnings"] == list(q.warnings)
+    imf_1 = next(f for f in data["fields"] if f["name"] == "imf_1")
+    assert imf_1["label"] == f"IMF 1 — {q.energy_share[0]:.1%} of the energy"
+
+
+def test_page_holds_no_external_script_or_style(result_page):
+    finder = _References()
+    finder.feed(result_page.read_text(encoding="utf-8"))
+    assert finder.found == []
+
+
+def test_color_limits_are_the_stated_percentiles():
+    values = np.random.default_rng(1).standard_normal(5000) * 3 + 0.5
+    values[:5] = [1e6, -1e6, 1e5, np.nan, np.inf]   # outliers and non-finite values do not move them
+    finite = values[np.isfinite(values)]
+    low, high = np.percentile(finite, PERCENTILES)
+    limits = color_limits(values)
+    np.testing.assert_allclose(limits["sequential"], [low, high], rtol=1e-12)
+    bound = max(abs(low), abs(high))
+    np.testing.assert_allclose(limits["symmetric"], [-bound, bound], rtol=1e-12)
+    assert limits["auto"] == "symmetric"
+    positive = np.abs(values[np.isfinite(values)]) + 1.0
+    assert color_limits(positive)["auto"] == "sequential"
+    np.testing.assert_allclose(color_limits(positive, (5, 95))["sequential"], np.percentile(positive, [5, 95]))
+
+
+def test_page_limits_are_those_of_every_vertex(result, result_page):
+    data = page_data(result_page)
+    for name, values in result.vertex_attributes().items():
+        entry = next(f for f in data["fields"] if f["name"] == name)
+        limits = color_limits(values)
+        assert entry["auto"] == limits["auto"]
+        np.testing.assert_allclose(entry["symmetric"], limits["symmetric"])
+        np.testing.assert_allclose(entry["sequential"], limits["sequential"])
+
+
+# -- big surfaces --------------------------------------------------------------------------------
+def test_decimation_transfers_fields_to_the_nearest_vertex(tmp_path):
+    v, f = icosphere(5)            # 10,242 vertices
+    surface = Surface(v, f, name="sphere")
+    field = np.sin(3 * v[:, 0]) + v[:, 1] * v[:, 2]
+    shown = shown_copy(surface, 2000)
+    assert shown.decimated and 1500 <= len(shown.source) <= 2000 and len(shown.faces) > 2500
+    distance = np.linalg.norm(shown.vertices[:, None, :] - v[None, :, :], axis=2)
+    np.testing.assert_array_equal(shown.source, np.argmin(distance, axis=1))
+    # the carried value is the analytic field near each drawn vertex (|grad| <= 4, moves < 2 edge lengths)
+    drawn = shown.vertices
+    exact = np.sin(3 * drawn[:, 0]) + drawn[:, 1] * drawn[:, 2]
+    assert np.max(np.abs(shown.carry(field) - exact)) < 4 * 2 * 0.025
+    page = write_page(tmp_path / "sphere.html", [surface], {"wave": field}, title="sphere", max_vertices=2000)
+    data = page_data(page)
+    np.testing.assert_array_equal(field_values(data, "wave"), field[shown.source].astype(np.float32))
+    assert len(data["notices"]) == 1 and "decimated copy with" in data["notices"][0]
+    np.testing.assert_allclose(next(e for e in data["fields"])["sequential"], np.percentile(field, PERCENTILES))
+
+
+def test_point_cloud_is_drawn_as_points_and_subsampled_with_its_own_values(tmp_path):
+    points = fibonacci_sphere(3000)
+    cloud = Surface(points, name="cloud")
+    height = points[:, 2]
+    page = write_page(tmp_path / "cloud.html", [cloud], {"height": height}, title="cloud", max_vertices=1000)
+    data = page_data(page)
+    (trace,) = data["figure"]["data"]
+    assert trace["type"] == "scatter3d" and trace["mode"] == "markers" and data["surfaces"][0]["points"]
+    drawn_z = decoded(trace["z"])
+    assert len(drawn_z) == 1000
+    np.testing.assert_array_equal(field_values(data, "height"), drawn_z)  # each point keeps its own value
+    assert "random subset of 1,000 points" in data["notices"][0]
+
+
+def test_bad_input_is_reported_with_the_file_and_field(result, tmp_path):
+    with pytest.raises(InputError, match="no field 'imf_7'.*available: shape, signal, imf_1"):
+        result.to_html(tmp_path / "x.html", field="imf_7")
+    with pytest.raises(InputError, match="field 'f' has shape"):
+        write_page(tmp_path / "x.html", [result.surface], {"f": np.zeros(5)}, title="x")
+    with pytest.raises(InputError, match="max_vertices"):
+        result.to_html(tmp_path / "x.html", max_vertices=2)
+    with pytest.raises(InputError, match="unknown view"):
+        result.to_html(tmp_path / "x.html", view="sideways")
+    assert not list(tmp_path.iterdir())
+
+
+# -- saved results, surfaces beside each other, CLI ------------------------------------------------------
+@pytest.mark.parametrize("suffix", [".npz", ".ply"])
+def test_saved_result_gives_the_same_page(result, tmp_path, suffix, capsys):
+    saved = result.save(tmp_path / f"spot_hht{suffix}")
+    surface, fields, _ = read_fields(saved)
+    assert surface.n_vertices == result.surface.n_vertices
+    for name, values in result.vertex_attributes().items():
+        np.testing.assert_allclose(fields[name], values, rtol=0, atol=0)
+    assert main(["view", str(saved), "--field", "frequency_1"]) == 0
+    page = tmp_path / "spot_hht.html"
+    assert capsys.readouterr().out.strip() == str(page)
+    data = page_data(page)
+    assert data["initial"] == "frequency_1" and data["spectrum"] is not None
+    assert data["quality"]["rows"][0][1] == f"{result.quality.energy_ratio:.3g}"
+    np.testing.assert_array_equal(field_values(data, "imf_2"), result.imfs[1].astype(np.float32))
+
+
+def test_view_reports_a_missing_file(tmp_path, capsys):
+    assert main(["view", str(tmp_path / "none.npz")]) == 1
+    assert "none.npz: no such file" in capsys.readouterr().err
+
+
+def test_filtered_surface_beside_the_original(result, tmp_path):
+    filtered = filter_geometry(result, LowPass(cutoff=5.0, width=2.0))
+    page = surfaces_html(tmp_path / "pair.html", result.surface, filtered)
+    data = page_data(page)
+    assert [s["label"] for s in data["surfaces"]] == ["spot", "spot_filtered"]
+    assert data["initial"] == SHAPE and len(data["figure"]["data"]) == 2
+    expected = np.einsum("ij,ij->i", filtered.vertices - result.surface.vertices, result.surface.normals)
+    np.testing.assert_array_equal(field_values(data, "displacement"), expected.astype(np.float32))
+    # both surfaces have all their vertices: one copy of each field serves both
+    assert [s["copy"] for s in data["surfaces"]] == [0, 0]
+
+
+def test_file_html_of_a_plain_surface_shows_its_properties(tmp_path):
+    v, f = icosphere(2)
+    path = tmp_path / "ball.ply"
+    hht3d.io.write_ply(path, Surface(v, f, name="ball"), {"height": v[:, 2]})
+    data = page_data(file_html(path))
+    assert [e["name"] for e in data["fields"]] == ["height"]
+    assert data["spectrum"] is None and data["quality"] is None
+
+
+# -- in a real browser ---------------------------------------------------------------------------
+def test_page_renders_offline_without_errors_and_switches_fields(browser, opened, result_page):
+    page = opened(result_page)
+    first = page.picture()
+    share, colours = not_blank(first)
+    assert share > 0.05 and colours > 30, (share, colours)
+    page.select("#hht3d-field", "imf_1")
+    second = page.picture()
+    changed = np.any(np.abs(second - first) > 24, axis=2).mean()
+    assert changed > 0.02, changed
+    page.select("#hht3d-scale", "sequential")
+    assert np.any(np.abs(page.picture() - second) > 24, axis=2).mean() > 0.02
+    assert "p1 to p99" in page.page.text_content("#hht3d-limits")
+    assert page.errors == []
+    assert page.requests == [page.url]   # nothing fetched: plotly.js and the data are in the file
+
+
+def test_page_shows_hover_values_and_the_spectrum(browser, opened, result_page):
+    page = opened(result_page)
+    box = page.page.locator("#hht3d-surface").bounding_box()
+    for dx in (0.0, -0.05, 0.05):
+        page.page.mouse.move(box["x"] + box["width"] * (0.5 + dx), box["y"] + box["height"] * 0.55)
+        label = page.page.locator(".hovertext")
+        if label.count():
+            break
+    assert label.count() and re.search(r"signal -?[0-9.]+", label.first.text_content()), "no hover label"
+    assert page.page.locator("#hht3d-spectrum .main-svg").count() > 0
+    assert page.errors == []
+
+
+def test_side_by_side_surfaces_share_the_camera(browser, opened, result, tmp_path):
+    filtered = filter_geometry(result, LowPass(cutoff=5.0, width=2.0))
+    page = opened(surfaces_html(tmp_path / "pair.html", result.surface, filtered))
+    share, _ = not_blank(page.picture())
+    assert share > 0.05
+    eye = page.page.evaluate("""() => {
+        const plot = document.getElementById('hht3d-surface');
+        return Plotly.relayout(plot, {'scene.camera': {eye: {x: 0.3, y: 1.4, z: 0.2}, up: {x: 0, y: 0, z: 1}}})
+            .then(() => new Promise(r => setTimeout(r, 200)))
+            .then(() => plot.layout.scene2.camera.eye);
+    }""")
+    assert eye == {"x": 0.3, "y": 1.4, "z": 0.2}
+    assert page.errors == []
+
+
+class _Limited(HilbertSpectrum):
+    """A spectrum that reports the frequency above which its surface resolves nothing."""
+
+    @property
+    def resolvable_frequency(self):
+        return 12.0
+
+
+def cloud_with_spectrum(tmp_path):
+    points = fibonacci_sphere(4000)
+    cloud = Surface(points, name="cloud")
+    frequency = np.vstack([20 + 5 * points[:, 0], 4 + points[:, 1]])
+    spectrum = _Limited(frequency, np.ones_like(frequency), np.full(len(points), 1 / len(points)))
+    return write_page(tmp_path / "cloud.html", [cloud], {"z": points[:, 2]}, title="cloud", spectrum=spectrum)
+
+
+def test_resolution_limit_of_the_spectrum_is_marked(tmp_path):
+    spectrum = page_data(cloud_with_spectrum(tmp_path))["spectrum"]
+    assert spectrum["resolvable_frequency"] == 12.0 and spectrum["edges"][0] < 12.0 < spectrum["edges"][-1]
+
+
+def test_point_cloud_page_renders(browser, opened, tmp_path):
+    page = opened(cloud_with_spectrum(tmp_path))
+    share, colours = not_blank(page.picture())
+    assert share > 0.03 and colours > 10, (share, colours)
+    assert "resolution limit" in page.page.text_content("#hht3d-spectrum")
+    assert page.page.text_content("#hht3d-title") == "cloud"
+    low, high = page.page.evaluate("document.getElementById('hht3d-spectrum').layout.xaxis.range")
+    assert 0 < low < np.log10(12.0) < high < 2   # the log axis spans the spectrum, not the marker's log10
+    assert page.errors == []
