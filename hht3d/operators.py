@@ -35,6 +35,8 @@ __all__ = [
     "vertex_fem_gradient",
     "connected_components",
     "boundary_vertices",
+    "corner_angles",
+    "grown_regions",
 ]
 
 
@@ -267,3 +269,32 @@ def boundary_vertices(n: int, faces: np.ndarray) -> np.ndarray:
     mask = np.zeros(n, dtype=bool)
     mask[uniq[counts == 1].ravel()] = True
     return mask
+
+
+def corner_angles(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Interior angle at each corner (f, 3), radians; 0 at the corners of a zero-area face."""
+    e = _edges(vertices, faces)
+    a, b = -e[:, [2, 0, 1]], e[:, [1, 2, 0]]  # the edges leaving each corner
+    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=2), np.einsum("fki,fki->fk", a, b))
+
+
+def grown_regions(adj: sp.csr_matrix, mass: np.ndarray, seeds: np.ndarray, min_area,
+                  max_rings: int = 8) -> sp.csr_matrix:
+    """Vertex regions around ``seeds``, grown ring by ring until they hold ``min_area``.
+
+    Each region starts as the closed 1-ring of its seed and gains one ring
+    per step while its area (sum of ``mass``) is below ``min_area`` (a number,
+    or one per seed), for at most ``max_rings`` rings.  Returns a 0/1 matrix ``(len(seeds), n)``: row
+    ``k`` marks the region of ``seeds[k]``.
+    """
+    n = len(mass)
+    step = (adj + sp.eye(n, dtype=bool, format="csr")).astype(np.float64)
+    region = sp.csr_matrix((np.ones(len(seeds)), (np.arange(len(seeds)), seeds)), shape=(len(seeds), n)) @ step
+    for _ in range(max_rings - 1):
+        small = np.asarray(region @ mass).ravel() < min_area
+        if not small.any():
+            break
+        region = region + sp.diags(small.astype(np.float64)) @ region @ step
+        region.data[:] = 1.0
+    region.data[:] = 1.0
+    return region.tocsr()

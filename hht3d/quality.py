@@ -154,8 +154,10 @@ def _warnings(ratio: float, io: float, spike: float) -> tuple[str, ...]:
     if ratio > ENERGY_RATIO_LIMIT or io < ORTHOGONALITY_LIMIT:
         found.append(f"the IMFs cancel each other (energy ratio {ratio:.3g} > {ENERGY_RATIO_LIMIT}, "
                      f"or IO {io:.3g} < {ORTHOGONALITY_LIMIT}): envelopes overshoot between sparse "
-                     "extrema; try a stronger envelope tension (emd option tension) or EEMD")
+                     "extrema; keep the default envelope and cancellation guard, or try EEMD "
+                     "(ensemble_size) or a higher emd option tension")
     if spike > SPIKE_LIMIT:
-        found.append(f"the signal spikes to {spike:.3g}x its 99th percentile: likely tiny-area or "
-                     "needle triangles; clean or remesh the surface, or use a robust signal")
+        found.append(f"the signal spikes to {spike:.3g}x its 99th percentile: likely tiny-area, needle "
+                     "or cap triangles; use the curvature signals with their default min_area, or "
+                     "clean or remesh the surface")
     return tuple(found)
