@@ -6,7 +6,6 @@ in which the quadrature tolerance is a proven bound.
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,9 +29,10 @@ from hht3d.riesz import (
 )
 from hht3d.errors import InputError
 from hht3d.surface import Surface
+from conftest import shipped_model_path
 from meshes import fibonacci_sphere, grid, icosphere
 
-SPOT = Path(hht3d.__file__).parent / "data" / "spot.ply"
+SPOT = shipped_model_path("spot.ply")
 
 
 def m_error(surface, approx, exact):
