@@ -37,9 +37,9 @@ from benchmarks.common import ROOT, machine, table, write_results  # noqa: E402
 #: Longest run of one mutant's tests; a mutant that hangs the suite counts as caught (by timeout).
 TIMEOUT = 900
 
-EMD_TESTS = ("tests/test_emd.py", "tests/test_hht.py")
+EMD_TESTS = ("tests/test_emd.py", "tests/test_emd_stopping.py", "tests/test_hht.py")
 RIESZ_TESTS = ("tests/test_riesz.py", "tests/test_monogenic.py")
-MONOGENIC_TESTS = ("tests/test_monogenic.py", "tests/test_hht.py")
+MONOGENIC_TESTS = ("tests/test_monogenic.py", "tests/test_hht.py", "tests/test_apps_filtering.py")
 FILTER_TESTS = ("tests/test_apps_filtering.py",)
 OPERATOR_TESTS = ("tests/test_operators.py", "tests/test_riesz.py", "tests/test_signals.py")
 GRADIENT_TESTS = ("tests/test_operators.py", "tests/test_riesz.py", "tests/test_monogenic.py")
