@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from conftest import assert_red_blue_swapped
 from hht3d import figures
 from hht3d.errors import InputError
 from hht3d.hht import HHTResult, hht
@@ -95,11 +96,9 @@ def test_composite_panels_show_their_own_fields(result):
         imf, frequency, amplitude = (3 + 3 * i, 4 + 3 * i, 5 + 3 * i)
         assert np.array_equal(plain[frequency], flipped[frequency])
         assert np.array_equal(plain[amplitude], flipped[amplitude])
-        warm = plain[imf][..., 0] - plain[imf][..., 2]
-        cool = flipped[imf][..., 0] - flipped[imf][..., 2]
-        coloured = np.abs(warm) > 30
+        coloured = np.abs(plain[imf][..., 0] - plain[imf][..., 2]) > 30
         assert coloured.mean() > 0.05
-        assert np.mean(np.sign(warm[coloured]) == -np.sign(cool[coloured])) > 0.95
+        assert_red_blue_swapped(plain[imf], flipped[imf], coloured)
     assert not np.array_equal(plain[3], plain[6])  # IMF 1 and IMF 2 are different fields
 
 
@@ -117,9 +116,17 @@ def test_composite_default_height_fits_the_model(result):
 
 
 def test_point_cloud_result(cloud_result, tmp_path):
-    paths = figures.write_figures(cloud_result, tmp_path, stem="pc", hht_size=(700, 420))
+    from hht3d.render import render_png
+
+    paths = figures.write_figures(cloud_result, tmp_path, stem="pc", hht_size=(700, 420), field_size=(400, 360))
     assert pixels(paths["hht"]).shape[:2] == (420, 700)
-    assert pixels(paths["signal"]).std() > 20
+    # the signal figure shows the signal on the points: rendered again for −f with the same title
+    # (the signed signal gets symmetric limits, so the colour bar is the same), only the splats
+    # change, and red and blue swap there
+    other = render_png(tmp_path / "negated.png", cloud_result.surface, -cloud_result.signal, size=(400, 360),
+                       title="cloud: signal")
+    changed = assert_red_blue_swapped(pixels(paths["signal"]), pixels(other))
+    assert 0.1 < changed.mean() < 0.7
 
 
 def test_spectrum_shares(result):
