@@ -132,3 +132,83 @@ def disjoint_union(*meshes):
         faces.append(np.asarray(f) + offset)
         offset += len(v)
     return np.vstack(vertices), np.vstack(faces)
+
+
+def jittered_height_field(nx: int = 14, ny: int = 11, jitter: float = 0.35, seed: int = 5):
+    """:func:`grid` on ``[0, 1]²`` with jittered interior vertices (many obtuse triangles), lifted
+    to ``z = 0.2·sin(2πx)·cos(πy)``."""
+    v, f = grid(nx, ny, jitter=jitter, seed=seed)
+    v[:, 2] = 0.2 * np.sin(2 * np.pi * v[:, 0]) * np.cos(np.pi * v[:, 1])
+    return v, f
+
+
+def reference_operators(vertices, faces):
+    """Dense cotan stiffness ``L``, mixed-Voronoi areas ``A`` and unit vertex normals ``N``.
+
+    Written face by face from the textbook formulas (angles by ``arccos``; Meyer et al. 2002
+    for the areas; area-weighted face normals), independently of :mod:`hht3d.operators`, as
+    the reference for tests of code that uses the operators.  For small meshes only.
+    Returns ``(L (n, n), A (n,), N (n, 3))``.
+    """
+    v = np.asarray(vertices, dtype=float)
+    n = len(v)
+    lap, area, normal = np.zeros((n, n)), np.zeros(n), np.zeros((n, 3))
+    for tri in np.asarray(faces):
+        p = v[tri]
+        angle = np.empty(3)
+        for k in range(3):
+            a, b = p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]
+            angle[k] = np.arccos(np.clip(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)), -1, 1))
+        cross = np.cross(p[1] - p[0], p[2] - p[0])
+        normal[tri] += cross
+        face_area = 0.5 * np.linalg.norm(cross)
+        for k in range(3):  # the edge opposite corner k, weight cot(angle_k) / 2
+            i, j = tri[(k + 1) % 3], tri[(k + 2) % 3]
+            w = 0.5 / np.tan(angle[k])
+            lap[i, j] -= w
+            lap[j, i] -= w
+            lap[i, i] += w
+            lap[j, j] += w
+        for k in range(3):
+            if angle.max() > np.pi / 2:  # obtuse triangle: half to the obtuse corner, a quarter to the others
+                area[tri[k]] += face_area / 2 if angle[k] > np.pi / 2 else face_area / 4
+            else:  # Voronoi share: the edges k-(k+1) and k-(k+2), opposite the angles at k+2 and k+1
+                to_next = np.sum((p[(k + 1) % 3] - p[k]) ** 2) / np.tan(angle[(k + 2) % 3])
+                to_prev = np.sum((p[(k + 2) % 3] - p[k]) ** 2) / np.tan(angle[(k + 1) % 3])
+                area[tri[k]] += (to_next + to_prev) / 8
+    return lap, area, normal / np.linalg.norm(normal, axis=1, keepdims=True)
+
+
+def boundary_mask(n: int, faces) -> np.ndarray:
+    """Vertices on an edge that only one face uses (counted with a plain dictionary)."""
+    count: dict = {}
+    for tri in np.asarray(faces):
+        for k in range(3):
+            edge = tuple(sorted((int(tri[k]), int(tri[(k + 1) % 3]))))
+            count[edge] = count.get(edge, 0) + 1
+    mask = np.zeros(n, dtype=bool)
+    for (i, j), c in count.items():
+        if c == 1:
+            mask[[i, j]] = True
+    return mask
+
+
+def random_bump_sphere(subdivisions: int = 5, count: int = 60, seed: int = 7):
+    """Unit icosphere with ``count`` random Gaussian bumps along the normal, of two width classes.
+
+    Even-numbered bumps are narrow (angular σ ≈ 0.08, peak 0.5-1% of the radius), odd ones wide
+    (σ ≈ 0.25, peak 1-2%), each with a random sign, centre and ±25% width.  Returns
+    ``(vertices, faces, narrow, wide)``: the two radial displacement fields, ``vertices =
+    clean · (1 + narrow + wide)`` with ``clean`` on the unit sphere.
+    """
+    rng = np.random.default_rng(seed)
+    clean, faces = icosphere(subdivisions)
+    centres = rng.normal(size=(count, 3))
+    centres /= np.linalg.norm(centres, axis=1, keepdims=True)
+    is_narrow = np.arange(count) % 2 == 0
+    sigma = np.where(is_narrow, 0.08, 0.25) * rng.uniform(0.8, 1.25, count)
+    peak = 0.01 * rng.uniform(0.5, 1.0, count) * np.where(is_narrow, 1.0, 2.0) * rng.choice([-1, 1], count)
+    angle = np.arccos(np.clip(clean @ centres.T, -1, 1))
+    bumps = np.exp(-angle ** 2 / (2 * sigma ** 2)) * peak
+    narrow, wide = bumps[:, is_narrow].sum(axis=1), bumps[:, ~is_narrow].sum(axis=1)
+    return clean * (1 + narrow + wide)[:, None], faces, narrow, wide

@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 
 import hht3d
 from hht3d import InputError, Surface
-from hht3d.apps import (FeatureResult, heat_kernel_signature, hks_features, merge_hits, prominent_features,
+from hht3d.apps import (FEATURE_EMD_OPTIONS, FeatureResult, heat_kernel_signature, hks_features, merge_hits, prominent_features,
                         repeatability)
 from hht3d.cli import demo_model_path
 from hht3d.emd import emd, local_extrema
@@ -24,9 +24,9 @@ def mean_edge_length(surface: Surface) -> float:
 
 @pytest.fixture(scope="module")
 def spot():
-    """The shipped demo model (2,930 vertices) and its mean-curvature EMD."""
+    """The shipped demo model (2,930 vertices) and its mean-curvature EMD, as features take it."""
     surface = hht3d.load(demo_model_path())
-    return surface, emd(surface, mean_curvature(surface))
+    return surface, emd(surface, mean_curvature(surface), **FEATURE_EMD_OPTIONS)
 
 
 # -- counting and merging -----------------------------------------------------------------------
@@ -88,39 +88,56 @@ def test_features_invariant_to_rotation_and_scale(spot):
     assert reference.n_features > 0
     for c in (2.5, 1e-3):
         moved = Surface(c * surface.vertices @ rotation.T + [1.0, -2.0, 3.0], surface.faces)
-        result = prominent_features(moved, emd(moved, mean_curvature(moved)))
+        result = prominent_features(moved, emd(moved, mean_curvature(moved), **FEATURE_EMD_OPTIONS))
         assert np.array_equal(result.vertices, reference.vertices)
         assert np.array_equal(result.vertex_counts, reference.vertex_counts)
         hks_moved = hks_features(moved, eigenpairs=60)
         assert np.array_equal(hks_moved.vertices, hks_features(surface, eigenpairs=60).vertices)
 
 
-def test_noise_repeatability(spot):
-    """Paper Fig. 8: Gaussian noise of 15% of the mean edge length.
+def significance(hits: int, trials: int, chance: np.ndarray) -> float:
+    """z-score of ``hits`` successes out of ``trials`` against independent chance rates.
 
-    Features of the noisy copy are mapped to the clean positions (same vertex order) and count as
-    repeated within 2 mean edge lengths of a clean feature.  Chance level is the fraction of all
-    vertices that lie that close to a clean feature.  Measured (seed 0): ours 0.67 noisy->clean
-    (chance 0.39) and 0.36 clean->noisy; HKS 1.00 and 0.86 with 7 features.
+    Poisson-binomial null model with its normal approximation: ``(k − Σp) / √Σp(1−p)``.
+    """
+    chance = np.broadcast_to(chance, (trials,))
+    return float((hits - chance.sum()) / np.sqrt(np.sum(chance * (1 - chance))))
+
+
+def test_noise_repeatability(spot):
+    """Paper Fig. 8: Gaussian noise of 15% of the mean edge length, three noise seeds.
+
+    Features of a noisy copy are mapped to the clean positions (same vertex order) and count as
+    repeated within 2 mean edge lengths of a feature of the other copy.  Null model: features
+    placed independently of the other copy's land that close with the chance rate, the fraction
+    of all vertices that close to it.  Pooled over the seeds, the repeated count must exceed
+    chance at significance 1e-3 (z ≥ 3.1) in both directions, for ours and for HKS.  One seed is
+    not enough: our noisy feature count varies 22-58 with the seed.  Measured z: ours 13.7
+    noisy->clean, 10.2 clean->noisy (with the cancellation guard on: 4.1 and 2.2); HKS 17.9.
     """
     surface, decomposition = spot
     h = mean_edge_length(surface)
-    rng = np.random.default_rng(0)
-    noisy = Surface(surface.vertices + rng.normal(scale=0.15 * h, size=surface.vertices.shape), surface.faces)
-    clean_features = prominent_features(surface, decomposition)
-    noisy_features = prominent_features(noisy, emd(noisy, mean_curvature(noisy)))
     p = surface.vertices
-    forward = repeatability(p[noisy_features.vertices], p[clean_features.vertices], 2 * h)
-    backward = repeatability(p[clean_features.vertices], p[noisy_features.vertices], 2 * h)
-    chance = float(np.mean(cKDTree(p[clean_features.vertices]).query(p)[0] <= 2 * h))
-    hks_clean, hks_noisy = hks_features(surface, eigenpairs=60), hks_features(noisy, eigenpairs=60)
-    hks_forward = repeatability(p[hks_noisy.vertices], p[hks_clean.vertices], 2 * h)
-    print(f"\nrepeatability under 15% noise: ours {forward:.2f} noisy->clean (chance {chance:.2f}), "
-          f"{backward:.2f} clean->noisy, {clean_features.n_features}/{noisy_features.n_features} features; "
-          f"HKS {hks_forward:.2f} noisy->clean, {hks_clean.n_features}/{hks_noisy.n_features} features")
-    assert forward >= 0.5 and forward >= 1.3 * chance
-    assert backward >= 0.2
-    assert hks_forward >= 0.8
+    clean = prominent_features(surface, decomposition).vertices
+    hks_clean = hks_features(surface, eigenpairs=60).vertices
+    tallies = {name: [0, 0, []] for name in ("forward", "backward", "hks")}
+
+    def tally(name, found, reference):
+        near = cKDTree(p[reference])
+        tallies[name][0] += int(np.sum(near.query(p[found])[0] <= 2 * h))
+        tallies[name][1] += len(found)
+        tallies[name][2] += [np.mean(near.query(p)[0] <= 2 * h)] * len(found)
+
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        noisy = Surface(p + rng.normal(scale=0.15 * h, size=p.shape), surface.faces)
+        found = prominent_features(noisy, emd(noisy, mean_curvature(noisy), **FEATURE_EMD_OPTIONS)).vertices
+        tally("forward", found, clean)
+        tally("backward", clean, found)
+        tally("hks", hks_features(noisy, eigenpairs=60).vertices, hks_clean)
+    z = {name: significance(hits, trials, np.array(chance)) for name, (hits, trials, chance) in tallies.items()}
+    print(f"\nrepeatability under 15% noise, z-scores against chance: {z}")
+    assert all(value >= 3.1 for value in z.values()), z
 
 
 # -- heat kernel signature -----------------------------------------------------------------------
@@ -140,12 +157,58 @@ def test_hks_equals_heat_kernel_diagonal():
                        1 / surface.mass_diagonal.sum(), rtol=1e-8)
 
 
-def test_hks_features_are_strict_maxima(spot):
-    surface, _ = spot
-    result = hks_features(surface, eigenpairs=60, time=0.05)
-    hks = heat_kernel_signature(surface, 0.05, eigenpairs=60)
-    assert np.array_equal(result.vertices, local_extrema(surface, hks, rule="strict", ring=2)[0])
-    assert result.n_scales == 1 and len(result.minima[0]) == 0 and set(result.counts) == {1}
+def sphere_hks_series(t: float) -> float:
+    """HKS of the unit sphere, the same at every point: Σ_l (2l+1)/(4π) e^{−l(l+1)t}.
+
+    (Addition theorem: Σ_m Y_lm(x)² = (2l+1)/(4π) for the l(l+1)-eigenspace.)
+    """
+    degrees = np.arange(60)
+    return float(np.sum((2 * degrees + 1) / (4 * np.pi) * np.exp(-degrees * (degrees + 1) * t)))
+
+
+def test_hks_on_the_sphere_is_constant_and_matches_the_series():
+    # 48 eigenpairs = every mode of degree 1..6 (ARPACK path on 642 vertices); at t = 0.5 the
+    # degree-7 terms weigh e^{-28} and are negligible.  By symmetry the HKS is the same at every
+    # point: the icosphere breaks the symmetry slightly, measured spread 3.6e-4 of the value
+    # (bound 2e-3).  Its value is the series up to the mesh's O(h²) area and eigenvalue errors:
+    # measured +0.73%, bound 2%.
+    surface = Surface(*icosphere(3))
+    hks = heat_kernel_signature(surface, [0.5, 1.0], eigenpairs=48)
+    for row, t in zip(hks, (0.5, 1.0)):
+        assert np.ptp(row) <= 2e-3 * row.mean()
+        assert row.mean() == pytest.approx(sphere_hks_series(t), rel=0.02)
+
+
+def test_hks_matches_a_truncated_generalized_eigh():
+    # The HKS sum over p modes, written here from scipy.linalg.eigh(L, M) and the kernel
+    # term 1/area; the library takes its 29 modes from ARPACK (tol 0), so the two agree to
+    # round-off: measured 3e-14 relative, bound 3e-13.  The cut must not split an
+    # eigenspace (Σ φ² over part of one depends on the basis).
+    v, f = icosphere(3)
+    surface = Surface(v * [1.6, 1.0, 0.8], f)
+    values, vectors = scipy.linalg.eigh(surface.stiffness.toarray(), np.diag(surface.mass_diagonal))
+    times = np.array([0.05, 0.3])
+    p = 29
+    assert values[p + 1] - values[p] > 0.05 * values[p]  # values[0] is the kernel
+    expected = np.exp(-np.outer(times, values[1:p + 1])) @ (vectors[:, 1:p + 1] ** 2).T \
+        + 1 / surface.mass_diagonal.sum()
+    hks = heat_kernel_signature(surface, times, eigenpairs=p)
+    assert np.max(np.abs(hks / expected - 1)) <= 3e-13
+
+
+def test_hks_features_of_an_ellipsoid_are_the_long_axis_tips():
+    # Ellipsoid with semi-axes 2 > 1.3 > 1.  The HKS at small t is 1/(4πt) + K/(12π) + O(t)
+    # (Minakshisundaram–Pleijel), and K = a²/(b²c²) peaks at the tips of the long axis; the
+    # short-axis tips are minima and the middle-axis tips saddles.  The mesh keeps the three
+    # mirror symmetries of the icosahedron, whose subdivision has vertices on the axes; the
+    # strict 2-ring rule must find exactly the two tips, and only maxima.
+    v, f = icosphere(3)
+    surface = Surface(v * [2.0, 1.3, 1.0], f)
+    tips = [int(np.argmax(v[:, 0])), int(np.argmin(v[:, 0]))]
+    assert np.allclose(np.abs(surface.vertices[tips, 0]), 2.0)
+    result = hks_features(surface, eigenpairs=60)
+    assert sorted(result.vertices.tolist()) == sorted(tips)
+    assert result.n_scales == 1 and len(result.minima[0]) == 0 and result.counts.tolist() == [1, 1]
 
 
 # -- bad parameters --------------------------------------------------------------------------

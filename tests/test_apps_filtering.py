@@ -5,14 +5,15 @@ import pickle
 
 import numpy as np
 import pytest
-from meshes import bump_band_sphere, disjoint_union, fibonacci_sphere, grid, height_field_grid, icosphere
+from meshes import (boundary_mask, bump_band_sphere, disjoint_union, fibonacci_sphere, grid, height_field_grid, icosphere,
+                    jittered_height_field, random_bump_sphere, reference_operators)
 from scipy.spatial.transform import Rotation
 
 import hht3d
 from hht3d import InputError, Surface
 from hht3d.apps import (BandBoost, BandStop, Constant, HighBoost, LowPass, PiecewiseLinear, filter_geometry,
                         filter_signal, gains_of, imf_enhancement, make_gain, manifold_harmonics_filter,
-                        position_weights, reconstruct, reconstruct_from_change)
+                        reconstruct, reconstruct_from_change)
 from hht3d.hht import hht
 from hht3d.signals import mean_curvature
 
@@ -103,6 +104,25 @@ def test_filter_signal_is_eq26(bumps):
     assert gains_of(result, gain).shape == result.imfs.shape
 
 
+def test_filtering_does_not_depend_on_the_signal_unit():
+    """The gains read the instantaneous frequency ω = |∇φ|, a rate of the phase φ = atan2(|Rf|, f),
+    which does not change when the signal is multiplied by c (EMD's thresholds are relative, the
+    Riesz transform is linear): the HHT of c·s gives the same gains and c times the filtered signal,
+    whatever the IMF amplitudes (0.2-0.7 here).  Only round-off differs: measured 9e-13 in the
+    gains and 2e-14 of max |c·s| in s', bounds 1e-11 and 2e-13."""
+    v, f, _, _ = bump_band_sphere(4, 12, 0.01)
+    surface = Surface(v, f)
+    signal = mean_curvature(surface)
+    omega = np.sqrt(12 * 13)
+    gain = BandStop(omega / 2, 2 * omega, width=omega / 4)
+    reference = hht(surface, signal, emd_options={"max_imfs": 3})
+    for c in (1e3, -1e-3):
+        scaled = hht(surface, c * signal, emd_options={"max_imfs": 3})
+        assert np.abs(gains_of(scaled, gain) - gains_of(reference, gain)).max() <= 1e-11
+        error = np.abs(filter_signal(scaled, gain) - c * filter_signal(reference, gain)).max()
+        assert error <= 2e-13 * np.abs(c * signal).max()
+
+
 # -- identity (Eq. 27 with s' = s) -----------------------------------------------------------
 
 def assert_identity(surface: Surface, result) -> None:
@@ -142,26 +162,39 @@ def test_identity_point_cloud_and_components():
 
 # -- the least-squares problem -------------------------------------------------------------
 
-@pytest.mark.parametrize("mesh", ["open", "closed"])
-def test_reconstruction_minimises_documented_energy(mesh):
-    """V' is the stationary point of Σ A_i |(M⁻¹LV')_i − δ'_i|² + Σ w_i |v'_i − v_i|², δ' = δ + (s'−s)n,
-    w_i = μ_i A_i / Ā² (checked with dense algebra, independent of the solver)."""
-    v, f = height_field_grid(12, 10) if mesh == "open" else icosphere(2)
+@pytest.mark.parametrize("mesh, weights, preserve_scale", [
+    ("open", "default", False), ("open", "default", True), ("closed", "default", True),
+    ("closed", "random", False),
+])
+def test_reconstruction_equals_a_dense_solve_written_here(mesh, weights, preserve_scale):
+    """Eq. 27 as documented: (L M⁻¹ L + W) D = L diag(Δs) N with w_i = μ_i A_i / Ā², solved densely
+    with L, M, N and the boundary built in this file (tests/meshes.py), not by hht3d.
+
+    The change is smooth plus noise, so every part of the system matters: a flipped sign, a
+    missing M⁻¹, other weights or normals change D by O(1).  The open mesh is a jittered height
+    field (127 of its 260 triangles obtuse, its boundary held by μ = 1); the closed one an
+    icosphere.  Both sides solve the same SPD system with backward-stable solvers, so they agree
+    to about κ·ε (κ ≈ 3e3-4e3 here); measured 4e-14 relative, bound 10 κ ε.
+    """
+    v, f = jittered_height_field() if mesh == "open" else icosphere(2)
     surface = Surface(v, f)
+    lap, area, normals = reference_operators(v, f)
     rng = np.random.default_rng(4)
-    change = rng.standard_normal(surface.n_vertices)
-    new = reconstruct_from_change(surface, change, preserve_scale=False).vertices
-    lap, area, normals = surface.stiffness.toarray(), surface.mass_diagonal, surface.normals
-    delta = lap @ v / area[:, None]
-    target = delta + change[:, None] * normals
-    w = position_weights(surface) * area / area.mean() ** 2
-    gradient = lap @ (lap @ new / area[:, None] - target) + w[:, None] * (new - v)
-    scale = np.abs(lap @ (change[:, None] * normals)).max()
-    assert np.abs(gradient).max() <= 1e-8 * scale
-    # the boundary is held 100x more strongly than the interior
+    change = np.sin(5 * v[:, 0]) * np.cos(3 * v[:, 1]) + 0.3 * rng.standard_normal(len(v))
+    if weights == "default":
+        mu = np.where(boundary_mask(len(v), f), 1.0, 0.01)  # the paper's μ: 1 on the boundary, 0.01 inside
+        options = {}
+    else:
+        mu = rng.uniform(0.005, 2.0, len(v))
+        options = {"weights": mu}
+    ds = change - np.sum(area * change) / area.sum() if preserve_scale else change
+    system = lap @ np.diag(1 / area) @ lap + np.diag(mu * area / area.mean() ** 2)
+    expected = np.linalg.solve(system, lap @ (ds[:, None] * normals))
+    got = reconstruct_from_change(surface, change, preserve_scale=preserve_scale, **options).vertices - v
+    error = np.abs(got - expected).max() / np.abs(expected).max()
+    assert error <= 10 * np.linalg.cond(system) * np.finfo(float).eps, error
     if mesh == "open":
-        weights = position_weights(surface)
-        assert set(weights[surface.boundary_vertices]) == {1.0} and set(weights[~surface.boundary_vertices]) == {0.01}
+        assert surface.boundary_vertices.sum() == 2 * (14 + 11) - 4
 
 
 def test_reconstruction_is_invariant_to_similarity_transforms():
@@ -221,6 +254,52 @@ def test_enhancement_raises_bumps(bumps, gain):
     surface, _, pattern, result = bumps
     ratio = bump_amplitude(surface, filter_geometry(result, gain).vertices, pattern) / AMPLITUDE
     assert 1.5 <= ratio <= 2.2, ratio  # measured 1.86 for a gain of 2
+
+
+# -- sixty random bumps of two widths: the realistic case -------------------------------------
+
+@pytest.fixture(scope="module")
+def mixed_bumps():
+    """(surface, narrow field, wide field, HHT of the mean curvature): 30 narrow and 30 wide bumps."""
+    v, f, narrow, wide = random_bump_sphere()
+    surface = Surface(v, f, name="random_bumps")
+    return surface, narrow, wide, hht(surface, mean_curvature(surface), emd_options={"max_imfs": 6})
+
+
+def bump_classes(surface: Surface, vertices: np.ndarray, narrow: np.ndarray, wide: np.ndarray) -> np.ndarray:
+    """Area-weighted least-squares amplitudes of the narrow and the wide field in the radial deviation
+    (1, 1 for the input)."""
+    area = surface.mass_diagonal
+    deviation = np.linalg.norm(vertices, axis=1) - 1
+    basis = np.c_[narrow, wide]
+    return np.linalg.solve(basis.T @ (area[:, None] * basis), basis.T @ (area * deviation))
+
+
+# Target: a low-pass between the two scales (narrow bumps ω ≈ 1/σ ≈ 12, wide ≈ 4 rad/unit)
+# removes most of the narrow bumps and keeps the wide ones, as the band-stop does on the
+# one-scale bump band above (amplitude 0.14 there).
+@pytest.mark.xfail(strict=True, reason="issue 14: measured narrow 0.88, wide 0.996 of the input amplitude "
+                                       "(target narrow <= 0.3, wide within 15%)")
+def test_low_pass_removes_narrow_bumps_of_a_mixed_field(mixed_bumps):
+    surface, narrow, wide, result = mixed_bumps
+    out = filter_geometry(result, LowPass(6.0, width=2.0))
+    kept_narrow, kept_wide = bump_classes(surface, out.vertices, narrow, wide)
+    print(f"low-pass at 6 rad/unit on 60 mixed bumps: narrow {kept_narrow:.3f}, wide {kept_wide:.3f}")
+    assert kept_narrow <= 0.3 and abs(kept_wide - 1) <= 0.15
+
+
+# The same target for Eq. 27 alone: the exact mean-curvature change that removes the narrow bumps,
+# taken from the mesh without them, should move the geometry most of the way there.
+@pytest.mark.xfail(strict=True, reason="issue 14: measured narrow 0.49 with μ = 0.01 (0.28 with 0.001, 0.15 "
+                                       "with 1e-4), wide 0.997 (target narrow <= 0.3)")
+def test_exact_curvature_change_removes_narrow_bumps(mixed_bumps):
+    surface, narrow, wide, _ = mixed_bumps
+    clean = surface.vertices / np.linalg.norm(surface.vertices, axis=1, keepdims=True)
+    without = Surface(clean * (1 + wide)[:, None], surface.faces)
+    out = reconstruct_from_change(surface, mean_curvature(without) - mean_curvature(surface))
+    kept_narrow, kept_wide = bump_classes(surface, out.vertices, narrow, wide)
+    print(f"exact curvature change on 60 mixed bumps: narrow {kept_narrow:.3f}, wide {kept_wide:.3f}")
+    assert kept_narrow <= 0.3 and abs(kept_wide - 1) <= 0.15
 
 
 # -- baselines -------------------------------------------------------------------------------

@@ -1,4 +1,5 @@
 """The ``hht3d`` command: subcommands, output and exit codes."""
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -7,9 +8,12 @@ import numpy as np
 import pytest
 from meshes import icosphere
 
+from conftest import assert_same_hht
 from hht3d import Surface
-from hht3d.cli import demo_pipeline_path, main
-from hht3d.io import write_ply
+from hht3d.cli import demo_model_path, demo_pipeline_path, main
+from hht3d.hht import hht
+from hht3d.io import load, write_ply
+from hht3d.signals import mean_curvature
 from hht3d.pipeline import OPERATIONS
 
 PIPELINE = """\
@@ -40,12 +44,19 @@ def pipeline(tmp_path, mesh_file):
     return path
 
 
-def test_run_succeeds_with_exit_code_0(pipeline, tmp_path, capsys):
+def test_run_succeeds_with_exit_code_0(pipeline, mesh_file, tmp_path, capsys):
     assert main(["run", str(pipeline), "--scheduler", "synchronous", "--quiet"]) == 0
     out = capsys.readouterr().out
     assert "bumpy.ply: ok, 162 vertices, 2 IMFs" in out
     assert f"wrote {tmp_path / 'out' / 'bumpy_hht.npz'}" in out
-    assert (tmp_path / "out" / "summary.json").is_file()
+    (row,) = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert (row["status"], row["vertices"], row["imfs"]) == ("ok", 162, 2)
+    # the file holds what the Python API computes in memory
+    surface = load(mesh_file)
+    expected = hht(surface, mean_curvature(surface), emd_options={"max_imfs": 2})
+    with np.load(tmp_path / "out" / "bumpy_hht.npz") as saved:
+        assert_same_hht(saved, expected)
+        np.testing.assert_array_equal(saved["vertices"], surface.vertices)
 
 
 def test_set_overrides_a_parameter_and_resume_skips(pipeline, tmp_path, capsys):
@@ -103,19 +114,48 @@ def test_ops_lists_every_operation_with_parameters_and_defaults(capsys):
 
 def test_info_describes_a_file(mesh_file, tmp_path, capsys):
     assert main(["info", str(mesh_file)]) == 0
-    assert "162" in capsys.readouterr().out
+    info = dict(line.split(maxsplit=1) for line in capsys.readouterr().out.splitlines())
+    # a subdivided icosahedron: 162 vertices, 320 faces, 480 edges, closed, χ = 2
+    assert {k: info[k] for k in ("vertices", "faces", "edges", "euler_characteristic", "closed")} == \
+        {"vertices": "162", "faces": "320", "edges": "480", "euler_characteristic": "2", "closed": "True"}
+    surface = load(mesh_file)
+    corners = surface.vertices[surface.faces]
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
+    assert float(info["surface_area"]) == pytest.approx(area, rel=1e-12)
     assert main(["info", str(tmp_path / "none.ply")]) == 1
     assert "no such file" in capsys.readouterr().err
 
 
 def test_demo_runs_the_shipped_pipeline_into_out(tmp_path, capsys):
     """The README's main job: ``hht3d demo --out out/demo``, on the shipped model."""
+    import matplotlib
+
     out = tmp_path / "demo"
     assert main(["demo", "--out", str(out), "--scheduler", "synchronous", "--quiet"]) == 0
     expected = {f"spot_{name}" for name in ("hht.ply", "hht.npz", "signal.ply", "imf_1.ply", "frequency_1.ply",
                                             "hht.png", "spectrum.png", "hht.html")}
     assert {p.name for p in out.iterdir()} == expected
     assert "spot.ply: ok, 2930 vertices" in capsys.readouterr().out
+    # contents: the signal is the mean curvature of the shipped model, computed here; the PLY files
+    # hold the arrays of the npz (float64 properties: exact), and the single-field PLYs colour
+    # them with matplotlib's viridis over the 1st-99th percentiles (8-bit: half a step)
+    surface = load(demo_model_path())
+    saved = dict(np.load(out / "spot_hht.npz"))
+    np.testing.assert_allclose(saved["signal"], mean_curvature(surface), rtol=0,
+                               atol=1e-12 * np.abs(saved["signal"]).max())
+    assert 2 <= len(saved["imfs"]) <= 6 and saved["imfs"].shape[1] == 2930
+    fields = load(out / "spot_hht.ply", clean=False).attributes
+    for k in range(len(saved["imfs"])):
+        for name in ("imfs", "amplitude", "phase", "frequency"):
+            np.testing.assert_array_equal(fields[f"{name.rstrip('s')}_{k + 1}"], saved[name][k])
+    np.testing.assert_array_equal(fields["residue"], saved["residue"])
+    for name, values in (("signal", saved["signal"]), ("imf_1", saved["imfs"][0]),
+                         ("frequency_1", saved["frequency"][0])):
+        coloured = load(out / f"spot_{name}.ply", clean=False)
+        np.testing.assert_array_equal(coloured.attributes[name], values)
+        lo, hi = np.percentile(values, [1, 99])
+        colours = matplotlib.colormaps["viridis"](np.clip((values - lo) / (hi - lo), 0, 1))[:, :3]
+        np.testing.assert_allclose(coloured.colors, colours, rtol=0, atol=0.5 / 255 + 1e-12)
 
 
 def test_pipelines_demo_is_the_shipped_demo():

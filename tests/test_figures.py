@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from conftest import assert_red_blue_swapped
 from hht3d import figures
 from hht3d.errors import InputError
 from hht3d.hht import HHTResult, hht
@@ -71,6 +72,36 @@ def test_composite_panels_are_coloured_by_their_fields(result):
     assert red.mean() > 0.02 and blue.mean() > 0.02
 
 
+def negated(result: HHTResult) -> HHTResult:
+    """The HHT of −f, written from the definitions: IMFs, residue and Riesz vectors change sign,
+    the phase φ becomes π − φ, the amplitude and frequency stay."""
+    mono = result.monogenic
+    flipped = dataclasses.replace(mono, signal=-mono.signal, riesz=-mono.riesz, phase=np.pi - mono.phase)
+    return dataclasses.replace(result, signal=-result.signal, imfs=-result.imfs, residue=-result.residue,
+                               monogenic=flipped)
+
+
+def test_composite_panels_show_their_own_fields(result):
+    # Panels in drawing order: model, signal, residue, then IMF, ω and a of each IMF.  For −f the
+    # IMF panels (diverging map, symmetric limits) swap red and blue, the ω and a panels and the
+    # model are pixel for pixel the same, and different IMFs give different pictures.
+    def panels(r):
+        fig = figures.hht_figure(r, panel_width=100)
+        return [np.asarray(ax.get_images()[0].get_array(), float) for ax in fig.axes if ax.get_images()]
+
+    plain, flipped = panels(result), panels(negated(result))
+    k = result.n_imfs
+    assert np.array_equal(plain[0], flipped[0])
+    for i in range(k):
+        imf, frequency, amplitude = (3 + 3 * i, 4 + 3 * i, 5 + 3 * i)
+        assert np.array_equal(plain[frequency], flipped[frequency])
+        assert np.array_equal(plain[amplitude], flipped[amplitude])
+        coloured = np.abs(plain[imf][..., 0] - plain[imf][..., 2]) > 30
+        assert coloured.mean() > 0.05
+        assert_red_blue_swapped(plain[imf], flipped[imf], coloured)
+    assert not np.array_equal(plain[3], plain[6])  # IMF 1 and IMF 2 are different fields
+
+
 def test_composite_default_height_fits_the_model(result):
     tall_surface = Surface(result.surface.vertices * [1.0, 2.0, 1.0], result.surface.faces, name="tall")
     tall = dataclasses.replace(result, surface=tall_surface)
@@ -85,9 +116,17 @@ def test_composite_default_height_fits_the_model(result):
 
 
 def test_point_cloud_result(cloud_result, tmp_path):
-    paths = figures.write_figures(cloud_result, tmp_path, stem="pc", hht_size=(700, 420))
+    from hht3d.render import render_png
+
+    paths = figures.write_figures(cloud_result, tmp_path, stem="pc", hht_size=(700, 420), field_size=(400, 360))
     assert pixels(paths["hht"]).shape[:2] == (420, 700)
-    assert pixels(paths["signal"]).std() > 20
+    # the signal figure shows the signal on the points: rendered again for −f with the same title
+    # (the signed signal gets symmetric limits, so the colour bar is the same), only the splats
+    # change, and red and blue swap there
+    other = render_png(tmp_path / "negated.png", cloud_result.surface, -cloud_result.signal, size=(400, 360),
+                       title="cloud: signal")
+    changed = assert_red_blue_swapped(pixels(paths["signal"]), pixels(other))
+    assert 0.1 < changed.mean() < 0.7
 
 
 def test_spectrum_shares(result):

@@ -2,6 +2,7 @@
 import numpy as np
 import open3d as o3d
 import pytest
+from scipy.spatial import cKDTree
 
 from hht3d import InputError, Surface, load
 from hht3d.errors import OutputError
@@ -31,6 +32,23 @@ def test_point_cloud_ply_round_trip(tmp_path):
     back = load(write_ply(tmp_path / "pc.ply", cloud, {"f": cloud.vertices[:, 2]}), clean=False)
     assert not back.is_mesh
     np.testing.assert_array_equal(back.attributes["f"], cloud.vertices[:, 2])
+    np.testing.assert_array_equal(back.vertices, cloud.vertices)
+    # written, not re-estimated (estimates differ by ~1e-2); renormalised on load: a few ulps
+    np.testing.assert_allclose(back.normals, cloud.normals, rtol=0, atol=1e-15)
+
+
+def canonical_faces(faces) -> set:
+    """Faces as a set of index triples rotated to start at their smallest index (orientation kept)."""
+    faces = np.asarray(faces)
+    start = np.argmin(faces, axis=1)
+    return {tuple(np.roll(face, -k)) for face, k in zip(faces.tolist(), start)}
+
+
+#: Largest position error each format allows for coordinates in [-1, 1]: text with 6 decimals
+#: (half a unit of 1e-6 per coordinate, times √3), float32 (2^-24 relative per coordinate, times
+#: √3), or Open3D's 10-decimal text.
+POSITION_ATOL = {".obj": 8.7e-7, ".off": 8.7e-7, ".stl": 1.1e-7, ".gltf": 1.1e-7, ".glb": 1.1e-7,
+                 ".pcd": 1.1e-7, ".xyz": 1e-9, ".xyzn": 1e-9, ".pts": 1e-9}
 
 
 @pytest.mark.parametrize("ext", [".obj", ".off", ".stl", ".gltf", ".glb"])
@@ -43,8 +61,14 @@ def test_open3d_mesh_formats(tmp_path, ext):
     if ext == ".glb":
         gltf_to_glb(path.with_suffix(".gltf"), path)
     surface = load(path)
-    # STL stores one vertex per corner: cleaning welds them back to the original count
+    # STL stores one vertex per corner: cleaning welds them back to the original count.  The order
+    # may change: match every vertex to its nearest loaded one, then compare the faces through
+    # that map, orientation included.
     assert surface.n_vertices == len(v) and len(surface.faces) == len(f)
+    distance, index = cKDTree(surface.vertices).query(v)
+    assert distance.max() <= POSITION_ATOL[ext]
+    assert len(set(index)) == len(v)
+    assert canonical_faces(index[f]) == canonical_faces(surface.faces)
 
 
 @pytest.mark.parametrize("ext", [".pcd", ".xyz", ".xyzn", ".pts"])
@@ -56,17 +80,25 @@ def test_open3d_point_formats(tmp_path, ext):
     assert o3d.io.write_point_cloud(path, pcd)
     surface = load(path)
     assert not surface.is_mesh and surface.n_vertices == len(pts)
+    np.testing.assert_allclose(surface.vertices, pts, rtol=0, atol=POSITION_ATOL[ext])
+    if ext in (".pcd", ".xyzn"):  # formats that store normals: they are read, not re-estimated
+        np.testing.assert_allclose(surface.normals, pts, rtol=0, atol=POSITION_ATOL[ext])
 
 
 def test_open3d_geometries(sphere):
     legacy = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(sphere.vertices),
                                        o3d.utility.Vector3iVector(sphere.faces))
-    assert Surface.from_open3d(legacy).n_vertices == sphere.n_vertices
+    from_legacy = Surface.from_open3d(legacy)
+    np.testing.assert_array_equal(from_legacy.vertices, sphere.vertices)  # float64 in memory: exact
+    np.testing.assert_array_equal(from_legacy.faces, sphere.faces)
     tensor = sphere.to_open3d({"signal": sphere.vertices[:, 0]})
     back = Surface.from_open3d(tensor, clean=False)
-    np.testing.assert_allclose(back.attributes["signal"], sphere.vertices[:, 0])
-    cloud = o3d.t.geometry.PointCloud(o3d.core.Tensor(sphere.vertices))
-    assert not Surface.from_open3d(cloud).is_mesh
+    np.testing.assert_array_equal(back.attributes["signal"], sphere.vertices[:, 0])
+    np.testing.assert_array_equal(back.vertices, sphere.vertices)
+    np.testing.assert_array_equal(back.faces, sphere.faces)
+    cloud = Surface.from_open3d(o3d.t.geometry.PointCloud(o3d.core.Tensor(sphere.vertices)))
+    assert not cloud.is_mesh
+    np.testing.assert_array_equal(cloud.vertices, sphere.vertices)
 
 
 def test_cleaning_reports_and_maps_attributes():
@@ -142,13 +174,21 @@ def test_atomic_write_leaves_nothing_on_failure(tmp_path):
 
 
 def test_colored_ply_uses_colormap(tmp_path, sphere):
-    path = write_colored_ply(tmp_path / "c.ply", sphere, sphere.vertices[:, 2], name="height")
+    import matplotlib
+
+    z = sphere.vertices[:, 2]
+    path = write_colored_ply(tmp_path / "c.ply", sphere, z, name="height", limits=(-0.5, 0.5), cmap="magma")
     back = load(path, clean=False)
-    z = back.attributes["height"]
-    # viridis: low values dark blue-purple, high values yellow (red+green high, blue low)
-    lo, hi = np.argmin(z), np.argmax(z)
-    assert back.colors[hi, 0] > 0.8 and back.colors[hi, 2] < 0.3
-    assert back.colors[lo, 2] > back.colors[lo, 0]
+    np.testing.assert_array_equal(back.attributes["height"], z)
+    # the colours are matplotlib's magma of the clipped, normalised values, stored as 8-bit
+    # channels: within half a step (0.5/255) of the exact colour
+    expected = matplotlib.colormaps["magma"](np.clip(z + 0.5, 0, 1))[:, :3]
+    np.testing.assert_allclose(back.colors, expected, rtol=0, atol=0.5 / 255 + 1e-12)
+    # default limits: the 1st and 99th percentile
+    default = load(write_colored_ply(tmp_path / "d.ply", sphere, z), clean=False)
+    lo, hi = np.percentile(z, [1, 99])
+    expected = matplotlib.colormaps["viridis"](np.clip((z - lo) / (hi - lo), 0, 1))[:, :3]
+    np.testing.assert_allclose(default.colors, expected, rtol=0, atol=0.5 / 255 + 1e-12)
 
 
 def test_headers_give_sizes_without_the_data(tmp_path, sphere):

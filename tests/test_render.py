@@ -6,6 +6,7 @@ import sys
 import numpy as np
 import pytest
 
+from conftest import assert_red_blue_swapped
 from hht3d import render as R
 from hht3d.errors import InputError
 from hht3d.surface import Surface
@@ -121,6 +122,20 @@ def test_render_png_has_the_requested_size(sphere, tmp_path):
     assert pixels.std() > 20
     assert list(tmp_path.iterdir()) == [path]  # no temporary file left
     assert pyplot_loaded or "matplotlib.pyplot" not in sys.modules  # no global pyplot state
+    # the PNG shows the field: with −x (same symmetric limits, so the same title and colour bar)
+    # only the model's pixels change, red and blue swap there, and red lies right of blue (the
+    # front view looks down −z with y up, so x grows to the right)
+    other = R.render_png(tmp_path / "y.png", sphere, -sphere.vertices[:, 0], title="x", label="x (m)",
+                         size=(420, 300), dpi=90, limits=(-1, 1), cmap="RdBu_r")
+    path = R.render_png(tmp_path / "x.png", sphere, sphere.vertices[:, 0], title="x", label="x (m)",
+                        size=(420, 300), dpi=90, limits=(-1, 1), cmap="RdBu_r")
+    with Image.open(path) as image, Image.open(other) as flipped:
+        a, b = (np.asarray(i.convert("RGB"), dtype=float) for i in (image, flipped))
+    changed = assert_red_blue_swapped(a, b)
+    assert 0.1 < changed.mean() < 0.6
+    warm = a[..., 0] - a[..., 2]
+    columns = np.nonzero(changed)[1]
+    assert columns[warm[changed] > 0].mean() > columns[warm[changed] < 0].mean() + 30
 
 
 @pytest.mark.parametrize(("call", "message"), [
@@ -146,6 +161,7 @@ OPEN3D_CHECK = """
 import sys
 import numpy as np
 sys.path.insert(0, {tests!r})
+from conftest import assert_red_blue_swapped
 from hht3d import render as R
 from hht3d.errors import InputError
 from hht3d.surface import Surface

@@ -15,6 +15,7 @@ from html.parser import HTMLParser
 
 import numpy as np
 import pytest
+from conftest import decoded, field_values, page_data
 from meshes import fibonacci_sphere, icosphere
 
 import hht3d
@@ -28,23 +29,6 @@ from hht3d.viewer import (PERCENTILES, SHAPE, color_limits, file_html, read_fiel
 
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-
-
-# -- reading a page back -----------------------------------------------------------------------------
-def page_data(path) -> dict:
-    """The JSON the page's script reads."""
-    text = path.read_text(encoding="utf-8")
-    match = re.search(r'<script type="application/json" id="hht3d-data">(.*?)</script>', text, re.S)
-    return json.loads(match.group(1))
-
-
-def decoded(spec) -> np.ndarray:
-    assert spec["dtype"] == "f4"
-    return np.frombuffer(base64.b64decode(spec["bdata"]), dtype="<f4")
-
-
-def field_values(data: dict, name: str, copy: int = 0) -> np.ndarray:
-    return decoded(next(f for f in data["fields"] if f["name"] == name)["values"][copy])
 
 
 class _References(HTMLParser):

@@ -22,7 +22,7 @@
 """
 from .baselines import (HKS_TIME_FRACTION, heat_kernel_signature, hks_features, imf_enhancement,
                         manifold_harmonics_filter)
-from .features import FeatureResult, features_from_counts, merge_hits, prominent_features, repeatability
+from .features import FEATURE_EMD_OPTIONS, FeatureResult, features_from_counts, merge_hits, prominent_features, repeatability
 from .filters import (GAINS, BandBoost, BandStop, Constant, Gain, HighBoost, LowPass, PiecewiseLinear,
                       filter_signal, gains_of, make_gain)
 from .reconstruction import (BOUNDARY_WEIGHT, INTERIOR_WEIGHT, check_mean_curvature_signal, filter_geometry,
@@ -36,7 +36,7 @@ __all__ = [
     "INTERIOR_WEIGHT", "BOUNDARY_WEIGHT", "position_weights", "reconstruct", "reconstruct_from_change",
     "check_mean_curvature_signal", "filter_geometry",
     # features (Sec. 5.2)
-    "FeatureResult", "prominent_features", "features_from_counts", "merge_hits", "repeatability",
+    "FEATURE_EMD_OPTIONS", "FeatureResult", "prominent_features", "features_from_counts", "merge_hits", "repeatability",
     # baselines
     "imf_enhancement", "manifold_harmonics_filter", "heat_kernel_signature", "hks_features",
     "HKS_TIME_FRACTION",
