@@ -12,9 +12,10 @@ model unit of length.  In the continuum:
   wavelength;
 * for patterns that vary in two directions Eq. 23 reads *less* than the
   wavenumber, because ``|Rf|`` mixes the directions: an isotropic random wave
-  of wavenumber ``k`` gives ``ω ≈ 0.80 k`` on average (median ``0.83 k``),
-  ``cos kx + cos ky`` gives ``0.71 k``, and Laplacian eigenfunctions of real
-  meshes ``0.75–0.96 √λ``.
+  of wavenumber ``k`` gives ``0.77 k`` (mean weighted by the energy ``a²``;
+  unweighted mean 0.84, median 0.86), ``cos kx + cos ky`` gives ``0.69 k``
+  (median 0.71), and Laplacian eigenfunctions of a real mesh (spot)
+  ``0.77–0.90 √λ`` (``benchmarks/bench_frequency.py``).
 
 No single factor converts Eq. 23 into a wavenumber, since the factor depends on
 the local pattern (1 for ridges and 1-D waves, 0.71–0.80 for isotropic
@@ -39,9 +40,10 @@ Estimators (``method``)
     the Laplacian's, both relative to their long-wave limits), so that a
     sampled plane wave reads its wavenumber at every vertex.  Exact for
     plane waves up to the mesh's Nyquist limit on regular grids, hence
-    monotone in the true frequency; ``O((kh)²)`` from Eq. 23 for curved
-    phase fields (about +2 % at 8 points per wavelength for spherical
-    harmonics).
+    monotone in the true frequency.  Where the phase field curves (patterns
+    varying in two directions) the 1-ring fit is off by ``O((kh)²)``: for
+    spherical harmonics at 8 points per wavelength +1.6 % (sectoral) to
+    +2.4 % (tesseral) of the continuum Eq. 23.
 ``"gradient"``
     Eq. 23 as the paper writes it: ``∇φ = (f ∇q − q ∇f)/(f² + q²)`` from
     vertex gradients of the sampled fields, ``∇q = Jᵀ Rf/|Rf|`` by the chain
@@ -225,10 +227,12 @@ def _phase_frequency(st: _Stencil, f: np.ndarray, r: np.ndarray) -> np.ndarray:
     q = np.linalg.norm(r, axis=1)
     o = _orientation(st, r, q)
     q_i = np.einsum("vc,vc->v", r, o)[st.rows]
-    q_j = sum(r[:, c][st.cols] * o[:, c][st.rows] for c in range(3))
-    grad = _unwrapped_fit(st, f, q_i, q_j, None)
+    r_t, o_t = np.ascontiguousarray(r.T), np.ascontiguousarray(o.T)  # 1-D gathers are the fast ones
+    q_j = sum(r_t[c][st.cols] * o_t[c][st.rows] for c in range(3))
+    f_i, f_j = f[st.rows], f[st.cols]
+    grad = _unwrapped_fit(st, f_i, f_j, q_i, q_j, None)
     response = _riesz_response(st, grad, f ** 2 + q ** 2)
-    grad = _unwrapped_fit(st, f, q_i / response[st.rows], q_j / response[st.cols], grad)
+    grad = _unwrapped_fit(st, f_i, f_j, q_i / response[st.rows], q_j / response[st.cols], grad)
     return np.linalg.norm(grad, axis=1)
 
 
@@ -254,13 +258,13 @@ def _orientation(st: _Stencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
     return o
 
 
-def _unwrapped_fit(st: _Stencil, f: np.ndarray, q_i: np.ndarray, q_j: np.ndarray, guess) -> np.ndarray:
-    """Gradient (n, 3) fitted to the edge increments ``arg(z_j z̄_i)``, each shifted by the
-    whole turns that bring it closest to the gradient's prediction ``∇ψ_i · (x_j − x_i)``.
+def _unwrapped_fit(st: _Stencil, f_i, f_j, q_i, q_j, guess) -> np.ndarray:
+    """Gradient (n, 3) fitted to the edge increments ``arg(z_j z̄_i)``, ``z = f + i q`` at the
+    edges' ends, each shifted by the whole turns that bring it closest to the gradient's
+    prediction ``∇ψ_i · (x_j − x_i)``.
 
     Starts from ``guess`` (or the wrapped increments) and refits until no turn changes.
     """
-    f_i, f_j = f[st.rows], f[st.cols]
     increment = np.arctan2(f_i * q_j - q_i * f_j, f_i * f_j + q_i * q_j)
     turns = np.zeros_like(increment)
     grad = guess
@@ -287,9 +291,9 @@ def _riesz_response(st: _Stencil, grad: np.ndarray, energy: np.ndarray) -> np.nd
     ``|k| h → 0``.  Floored at :data:`_MIN_RESPONSE`.
     """
     magnitude = np.linalg.norm(grad, axis=1)
-    weighted = energy * magnitude
-    total = st.ring @ energy + energy
-    mean = np.divide(st.ring @ weighted + weighted, total, out=np.zeros(st.n), where=total > 0)
+    both = np.column_stack([energy * magnitude, energy])
+    weighted, total = (st.ring @ both + both).T
+    mean = np.divide(weighted, total, out=np.zeros(st.n), where=total > 0)
     wave = np.divide(grad * mean[:, None], magnitude[:, None], out=np.zeros_like(grad),
                      where=magnitude[:, None] > 0).ravel()
     symbol = np.linalg.norm((st.fit @ np.sin(st.along @ wave)).reshape(st.n, 3), axis=1)
