@@ -10,7 +10,8 @@ and the marginal spectrum integrates it over the surface with the vertex
 areas ``A_v`` (lumped mass): ``h(ω) = Σ_v A_v H(ω, v)``.
 
 Frequencies are Eq. 23 as :mod:`hht3d.frequency` estimates it (the
-wavenumber for 1-D waves, about 0.80 of it for isotropic patterns).  A
+wavenumber for waves varying in one direction, less for patterns varying in
+two: 0.77 of it for an isotropic random wave, energy-weighted).  A
 vertex resolves frequencies up to ``π/√A_v``
 (:func:`hht3d.frequency.resolvable_frequency`); the spectrum keeps these
 limits, and :attr:`HilbertSpectrum.resolution` counts the vertex–IMF pairs
