@@ -7,7 +7,9 @@
   0; every limit is a robust percentile range.
 - :func:`spectrum_figure`: the area-weighted marginal spectrum
   ``h(ω) = Σ_v A_v H(ω, v)`` and the frequency–energy distribution of each
-  IMF, as shares of the total energy per frequency bin (log or linear bins).
+  IMF, as shares of the total energy per frequency bin (log or linear bins),
+  with the surface's resolution limit ``π/√A`` marked
+  (:mod:`hht3d.frequency`).
 - :func:`write_figures`: the standard set of PNGs of a result in a folder.
 
 Figures are Matplotlib ``Figure`` objects drawn with the Agg canvas (no
@@ -142,7 +144,8 @@ def hht_figure(result: HHTResult, *, size=None, dpi: float = 100, panel_width: i
         scale = color_scale(values, percentiles=percentiles, **options)
         draw_image(fig, grid.image_box(row, column), drawer.render(values, scale), title=title, font=grid.font)
         draw_colorbar(fig, grid.bar_box(row, column), scale, orientation="horizontal", font=grid.font)
-    for row, text in ((1, "instantaneous\nfrequency ω\n(rad / unit length)"), (2, "local\namplitude a")):
+    limit = f"resolution limit\n≈ {result.spectrum.resolvable_frequency:.3g}"
+    for row, text in ((1, f"instantaneous\nfrequency ω\n(rad / unit length)\n{limit}"), (2, "local\namplitude a")):
         fig.text(*grid.row_label_position(row, 2), text, ha="right", va="center", fontsize=grid.font * 1.1)
     return fig
 
@@ -161,6 +164,10 @@ def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", li
     Right: the frequency–energy distribution of each IMF (its share of ``h``)
     with its energy-weighted mean frequency dashed.  Both show the share of
     the total IMF energy ``Σ_k ∫ a_k² dA`` per frequency bin, in percent.
+    A dash-dotted line marks the surface's resolution limit (the median of
+    ``π/√A_v``, :func:`hht3d.frequency.resolvable_frequency`; the axis
+    extends to it when it lies less than twice beyond the data), and the
+    title gives the share of the energy above each vertex's limit.
 
     Parameters
     ----------
@@ -194,6 +201,8 @@ def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", li
         raise InputError(f"{result.surface.name}: the IMFs carry no energy; there is no spectrum to plot")
     limits = _frequency_limits(spectrum, scale) if limits is None else limits
     edges, marginal = spectrum.marginal(bins, scale, limits)
+    resolution = spectrum.resolution
+    right_end = resolution.limit if edges[-1] < resolution.limit < 2 * edges[-1] else edges[-1]
     font = font_points(width / 2.6, dpi)
     fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi, layout="constrained")
     left, right = fig.subplots(1, 2, sharex=True)
@@ -201,15 +210,21 @@ def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", li
     _plot_imfs(right, spectrum, edges, scale, limits, total, font)
     for axes in (left, right):
         axes.set_xscale(scale)
-        axes.set_xlim(edges[0], edges[-1])
+        axes.set_xlim(edges[0], right_end)
+        if edges[0] < resolution.limit <= right_end:
+            axes.axvline(resolution.limit, color="#8b1a1a", linestyle="-.", linewidth=1.1,
+                         label="resolution limit π/√A")
         axes.set_ylim(bottom=0)
         axes.set_xlabel("instantaneous frequency ω (rad / unit length)", fontsize=font)
         axes.set_ylabel("share of the IMF energy per bin (%)", fontsize=font)
         axes.tick_params(labelsize=font * 0.9)
         axes.grid(alpha=0.3, linewidth=0.5)
+    right.legend(fontsize=font * 0.85, frameon=False)
     shown = 100 * marginal.sum() / total
     fig.suptitle(f"{result.surface.name}: Hilbert spectrum ({bins} {scale} bins; "
-                 f"{shown:.1f}% of the energy within the plotted range)", fontsize=font * 1.15)
+                 f"{shown:.1f}% of the energy within the plotted range)\nresolution limit π/√A ≈ "
+                 f"{resolution.limit:.3g} (median over vertices); {100 * resolution.energy_share:.2g}% of the "
+                 "energy above the vertices' limits", fontsize=font * 1.15)
     return fig
 
 
@@ -234,7 +249,6 @@ def _plot_imfs(axes, spectrum: HilbertSpectrum, edges, scale: str, limits, total
         if np.isfinite(means[i]):
             axes.axvline(means[i], color=colors[i], linestyle="--", linewidth=0.9)
     axes.set_title("frequency–energy distribution of each IMF", fontsize=font)
-    axes.legend(fontsize=font * 0.85, frameon=False)
 
 
 def _frequency_limits(spectrum: HilbertSpectrum, scale: str, tail: float = 1e-3) -> tuple[float, float]:

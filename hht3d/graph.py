@@ -169,15 +169,16 @@ def riesz_potential(surface, imfs, *, method: str = "quadrature", tol: float = 1
     return builder.task("riesz_sum", combine_quadrature_parts)(surface, parts)
 
 
-def monogenic(surface, imfs, potential, *, gradient: str = "lsq", builder: Builder = _PLAIN):
+def monogenic(surface, imfs, potential, *, gradient: str = "lsq", frequency: str = "phase",
+              builder: Builder = _PLAIN):
     """Lazy :func:`hht3d.monogenic.monogenic_from_potential` (Eqs. 21–23)."""
-    return builder.task("monogenic", monogenic_from_potential)(surface, imfs, potential, gradient)
+    return builder.task("monogenic", monogenic_from_potential)(surface, imfs, potential, gradient, frequency)
 
 
 def transform(builder: Builder, surface, signal, *, emd_options: dict | None = None,
               ensemble: dict | None = None,
-              gradient: str = "lsq", method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
-              backend: str | None = None, riesz_tasks: int = 4) -> dict:
+              gradient: str = "lsq", frequency: str = "phase", method: str = "quadrature", tol: float = 1e-8,
+              eigenpairs: int = 300, backend: str | None = None, riesz_tasks: int = 4) -> dict:
     """The tasks of one HHT, by stage name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
 
     ``ensemble``: EEMD options (``ensemble_size``, ``noise_std``, ``seed``)
@@ -191,8 +192,9 @@ def transform(builder: Builder, surface, signal, *, emd_options: dict | None = N
     imfs = builder.task("imfs", _imfs)(decomposition)
     potential = riesz_potential(surface, imfs, method=method, tol=tol, eigenpairs=eigenpairs,
                                 backend=backend, riesz_tasks=riesz_tasks, builder=builder)
-    mono = monogenic(surface, imfs, potential, gradient=gradient, builder=builder)
-    riesz_options = {"gradient": gradient, "method": method, "tol": tol, "eigenpairs": eigenpairs}
+    mono = monogenic(surface, imfs, potential, gradient=gradient, frequency=frequency, builder=builder)
+    riesz_options = {"gradient": gradient, "frequency": frequency, "method": method, "tol": tol,
+                     "eigenpairs": eigenpairs}
     result = builder.task("hht", HHTResult.from_parts)(surface, signal, decomposition, mono, riesz_options)
     return {"emd": decomposition, "imfs": imfs, "riesz": potential, "monogenic": mono, "hht": result}
 

@@ -126,7 +126,7 @@ class HHTResult:
 
 
 def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: str = "lsq",
-        method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
+        frequency: str = "phase", method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
         backend: str | None = None) -> HHTResult:
     """Hilbert–Huang transform of a surface signal: EMD, then Algorithm 2 on all IMFs.
 
@@ -137,8 +137,8 @@ def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: 
     emd_options : dict, optional
         Keyword arguments of :func:`hht3d.emd.emd` (``max_imfs``,
         ``stopping``, ...).
-    gradient, method, tol, eigenpairs
-        Riesz transform options; see :func:`hht3d.monogenic.monogenic`.
+    gradient, frequency, method, tol, eigenpairs
+        Riesz transform and Eq. 23 options; see :func:`hht3d.monogenic.monogenic`.
     backend : str, optional
         Sparse solver for EMD and the Riesz transform.
 
@@ -150,9 +150,10 @@ def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: 
     start = time.perf_counter()
     decomposition = emd(surface, signal, **options)
     middle = time.perf_counter()
-    mono = monogenic(surface, decomposition.imfs, gradient=gradient, method=method, tol=tol,
-                     eigenpairs=eigenpairs, backend=backend)
+    mono = monogenic(surface, decomposition.imfs, gradient=gradient, frequency=frequency, method=method,
+                     tol=tol, eigenpairs=eigenpairs, backend=backend)
     end = time.perf_counter()
-    riesz_options = {"gradient": gradient, "method": method, "tol": tol, "eigenpairs": eigenpairs}
+    riesz_options = {"gradient": gradient, "frequency": frequency, "method": method, "tol": tol,
+                     "eigenpairs": eigenpairs}
     return HHTResult.from_parts(surface, signal, decomposition, mono, riesz_options,
                                 {"emd": middle - start, "spectra": end - middle})

@@ -6,18 +6,14 @@ the monogenic signal ``f + (i, j, k)·R f`` (Eq. 20) has, with ``q = |R f|``,
 * local amplitude ``a = √(f² + q²)`` (Eq. 21),
 * local phase ``φ = atan2(q, f) ∈ [0, π]`` (Eq. 22, the arctangent of
   ``q / f`` taken in the right half-turn),
-* instantaneous frequency ``ω = |∇φ|`` (Eq. 23), computed without phase
-  unwrapping from ``∇φ = (f ∇q − q ∇f) / (f² + q²)``.
-
-``∇q`` is taken by the chain rule, ``∇|Rf| = Jᵀ Rf/|Rf|`` with ``J`` the
-vertex gradient of the smooth vector field ``Rf``, never by differencing
-``|Rf|``: that has a kink (the phase folds at 0 and π) at every extremum of
-``f``, and a gradient stencil straddling it underestimates ``ω`` there.  On
-a cylinder with ``cos(8θ)`` sampled 16 times per period the chain rule
-gives a mean ``ω`` within 2.6 % of ``k/r``; differencing ``|Rf|`` was 14.5 %
-low.  Where ``Rf`` vanishes to round-off, ``|Rf|`` is a cone and its slope
-is taken along the steepest direction, the top right singular vector of
-``J``.
+* instantaneous frequency ``ω = |∇φ|`` (Eq. 23), estimated by
+  :func:`hht3d.frequency.instantaneous_frequency`: by default from the
+  phase increments along edges (exact for sampled plane waves up to the
+  mesh's resolution limit), or with ``frequency="gradient"`` by
+  differentiating the sampled fields as the paper writes it.  The module
+  notes of :mod:`hht3d.frequency` say what the number means (the wavenumber
+  for 1-D waves, about 0.80 of it for isotropic patterns) and how far a
+  surface resolves it.
 
 Since ``a cos φ = f`` exactly, ``Σ_k a_k cos φ_k + residue`` reproduces the
 signal.  Frequencies are in radians per model unit of length.
@@ -29,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
+from .frequency import (FREQUENCY_METHODS, ResolutionReport, instantaneous_frequency, resolution_report,
+                        resolvable_frequency)
 from .riesz import GRADIENTS, _as_signals, _check_choice, fractional_laplacian, vertex_gradient
 from .surface import Surface
 
@@ -51,7 +49,11 @@ class MonogenicSignal:
         Local phase ``φ_k ∈ [0, π]`` (Eq. 22).
     frequency : (k, n) ndarray
         Instantaneous frequency ``|∇φ_k|`` (Eq. 23), radians per unit
-        length; 0 where ``a_k = 0``.
+        length; 0 where ``a_k = 0``.  What it means for 1-D and isotropic
+        patterns: :mod:`hht3d.frequency`.
+    resolvable : (n,) ndarray, optional
+        Per-vertex resolution limit ``π/√A_v``
+        (:func:`hht3d.frequency.resolvable_frequency`).
     """
 
     signal: np.ndarray
@@ -59,6 +61,7 @@ class MonogenicSignal:
     amplitude: np.ndarray
     phase: np.ndarray
     frequency: np.ndarray
+    resolvable: np.ndarray | None = None
 
     @property
     def n_signals(self) -> int:
@@ -68,9 +71,18 @@ class MonogenicSignal:
         """``Σ_k a_k cos φ_k`` (n,): the sum of the signals, to round-off."""
         return np.sum(self.amplitude * np.cos(self.phase), axis=0)
 
+    @property
+    def resolution(self) -> ResolutionReport:
+        """Frequencies above their vertex's resolution limit (vertex–signal pairs, weighted by ``a²``)."""
+        if self.resolvable is None:
+            raise InputError("this monogenic signal carries no resolution limit; build it with "
+                             "hht3d.monogenic.monogenic or pass resolvable=")
+        return resolution_report(self.frequency, self.resolvable, self.amplitude ** 2)
 
-def monogenic(surface: Surface, imfs, *, gradient: str = "lsq", method: str = "quadrature",
-              tol: float = 1e-8, eigenpairs: int = 300, backend: str | None = None) -> MonogenicSignal:
+
+def monogenic(surface: Surface, imfs, *, gradient: str = "lsq", frequency: str = "phase",
+              method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
+              backend: str | None = None) -> MonogenicSignal:
     """Monogenic signal of every IMF: Algorithm 2, steps 2–5 (Eqs. 20–23).
 
     ``L^{-1/2}`` of all IMFs comes from one multi-signal call of
@@ -85,6 +97,10 @@ def monogenic(surface: Surface, imfs, *, gradient: str = "lsq", method: str = "q
     gradient : {"lsq", "fem"}
         Vertex gradient used for the Riesz transform and for ``∇φ``
         (Eq. 17 least squares, or area-averaged FEM gradients on meshes).
+    frequency : {"phase", "gradient"}
+        Estimator of Eq. 23 (:func:`hht3d.frequency.instantaneous_frequency`):
+        edge phase increments, exact for plane waves up to the resolution
+        limit, or the paper's gradients of the sampled fields.
     method, tol, eigenpairs, backend
         How ``L^{-1/2}`` is applied; see :func:`hht3d.riesz.fractional_laplacian`.
 
@@ -94,8 +110,9 @@ def monogenic(surface: Surface, imfs, *, gradient: str = "lsq", method: str = "q
     """
     f = _signals(surface, imfs)
     _check_choice(gradient, GRADIENTS, "gradient")
+    _check_choice(frequency, FREQUENCY_METHODS, "frequency")
     potential = fractional_laplacian(surface, f, -0.5, method, tol, eigenpairs, backend)
-    return monogenic_from_potential(surface, f, potential, gradient)
+    return monogenic_from_potential(surface, f, potential, gradient, frequency)
 
 
 def _signals(surface: Surface, imfs) -> np.ndarray:
@@ -104,7 +121,8 @@ def _signals(surface: Surface, imfs) -> np.ndarray:
     return _as_signals(surface, imfs, "imfs")[0]
 
 
-def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = "lsq") -> MonogenicSignal:
+def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = "lsq",
+                             frequency: str = "phase") -> MonogenicSignal:
     """Monogenic signal from precomputed ``L^{-1/2}`` of the IMFs (Eqs. 16, 20–23).
 
     Parameters
@@ -115,6 +133,8 @@ def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = 
         ``L^{-1/2}`` of the IMFs, e.g. from
         :func:`hht3d.riesz.combine_quadrature_parts`.
     gradient : {"lsq", "fem"}
+    frequency : {"phase", "gradient"}
+        Estimator of Eq. 23; see :func:`monogenic`.
 
     Returns
     -------
@@ -125,30 +145,9 @@ def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = 
     if u.shape != f.shape:
         raise InputError(f"potential has shape {u.shape}; the imfs have {f.shape}")
     _check_choice(gradient, GRADIENTS, "gradient")
+    _check_choice(frequency, FREQUENCY_METHODS, "frequency")
     rf = vertex_gradient(surface, u, gradient)
     q = np.linalg.norm(rf, axis=-1)
-    energy = f ** 2 + q ** 2
-    grad_f = vertex_gradient(surface, f, gradient)
-    grad_q = _norm_gradient(surface, rf, q, gradient)
-    numerator = np.linalg.norm(f[..., None] * grad_q - q[..., None] * grad_f, axis=-1)
-    frequency = np.divide(numerator, energy, out=np.zeros_like(energy), where=energy > 0)
-    return MonogenicSignal(signal=f, riesz=rf, amplitude=np.sqrt(energy), phase=np.arctan2(q, f),
-                           frequency=frequency)
-
-
-#: ``|Rf|`` below this fraction of its maximum (per signal) is round-off: a zero of ``Rf``.
-_ZERO_RTOL = 1e-10
-
-
-def _norm_gradient(surface: Surface, rf: np.ndarray, q: np.ndarray, gradient: str) -> np.ndarray:
-    """``∇|Rf| = Jᵀ Rf/|Rf|`` per vertex (k, n, 3), with ``J[g, c] = ∂_g (Rf)_c``.
-
-    At round-off zeros of ``Rf`` the direction is the top right singular
-    vector of ``J`` (steepest slope of the cone ``|Rf|``).
-    """
-    jac = np.stack([vertex_gradient(surface, rf[..., c], gradient) for c in range(3)], axis=-1)
-    direction = np.divide(rf, q[..., None], out=np.zeros_like(rf), where=q[..., None] > 0)
-    zero = q <= _ZERO_RTOL * q.max(axis=1, keepdims=True)
-    if zero.any():
-        direction[zero] = np.linalg.svd(jac[zero])[2][:, 0, :]
-    return np.einsum("kngc,knc->kng", jac, direction)
+    omega = instantaneous_frequency(surface, f, rf, method=frequency, gradient=gradient)
+    return MonogenicSignal(signal=f, riesz=rf, amplitude=np.sqrt(f ** 2 + q ** 2), phase=np.arctan2(q, f),
+                           frequency=omega, resolvable=resolvable_frequency(surface))

@@ -8,6 +8,14 @@ Hilbert spectrum places the energy ``a_k(v)²`` at frequency ``ω_k(v)``:
 
 and the marginal spectrum integrates it over the surface with the vertex
 areas ``A_v`` (lumped mass): ``h(ω) = Σ_v A_v H(ω, v)``.
+
+Frequencies are Eq. 23 as :mod:`hht3d.frequency` estimates it (the
+wavenumber for waves varying in one direction, less for patterns varying in
+two: 0.77 of it for an isotropic random wave, energy-weighted).  A
+vertex resolves frequencies up to ``π/√A_v``
+(:func:`hht3d.frequency.resolvable_frequency`); the spectrum keeps these
+limits, and :attr:`HilbertSpectrum.resolution` counts the vertex–IMF pairs
+above them (their frequencies are aliased).
 """
 from __future__ import annotations
 
@@ -16,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
+from .frequency import ResolutionReport, resolution_report, resolvable_from_area
 from .monogenic import MonogenicSignal
 from .surface import Surface
 
@@ -37,11 +46,15 @@ class HilbertSpectrum:
         ``a_k(v)`` (Eq. 21).
     area : (n,) ndarray
         Vertex areas (the lumped mass) used to integrate over the surface.
+    resolvable : (n,) ndarray, optional
+        Per-vertex resolution limit; default ``π/√A_v`` from ``area``
+        (:func:`hht3d.frequency.resolvable_from_area`).
     """
 
     frequency: np.ndarray
     amplitude: np.ndarray
     area: np.ndarray
+    resolvable: np.ndarray | None = None
 
     def __post_init__(self):
         if self.frequency.shape != self.amplitude.shape or self.frequency.ndim != 2:
@@ -49,11 +62,26 @@ class HilbertSpectrum:
                              "must both have shape (k, n)")
         if self.area.shape != self.frequency.shape[1:]:
             raise InputError(f"area has shape {self.area.shape}; expected ({self.frequency.shape[1]},)")
+        if self.resolvable is None:
+            object.__setattr__(self, "resolvable", resolvable_from_area(self.area))
+        elif self.resolvable.shape != self.area.shape:
+            raise InputError(f"resolvable has shape {self.resolvable.shape}; expected {self.area.shape}")
 
     @classmethod
     def from_monogenic(cls, surface: Surface, signal: MonogenicSignal) -> "HilbertSpectrum":
         """The spectrum of :func:`hht3d.monogenic.monogenic`'s result on ``surface``."""
         return cls(signal.frequency, signal.amplitude, surface.mass_diagonal)
+
+    @property
+    def resolvable_frequency(self) -> float:
+        """The surface's resolution limit: the median over vertices of ``π/√A_v``."""
+        return float(np.median(self.resolvable))
+
+    @property
+    def resolution(self) -> ResolutionReport:
+        """Vertex–IMF pairs whose frequency exceeds their vertex's limit, and their share of
+        the energy ``a² A_v``: frequencies the surface cannot resolve, reported, not dropped."""
+        return resolution_report(self.frequency, self.resolvable, self.energy * self.area)
 
     @property
     def energy(self) -> np.ndarray:

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from hht3d.errors import InputError
+from hht3d.frequency import instantaneous_frequency
 from hht3d.monogenic import monogenic, monogenic_from_potential
 from hht3d.riesz import fractional_laplacian, riesz
 from hht3d.spectrum import HilbertSpectrum
@@ -28,12 +29,14 @@ def cylinder_waves(cylinder):
     return np.stack([np.cos(k * theta) for k in WAVENUMBERS])
 
 
+@pytest.mark.parametrize("frequency", ["phase", "gradient"])
 @pytest.mark.parametrize("kind", ["lsq", "fem"])
-def test_cylinder_frequency_and_amplitude(cylinder, cylinder_waves, kind):
+def test_cylinder_frequency_and_amplitude(cylinder, cylinder_waves, kind, frequency):
     # cos(kθ) is a Neumann eigenfunction with λ = (k/r)², so R f = −sin(kθ) e_θ,
-    # a = 1 and φ = |kθ| folded into [0, π]: |∇φ| = k/r.  The discrete gradient of a
-    # sampled sinusoid loses ~(kh)²/6 (2.5% at k = 8), within the 5% bound.
-    result = monogenic(cylinder, cylinder_waves, gradient=kind)
+    # a = 1 and φ = |kθ| folded into [0, π]: |∇φ| = k/r.  The gradient route's vertex
+    # gradients of a sampled sinusoid lose ~(kh)²/6 (2.5% at k = 8), the phase route
+    # reads plane waves exactly: both within the 5% bound.
+    result = monogenic(cylinder, cylinder_waves, gradient=kind, frequency=frequency)
     z = cylinder.vertices[:, 2]
     inner = (z > 1.0) & (z < LENGTH - 1.0)
     for i, k in enumerate(WAVENUMBERS):
@@ -68,11 +71,14 @@ def test_definitions_and_identity(cylinder, cylinder_waves):
     assert np.allclose(result.reconstruct() + residue, signal, atol=1e-12 * np.abs(signal).max())
 
 
-def test_from_potential_matches(cylinder, cylinder_waves):
+@pytest.mark.parametrize("frequency", ["phase", "gradient"])
+def test_from_potential_matches(cylinder, cylinder_waves, frequency):
     potential = fractional_laplacian(cylinder, cylinder_waves)
-    a = monogenic_from_potential(cylinder, cylinder_waves, potential, "fem")
-    b = monogenic(cylinder, cylinder_waves, gradient="fem")
+    a = monogenic_from_potential(cylinder, cylinder_waves, potential, "fem", frequency)
+    b = monogenic(cylinder, cylinder_waves, gradient="fem", frequency=frequency)
     assert np.allclose(a.frequency, b.frequency, atol=1e-12) and np.allclose(a.riesz, b.riesz, atol=1e-12)
+    expected = instantaneous_frequency(cylinder, cylinder_waves, a.riesz, method=frequency, gradient="fem")
+    assert np.array_equal(a.frequency, expected)
     with pytest.raises(InputError, match="potential"):
         monogenic_from_potential(cylinder, cylinder_waves, potential[:1])
 
@@ -156,11 +162,13 @@ def test_spectrum_errors(cylinder_spectrum):
         HilbertSpectrum(np.ones((2, 5)), np.ones((2, 4)), np.ones(5))
 
 
-def test_cylinder_mean_frequency_has_no_fold_bias(cylinder, cylinder_waves):
-    # The phase folds at every extremum (q = |Rf| has a kink there); ∇q by the chain rule
-    # keeps the mean over all vertices as accurate as the median (differencing |Rf| gave
-    # 14.5% low at k = 8): within 5% of k/r, and no vertex below 90%.
-    result = monogenic(cylinder, cylinder_waves)
+@pytest.mark.parametrize("frequency", ["phase", "gradient"])
+def test_cylinder_mean_frequency_has_no_fold_bias(cylinder, cylinder_waves, frequency):
+    # The phase folds at every extremum (q = |Rf| has a kink there).  The gradient route
+    # takes ∇q by the chain rule, the phase route orients q by the ring's Riesz vectors
+    # there; either keeps the mean over all vertices as accurate as the median
+    # (differencing |Rf| gave 14.5% low at k = 8): within 5% of k/r, no vertex below 90%.
+    result = monogenic(cylinder, cylinder_waves, frequency=frequency)
     z = cylinder.vertices[:, 2]
     inner = (z > 1.0) & (z < LENGTH - 1.0)
     expected = np.array(WAVENUMBERS)[:, None] / RADIUS

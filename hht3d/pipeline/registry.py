@@ -29,6 +29,7 @@ from ..apps import reconstruct as _reconstruct
 from ..emd import ENVELOPES, EXTREMA_RULES, STOPPING_RULES
 from ..emd import emd as _emd
 from ..errors import InputError, PipelineError, shown
+from ..frequency import FREQUENCY_METHODS
 from ..io import load as _load
 from ..riesz import GRADIENTS, METHODS, MIN_TOL
 from ..signals import SIGNALS, check_signal_path
@@ -151,6 +152,8 @@ ENSEMBLE = with_defaults(
 SPECTRA = with_defaults(
     graph.transform,
     Param("gradient", "choice", "tangent gradient of the monogenic signal", choices=GRADIENTS),
+    Param("frequency", "choice", "Eq. 23 estimator: edge phase increments (exact for plane waves up to the "
+          "resolution limit) or the paper's gradients", choices=FREQUENCY_METHODS),
     Param("method", "choice", "L^{-1/2}: exact quadrature, spectral truncation or dense", choices=METHODS),
     Param("tol", "float", "relative accuracy of the quadrature", minimum=MIN_TOL, maximum=1, open_maximum=True),
     Param("eigenpairs", "int", "eigenpairs of method: spectral", minimum=1, maximum=MAX_EIGENPAIRS),
