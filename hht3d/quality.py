@@ -19,7 +19,7 @@ each connected component, ``f_k`` the IMFs and ``r`` the residue,
 
 :func:`decomposition_quality` computes them and turns the ones past a
 documented limit into warnings that name the likely cause and the option to
-try.  :class:`DecompositionWarning` is the warning category the core emits.
+try.  :class:`QualityWarning` is the warning category the core emits.
 """
 from __future__ import annotations
 
@@ -32,7 +32,7 @@ from .surface import Surface
 
 __all__ = [
     "Quality",
-    "DecompositionWarning",
+    "QualityWarning",
     "decomposition_quality",
     "fluctuation",
     "ENERGY_RATIO_LIMIT",
@@ -48,7 +48,7 @@ ORTHOGONALITY_LIMIT = -0.25
 SPIKE_LIMIT = 20.0
 
 
-class DecompositionWarning(UserWarning):
+class QualityWarning(UserWarning):
     """A result was computed but should not be trusted as it is (see its message)."""
 
 

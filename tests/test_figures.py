@@ -16,8 +16,10 @@ from meshes import fibonacci_sphere, icosphere
 
 
 def two_scale_signal(vertices):
+    """Two oscillations around the equator (8 and 3 waves) and a trend: two IMFs and a residue."""
     x, y, z = vertices.T
-    return np.cos(8 * np.arctan2(y, x)) * (1 - z ** 2) + 0.5 * z
+    azimuth = np.arctan2(y, x)
+    return np.cos(8 * azimuth) * (1 - z ** 2) + 0.8 * np.cos(3 * azimuth + 0.5) * (1 - z ** 2) ** 1.5 + 0.5 * z
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +64,7 @@ def test_composite_panels_are_coloured_by_their_fields(result):
     assert width == 120 * (k + 3)
     images = [ax.get_images()[0].get_array() for ax in fig.axes if ax.get_images()]
     assert len(images) == 3 + 3 * k  # model, signal, IMFs, residue; frequency and amplitude rows
-    model, imf = np.asarray(images[0], float), np.asarray(images[2], float)
+    model, imf = np.asarray(images[0], float), np.asarray(images[3], float)  # drawn: model, signal, residue, IMF 1
     on_model = imf.min(axis=2) < 250
     assert on_model.mean() > 0.3
     # the shaded model is grey; an IMF in a diverging map has both red and blue parts

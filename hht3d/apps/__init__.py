@@ -25,8 +25,8 @@ from .baselines import (HKS_TIME_FRACTION, heat_kernel_signature, hks_features, 
 from .features import FEATURE_EMD_OPTIONS, FeatureResult, features_from_counts, merge_hits, prominent_features, repeatability
 from .filters import (GAINS, BandBoost, BandStop, Constant, Gain, HighBoost, LowPass, PiecewiseLinear,
                       filter_signal, gains_of, make_gain)
-from .reconstruction import (BOUNDARY_WEIGHT, INTERIOR_WEIGHT, check_mean_curvature_signal, filter_geometry,
-                             position_weights, reconstruct, reconstruct_from_change)
+from .reconstruction import (BOUNDARY_WEIGHT, INTERIOR_WEIGHT, automatic_weight, check_mean_curvature_signal,
+                             edit_frequency, filter_geometry, position_weights, reconstruct, reconstruct_from_change)
 
 __all__ = [
     # filters (Eq. 26)
@@ -34,7 +34,7 @@ __all__ = [
     "make_gain", "gains_of", "filter_signal",
     # reconstruction (Eq. 27)
     "INTERIOR_WEIGHT", "BOUNDARY_WEIGHT", "position_weights", "reconstruct", "reconstruct_from_change",
-    "check_mean_curvature_signal", "filter_geometry",
+    "check_mean_curvature_signal", "filter_geometry", "edit_frequency", "automatic_weight",
     # features (Sec. 5.2)
     "FEATURE_EMD_OPTIONS", "FeatureResult", "prominent_features", "features_from_counts", "merge_hits", "repeatability",
     # baselines

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 
 from .. import graph
 from ..apps import hks_features, imf_enhancement, manifold_harmonics_filter, prominent_features
+from ..apps import filter_geometry as _filter_geometry
 from ..apps import reconstruct as _reconstruct
 from ..emd import ENVELOPES, EXTREMA_RULES, STOPPING_RULES
 from ..emd import emd as _emd
@@ -135,6 +136,8 @@ EMD = with_defaults(
           maximum=MAX_TENSION),
     Param("cancellation_tolerance", "float", "largest energy increase one IMF may cause before more tension "
           "is tried (null: no guard)", minimum=0, maximum=1, nullable=True),
+    Param("mean_correction", "float", "move each IMF's part slower than this many extrema spacings to the "
+          "residue (null: off)", minimum=0, maximum=10, nullable=True),
     Param("extrema", "choice", "extremum rule: 1-ring, or ratio of the ring-ring", choices=EXTREMA_RULES),
     Param("ring", "int", "neighbourhood of extrema: ring", minimum=1, maximum=MAX_RING),
     Param("ratio", "float", "fraction of extrema: ring", minimum=0.5, maximum=1, open_minimum=True),
@@ -169,14 +172,21 @@ HHT = (
     _BACKEND,
 )
 
-_WEIGHTS = with_defaults(
-    _reconstruct,
-    Param("interior_weight", "float", "position weight μ of interior vertices (Eq. 27)", minimum=0,
-          maximum=MAX_WEIGHT, open_minimum=True),
-    Param("boundary_weight", "float", "position weight μ of boundary vertices (Eq. 27)", minimum=0,
-          maximum=MAX_WEIGHT, open_minimum=True),
-    Param("preserve_scale", "bool", "remove the mean curvature change per component"),
-)
+def _weights(func, when_null: str = "") -> tuple[Param, ...]:
+    """The Eq. 27 position weights of ``func`` (reconstruct or filter_geometry), its defaults."""
+    return with_defaults(
+        func,
+        Param("interior_weight", "float", f"position weight μ of interior vertices (Eq. 27){when_null}", minimum=0,
+              maximum=MAX_WEIGHT, open_minimum=True),
+        Param("boundary_weight", "float", f"position weight μ of boundary vertices (Eq. 27){when_null}", minimum=0,
+              maximum=MAX_WEIGHT, open_minimum=True),
+        Param("preserve_scale", "bool", "remove the mean curvature change per component"),
+    )
+
+
+_WEIGHTS = _weights(_reconstruct)
+_FILTER_WEIGHTS = _weights(_filter_geometry, "; null: from the gain, positions hold below a third of the "
+                                                 "lowest edited frequency")
 _GAIN = Param("gain", "gain", "μ(ω) of the instantaneous frequency, e.g. {kind: band_stop, low: 8, high: 20}",
               default=REQUIRED)
 
@@ -311,7 +321,7 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
               (_HHT,), "signal", (_GAIN,), _filter_signal_step),
     Operation("filter_geometry", "Hilbert-spectrum filtering of the mean curvature and new positions "
                                  "(Eqs. 26-27)",
-              (_HHT,), "surface", (_GAIN, *_WEIGHTS, _BACKEND), _filter_geometry_step),
+              (_HHT,), "surface", (_GAIN, *_FILTER_WEIGHTS, _BACKEND), _filter_geometry_step),
     Operation("reconstruct", "new positions whose mean curvature is the given signal (Eq. 27)",
               (_SURFACE, _SIGNAL_IN), "surface", (*_WEIGHTS, _BACKEND), _reconstruct_step),
     Operation("features", "prominent feature points from IMF extrema counts (Sec. 5.2)",
