@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from . import io
-from .emd import emd
+from .emd import check_emd_options, emd
 from .errors import InputError
 from .monogenic import MonogenicSignal, monogenic
 from .quality import Quality, decomposition_quality
@@ -146,6 +146,7 @@ def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: 
     -------
     HHTResult
     """
+    check_emd_options(emd_options or {})
     options = {"backend": backend, **(emd_options or {})}
     start = time.perf_counter()
     decomposition = emd(surface, signal, **options)

@@ -212,3 +212,38 @@ def random_bump_sphere(subdivisions: int = 5, count: int = 60, seed: int = 7):
     bumps = np.exp(-angle ** 2 / (2 * sigma ** 2)) * peak
     narrow, wide = bumps[:, is_narrow].sum(axis=1), bumps[:, ~is_narrow].sum(axis=1)
     return clean * (1 + narrow + wide)[:, None], faces, narrow, wide
+
+
+def sliver_sphere(subdivisions: int = 4, count: int = 200, eps: float = 1e-3, kind: str = "edge", seed: int = 0):
+    """Unit icosphere with ``count`` vertices inserted almost on top of existing ones, all on the sphere.
+
+    ``kind="edge"`` splits an edge ``(a, b)`` at ``(1 − eps) a + eps b`` (two needle triangles per
+    side); ``kind="corner"`` splits a face ``(a, b, c)`` at ``(1 − 2 eps) a + eps b + eps c`` (a
+    vertex of tiny area among needles).  The new vertex is projected onto the sphere, so 2H = 2 and
+    K = 1 everywhere.  Returns ``(vertices, faces)``.
+    """
+    rng = np.random.default_rng(seed)
+    vertices, faces = icosphere(subdivisions)
+    vertices, faces = list(vertices), faces.copy()
+    keep = np.ones(len(faces), dtype=bool)
+    edge_faces: dict = {}
+    for index, face in enumerate(faces):
+        for edge in ((face[0], face[1]), (face[1], face[2]), (face[2], face[0])):
+            edge_faces.setdefault(tuple(sorted(edge)), []).append(index)
+    added = []
+    for index in rng.choice(len(faces), count, replace=False):
+        a, b, c = faces[index]
+        touched = edge_faces[tuple(sorted((a, b)))] if kind == "edge" else [index]
+        if not keep[touched].all():
+            continue
+        weights = {"edge": ((1 - eps, a), (eps, b)), "corner": ((1 - 2 * eps, a), (eps, b), (eps, c))}[kind]
+        point = sum(w * vertices[v] for w, v in weights)
+        new = len(vertices)
+        vertices.append(point / np.linalg.norm(point))
+        keep[touched] = False
+        for t in touched:
+            x, y, z = faces[t]
+            while {x, y} != {a, b} and kind == "edge":  # rotate so that (a, b) is the first edge
+                x, y, z = y, z, x
+            added += [[x, new, z], [new, y, z]] if kind == "edge" else [[x, y, new], [y, z, new], [z, x, new]]
+    return np.array(vertices), np.vstack([faces[keep], np.array(added, dtype=faces.dtype)])

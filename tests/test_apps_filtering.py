@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -12,10 +13,11 @@ from scipy.spatial.transform import Rotation
 import hht3d
 from hht3d import InputError, Surface
 from hht3d.apps import (BandBoost, BandStop, Constant, HighBoost, LowPass, PiecewiseLinear, automatic_weight,
-                        edit_frequency, filter_geometry,
-                        filter_signal, gains_of, imf_enhancement, make_gain, manifold_harmonics_filter,
-                        reconstruct, reconstruct_from_change)
+                        edit_frequency, filter_geometry, filter_signal, gains_of, imf_enhancement, make_gain,
+                        manifold_harmonics_filter, reconstruct, reconstruct_from_change)
+from hht3d.apps.reconstruction import DISPLACEMENT_LIMIT
 from hht3d.hht import hht
+from hht3d.quality import QualityWarning
 from hht3d.signals import mean_curvature
 
 #: Identity: the filtered positions may differ from the input by this fraction of the bounding-box
@@ -239,6 +241,28 @@ def test_band_stop_removes_bumps(bumps):
     # a band far above the bumps holds no energy: the geometry barely moves
     untouched = filter_geometry(result, BandStop(3 * OMEGA, 8 * OMEGA, width=OMEGA / 4))
     assert relative_rms(untouched.vertices, surface.vertices, 1.0) <= 0.01 * AMPLITUDE
+
+
+def test_a_gain_that_changes_nothing_says_so(bumps):
+    surface, _, _, result = bumps
+    top = result.monogenic.frequency.max()
+    with pytest.warns(QualityWarning, match="changes no frequency"):
+        same = filter_geometry(result, LowPass(2 * top))
+    np.testing.assert_array_equal(same.vertices, surface.vertices)
+
+
+def test_large_moves_are_warned_about():
+    # A slow (l = 2) curvature change of 2 on the unit sphere with a soft weight: the linearised
+    # Eq. 27 stretches the sphere by 9% of its diagonal (measured), beyond the 5% limit; with the
+    # paper's weight it is 2.7% and passes silently.
+    s = Surface(*icosphere(3))
+    change = 2.0 * s.vertices[:, 2] ** 2
+    with pytest.warns(QualityWarning, match="bounding-box diagonal"):
+        moved = reconstruct_from_change(s, change, interior_weight=1e-4)
+    assert np.abs(moved.vertices - s.vertices).max() > DISPLACEMENT_LIMIT * s.bounding_box_diagonal
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", QualityWarning)
+        reconstruct_from_change(s, change, interior_weight=0.01)
 
 
 def test_low_pass_keeps_volume(bumps):

@@ -168,14 +168,24 @@ def test_sphere_harmonics_separate(sphere, fine_order, coarse_order):
     coarse = 0.5 * single_harmonic(3, coarse_order, sphere.vertices)
     result = emd(sphere, fine + coarse)
     assert result.n_imfs >= 2
-    assert np.corrcoef(result.imfs[0], fine)[0, 1] >= 0.9
-    assert np.corrcoef(result.imfs[1:].sum(axis=0) + result.residue, coarse)[0, 1] >= 0.9
-    assert_sums_to_signal(result, fine + coarse)
+    # IMF 1 is the fine harmonic itself: measured correlation 0.9996-0.9999 and relative error
+    # 0.044-0.051 (sifting stops at SD < 0.2, so about 5% of mixing stays); a half sift step or a
+    # halved IMF errs by 0.5 or more.
+    imf = result.imfs[0]
+    assert np.corrcoef(imf, fine)[0, 1] >= 0.999
+    assert np.linalg.norm(imf - fine) <= 0.08 * np.linalg.norm(fine)
+    assert np.corrcoef(result.imfs[1:].sum(axis=0) + result.residue, coarse)[0, 1] >= 0.99  # measured 0.995
+    # an IMF: every maximum positive, every minimum negative, and as many of each as the fine
+    # harmonic has (57-69 each; measured within 11%)
+    maxima, minima = local_extrema(sphere, imf)
+    assert np.all(imf[maxima] > 0) and np.all(imf[minima] < 0)
+    reference = [len(e) for e in local_extrema(sphere, fine)]
+    assert abs(len(maxima) - reference[0]) <= 0.15 * reference[0]
+    assert abs(len(minima) - reference[1]) <= 0.15 * reference[1]
     assert result.info["max_constraint_error"] <= 1e-8
-    # two envelopes, hence two numeric factorizations, per sift; more when the guard retried
     per_imf = result.info["imfs"]
     assert result.info["factorizations"] >= sum(d["factorizations"] for d in per_imf)
-    # two per sift, plus one for the local-mean correction
+    # two envelopes per sift, plus one for the local-mean correction
     assert all(d["factorizations"] == 2 * d["sifts"] + 1 for d in per_imf if d["attempts"] == 1 and d["stop"] != "guard")
 
 
@@ -246,7 +256,7 @@ def test_scale_equivariance(small_sphere):
     f = real_sph_harm(10, rng.standard_normal(21), small_sphere.vertices) \
         + real_sph_harm(2, rng.standard_normal(5), small_sphere.vertices)
     base = emd(small_sphere, f)
-    for c in (-3.7, 2.0 ** 40, 1e-9):
+    for c in (-3.7, 2.0 ** 40, 1e-9, 1e200, 1e-200):  # the signal is normalised before sifting
         scaled = emd(small_sphere, c * f)
         assert scaled.n_imfs == base.n_imfs
         np.testing.assert_allclose(scaled.imfs, c * base.imfs, rtol=0, atol=1e-9 * abs(c))
@@ -317,12 +327,18 @@ def test_eemd_seeded(small_sphere):
     assert first.info["ensemble_size"] == 3
 
 
-def test_eemd_members_are_independent_tasks(small_sphere):
+def test_eemd_without_noise_is_emd_and_members_carry_their_noise(small_sphere):
+    # With zero noise every member is the plain EMD, so their average is too (to round-off of the
+    # averaging); a wrong divisor or member order breaks it.
     f = real_sph_harm(5, np.arange(11.0), small_sphere.vertices)
-    members = [eemd_member(small_sphere, f, i, seed=5, noise_std=0.2, max_imfs=2) for i in (1, 0)]
-    combined = combine_eemd(small_sphere, f, members[::-1])
-    direct = eemd(small_sphere, f, ensemble_size=2, seed=5, max_imfs=2)
-    np.testing.assert_array_equal(combined.imfs, direct.imfs)
-    # each member decomposes signal + its own noise, of std 0.2 * std(f)
-    noise = members[1].imfs.sum(axis=0) + members[1].residue - f
+    quiet = eemd(small_sphere, f, ensemble_size=3, noise_std=0.0, seed=5, max_imfs=2)
+    plain = emd(small_sphere, f, max_imfs=2)
+    np.testing.assert_allclose(quiet.imfs, plain.imfs, rtol=0, atol=1e-12 * np.abs(f).max())
+    # each member decomposes signal + its own noise, of std 0.2 * std(f) (642 samples: ±3σ ≈ ±17%)
+    member = eemd_member(small_sphere, f, 1, seed=5, noise_std=0.2, max_imfs=2)
+    noise = member.imfs.sum(axis=0) + member.residue - f
     assert 0.17 < np.std(noise) / np.std(f) < 0.23
+    other = eemd_member(small_sphere, f, 0, seed=5, noise_std=0.2, max_imfs=2)
+    assert abs(np.corrcoef(noise, other.imfs.sum(axis=0) + other.residue - f)[0, 1]) < 0.15  # independent
+    combined = combine_eemd(small_sphere, f, [member, other])
+    np.testing.assert_allclose(combined.imfs[:2], (member.imfs[:2] + other.imfs[:2]) / 2, rtol=0, atol=1e-15)
