@@ -37,9 +37,10 @@ from benchmarks.common import ROOT, machine, table, write_results  # noqa: E402
 #: Longest run of one mutant's tests; a mutant that hangs the suite counts as caught (by timeout).
 TIMEOUT = 900
 
-EMD_TESTS = ("tests/test_emd.py", "tests/test_emd_stopping.py", "tests/test_hht.py")
+EMD_TESTS = ("tests/test_emd.py", "tests/test_emd_stopping.py", "tests/test_quality.py", "tests/test_hht.py")
 RIESZ_TESTS = ("tests/test_riesz.py", "tests/test_monogenic.py")
-MONOGENIC_TESTS = ("tests/test_monogenic.py", "tests/test_hht.py", "tests/test_apps_filtering.py")
+MONOGENIC_TESTS = ("tests/test_monogenic.py", "tests/test_frequency.py", "tests/test_hht.py",
+                   "tests/test_apps_filtering.py")
 FILTER_TESTS = ("tests/test_apps_filtering.py",)
 OPERATOR_TESTS = ("tests/test_operators.py", "tests/test_riesz.py", "tests/test_signals.py")
 GRADIENT_TESTS = ("tests/test_operators.py", "tests/test_riesz.py", "tests/test_monogenic.py")
@@ -60,19 +61,34 @@ class Mutant:
 MUTANTS = (
     # -- EMD (hht3d/emd.py) -------------------------------------------------------------------
     Mutant("emd-half-step", "sifting subtracts half the mean envelope",
-           "hht3d/emd.py", "            h = h - mean\n", "            h = h - 0.5 * mean\n", EMD_TESTS),
+           "hht3d/emd.py", "            candidate = h - mean\n", "            candidate = h - 0.5 * mean\n", EMD_TESTS),
     Mutant("emd-sd-loose", "SD stopping threshold 10x looser",
-           "hht3d/emd.py", 'done = {"sd": value < o.sd_threshold,', 'done = {"sd": value < 10 * o.sd_threshold,',
+           "hht3d/emd.py", 'if o.stopping == "sd" and value < o.sd_threshold:',
+           'if o.stopping == "sd" and value < 10 * o.sd_threshold:',
            EMD_TESTS),
     Mutant("emd-imf-halved", "every IMF halved (the residue absorbs the rest)",
-           "hht3d/emd.py", "            imfs.append(sifted[0])\n", "            imfs.append(0.5 * sifted[0])\n",
+           "hht3d/emd.py", "            imfs.append(sifter.corrected(*sifted))\n",
+           "            imfs.append(0.5 * sifter.corrected(*sifted))\n",
            EMD_TESTS),
     Mutant("envelope-constrained-columns", "envelope system keeps the constrained columns in the free rows",
-           "hht3d/emd.py", "data = self.q.data * (free[self._rows] & free[self.q.indices])",
-           "data = self.q.data * free[self._rows]", EMD_TESTS),
+           "hht3d/emd.py", "data = q * (free[e.rows] & free[e.indices])", "data = q * free[e.rows]", EMD_TESTS),
     Mutant("envelope-rhs-sign", "envelope right-hand side with the wrong sign",
-           "hht3d/emd.py", "rhs = -(self.q @ np.where(constrained, f, 0.0))",
-           "rhs = self.q @ np.where(constrained, f, 0.0)", EMD_TESTS),
+           "hht3d/emd.py", "rhs = -(e.matrix(q) @ np.where(constrained, f, 0.0))",
+           "rhs = e.matrix(q) @ np.where(constrained, f, 0.0)", EMD_TESTS),
+    Mutant("envelope-tension-scale", "tension term (τ d)² L instead of (τ/d)² L",
+           "hht3d/emd.py", "return self.bilaplacian + (tension / spacing) ** 2 * self.laplacian",
+           "return self.bilaplacian + (tension * spacing) ** 2 * self.laplacian", EMD_TESTS),
+    Mutant("guard-ladder-off", "the cancellation guard accepts every first extraction",
+           "hht3d/emd.py", "sifted.step_energy_ratio <= 1 + o.cancellation_tolerance:",
+           "sifted.step_energy_ratio <= 1e9 + o.cancellation_tolerance:", EMD_TESTS),
+    Mutant("mean-correction-sign", "the local mean added to the IMF instead of removed",
+           "hht3d/emd.py", "        return imf - mean\n", "        return imf + mean\n", EMD_TESTS),
+    Mutant("mean-correction-scale", "local-mean filter at (c d)^1 instead of (c d)^2",
+           "hht3d/emd.py", "t = (c * np.pi) ** 2 * float(", "t = (c * np.pi) * float(", EMD_TESTS),
+    # -- curvature signals (hht3d/signals.py) ----------------------------------------------------
+    Mutant("curvature-no-region", "unreliable vertices keep their pointwise density",
+           "hht3d/signals.py", "density[seeds] = (regions @ integrated) / (regions @ area)[:, None]",
+           "density[seeds] = density[seeds]", ("tests/test_signals.py",)),
     # -- L^{-1/2} quadrature (hht3d/riesz.py) ---------------------------------------------------
     Mutant("quadrature-nodes", "midpoint nodes shifted by a quarter step",
            "hht3d/riesz.py", "u = (np.arange(1, count + 1) - 0.5) * kp / count",
@@ -90,19 +106,28 @@ MUTANTS = (
            "return float(0.5 * np.max(row_sums / surface.mass_diagonal))", RIESZ_TESTS),
     # -- monogenic signal (hht3d/monogenic.py) --------------------------------------------------
     Mutant("monogenic-amplitude", "amplitude a² instead of a (Eq. 21)",
-           "hht3d/monogenic.py", "amplitude=np.sqrt(energy)", "amplitude=energy", MONOGENIC_TESTS),
+           "hht3d/monogenic.py", "amplitude=np.sqrt(f ** 2 + q ** 2)", "amplitude=f ** 2 + q ** 2", MONOGENIC_TESTS),
     Mutant("monogenic-phase", "phase atan2(f, q) instead of atan2(q, f) (Eq. 22)",
            "hht3d/monogenic.py", "phase=np.arctan2(q, f)", "phase=np.arctan2(f, q)", MONOGENIC_TESTS),
     Mutant("monogenic-frequency", "frequency divided by a instead of a² (Eq. 23)",
-           "hht3d/monogenic.py", "frequency = np.divide(numerator, energy,",
-           "frequency = np.divide(numerator, np.sqrt(energy),", MONOGENIC_TESTS),
+           "hht3d/frequency.py", "return np.divide(numerator, energy, out=",
+           "return np.divide(numerator, np.sqrt(energy), out=", MONOGENIC_TESTS),
+    Mutant("phase-unwrap-turn", "edge increments unwrapped by π instead of 2π",
+           "hht3d/frequency.py", "grad = (st.fit @ (increment + 2 * np.pi * turns))",
+           "grad = (st.fit @ (increment + np.pi * turns))", MONOGENIC_TESTS),
+    Mutant("phase-dispersion-sqrt", "Laplacian dispersion ratio without its square root",
+           "hht3d/frequency.py", "laplacian_ratio = np.sqrt(np.divide(dispersion, long_wave,",
+           "laplacian_ratio = (np.divide(dispersion, long_wave,", MONOGENIC_TESTS),
     # -- Eq. 26 (hht3d/apps/filters.py, reconstruction.py) --------------------------------------
     Mutant("eq26-gain-order", "filter_signal applies each IMF's gains to the IMFs in reverse order",
            "hht3d/apps/filters.py", "return np.sum(mu * imfs, axis=0) + residue",
            "return np.sum(mu[::-1] * imfs, axis=0) + residue", FILTER_TESTS),
     Mutant("eq26-gain-squared", "filter_geometry applies μ² instead of μ",
-           "hht3d/apps/reconstruction.py", "change = np.sum((_evaluate_gain(gain, frequency) - 1.0) * imfs, axis=0)",
-           "change = np.sum((_evaluate_gain(gain, frequency) ** 2 - 1.0) * imfs, axis=0)", FILTER_TESTS),
+           "hht3d/apps/reconstruction.py", "change = np.sum((mu - 1.0) * imfs, axis=0)",
+           "change = np.sum((mu ** 2 - 1.0) * imfs, axis=0)", FILTER_TESTS),
+    Mutant("eq27-automatic-weight-power", "automatic weight (ω/3)² instead of (ω/3)⁴",
+           "hht3d/apps/reconstruction.py", "(STIFFNESS_FRACTION * frequency) ** 4",
+           "(STIFFNESS_FRACTION * frequency) ** 2", FILTER_TESTS),
     # -- Eq. 27 (hht3d/apps/reconstruction.py) --------------------------------------------------
     Mutant("eq27-sign", "right-hand side with the wrong sign",
            "hht3d/apps/reconstruction.py", "rhs = lap @ (ds[:, None] * surface.normals)",

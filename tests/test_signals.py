@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from hht3d import InputError, Surface, load, signals
+from hht3d import InputError, Surface, emd, load, signals
 from meshes import fibonacci_sphere, grid, icosphere, sliver_sphere
 
 
@@ -63,6 +63,20 @@ def test_curvature_of_a_scan_with_degenerate_triangles(shared_model):
         s = signals.mean_curvature(surface, min_area=min_area)
         deviation = np.abs(s - np.average(s, weights=surface.mass_diagonal))
         assert low <= deviation.max() / np.percentile(deviation, 99) <= high
+
+
+def test_flat_surfaces_away_from_the_origin_have_zero_curvature():
+    # A tilted plane: L V cancels to rounding (1e-11 measured before), which EMD would split into
+    # IMFs; below 64 ulps of the summed terms the curvature is exactly 0, and EMD finds nothing.
+    rng = np.random.default_rng(0)
+    rotation = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    v, f = grid(30, 30)
+    for surface in (Surface(v @ rotation.T + 5.0, f), Surface(3 * rng.uniform(size=(900, 2)) @ rotation[:, :2].T + 7)):
+        curvature = signals.mean_curvature(surface)
+        np.testing.assert_array_equal(curvature, 0.0)
+        assert emd(surface, curvature).info["stop_reason"] == "constant"
+    sphere = Surface(*icosphere(4, radius=1e-3))  # a small sphere keeps its curvature, 2000
+    np.testing.assert_allclose(signals.mean_curvature(sphere), 2000, rtol=0.02)
 
 
 def test_gauss_bonnet_disk_with_boundary():
