@@ -21,7 +21,9 @@ envelope is therefore a thin plate *in tension* (Smith & Wessel 1990),
     Q_τ = L M⁻¹ L + (τ / d)² L,      d = √(A / |C|),
 
 with ``A`` the surface area and ``|C|`` the number of extrema, so ``d`` is
-their mean spacing and the tension ``τ`` is scale-free: the same ``τ``
+their mean spacing, ``L`` in the tension term the membrane part of the
+Laplacian (its non-negative edge weights, :func:`_membrane`; all of ``L`` on
+a Delaunay mesh), and the tension ``τ`` is scale-free: the same ``τ``
 behaves alike on every IMF and every model.  ``τ = 0`` is the paper's
 biharmonic envelope and ``τ → ∞`` the membrane (harmonic) one, ``L g = 0``,
 which obeys a discrete maximum principle but loses the scale separation of
@@ -53,12 +55,16 @@ residue against 1% in the signal).  An IMF has zero local mean by
 definition, so after sifting, the part of ``f_k`` slower than its own
 oscillation is moved to the residue:
 
-    m_k = (M + t² L M⁻¹ L)⁻¹ M f_k,   t = (c d_k)²,   f_k ← f_k − m_k,
+    m_k = (M + t² L M̃⁻¹ L)⁻¹ M f_k,   t = (c d_k)²,   f_k ← f_k − m_k,
 
-with ``d_k`` the IMF's extrema spacing and ``c = mean_correction``.  The
-filter passes a fraction ``1 / (1 + (c d_k ω)⁴)`` of frequency ``ω``: at the
-IMF's own ``ω ≈ π/d_k`` (``c = 0.7``) 4%, at a third of it 78%.  One more
-numeric factorization per IMF, on the envelopes' pattern.
+with ``d_k`` the IMF's scale (its extrema spacing or ``π`` over its RMS
+wavenumber, the larger) and ``c = mean_correction``.  ``L`` is the membrane
+part of the Laplacian and ``M̃`` the vertex areas floored at
+:data:`MASS_FLOOR` of their median, so the system stays definite on scans
+with caps and tiny areas.  The filter passes a fraction ``1 / (1 + (c d_k
+ω)⁴)`` of frequency ``ω``: at the IMF's own ``ω ≈ π/d_k`` (``c = 0.6``) 7%,
+at a third of it 86%.  One more numeric factorization per IMF, on the
+envelopes' pattern.
 
 Solver design
 -------------
@@ -105,7 +111,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import linalg
-from .errors import InputError
+from .errors import InputError, NumericalError
 from .quality import QualityWarning, Quality, decomposition_quality, fluctuation
 from .signals import check_signal
 from .surface import Surface
@@ -146,6 +152,9 @@ RFG_THRESHOLDS = (0.05, 0.5, 0.05)
 #: A signal whose deviation from its per-component mean is below this fraction
 #: of its magnitude is constant up to round-off and is not decomposed.
 _FLAT_RTOL = 1e3 * np.finfo(np.float64).eps
+#: The local-mean correction's bilaplacian divides by vertex areas floored at this fraction of
+#: their median, so tiny vertices of a scan do not make its system numerically indefinite.
+MASS_FLOOR = 0.1
 #: Neighbouring values closer than this fraction of the signal's range are ties.
 TIE_RTOL = 1e-9
 
@@ -166,7 +175,7 @@ class EMDResult:
         ``stop`` — why sifting stopped: ``"sd"``, ``"rfg"``, ``"s_number"``,
         ``"fixed"``, ``"max_sifts"``, ``"extrema"`` or ``"guard"`` —,
         ``envelope`` and ``tension`` used, ``attempts`` of the cancellation
-        guard, ``step_energy_ratio``, ``mean_share`` (norm of the removed
+        guard and ``skipped_tensions`` whose systems were not definite, ``step_energy_ratio``, ``mean_share`` (norm of the removed
         local mean over the IMF's), ``factorizations``, ``seconds``);
         totals ``sifts``, ``factorizations``, ``seconds``; ``backend``;
         ``stop_reason``; ``max_constraint_error`` (relative envelope error at
@@ -263,7 +272,7 @@ def extrema_spacing(surface: Surface, n_extrema: int) -> float:
 
 
 class _EnvelopeEnergies:
-    """``L M⁻¹ L`` and ``L`` stored on one pattern (theirs together, diagonal included).
+    """``L M⁻¹ L`` and the membrane ``L`` stored on one pattern (theirs together, diagonal included).
 
     Every envelope energy ``Q_τ`` is a combination of the two data arrays, so
     all tensions share one symbolic analysis.
@@ -280,7 +289,10 @@ class _EnvelopeEnergies:
         self.rows = np.repeat(np.arange(n), np.diff(pattern.indptr))
         self.diagonal = np.flatnonzero(self.indices == self.rows)
         self.bilaplacian = self._on_pattern(bilaplacian)
-        self.laplacian = self._on_pattern(lap)
+        membrane = _membrane(lap)
+        self.laplacian = self._on_pattern(membrane)
+        floored = np.maximum(surface.mass_diagonal, MASS_FLOOR * np.median(surface.mass_diagonal))
+        self.smoothing = self._on_pattern(membrane @ sp.diags(1.0 / floored) @ membrane)
 
     def _on_pattern(self, a) -> np.ndarray:
         """The entries of ``a`` at the positions of the shared pattern (zeros elsewhere)."""
@@ -300,6 +312,20 @@ class _EnvelopeEnergies:
 
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
         return sp.csr_matrix((data, self.indices.copy(), self.indptr.copy()), shape=(self.n, self.n))
+
+
+def _membrane(lap: sp.csr_matrix) -> sp.csr_matrix:
+    """``L`` without its positive off-diagonal entries (negative cotangent weights of
+    non-Delaunay edges), the diagonal rebuilt so rows still sum to 0.
+
+    An M-matrix: the membrane envelope then obeys a discrete maximum principle, and every
+    constrained system stays numerically definite even with caps whose cotangents reach −500
+    (dragon_vrip).  On a Delaunay mesh it is ``L`` itself.
+    """
+    off = sp.csr_matrix(lap - sp.diags(lap.diagonal()))
+    off.data = np.minimum(off.data, 0.0)
+    off.eliminate_zeros()
+    return (off - sp.diags(np.asarray(off.sum(axis=1)).ravel())).tocsr()
 
 
 def _energies(surface: Surface) -> _EnvelopeEnergies:
@@ -436,7 +462,7 @@ class _Options:
     envelope: str = "tension"
     tension: float = 3.0
     cancellation_tolerance: float | None = 0.05
-    mean_correction: float | None = 0.7
+    mean_correction: float | None = 0.6
     extrema: str = "strict"
     ring: int = 2
     ratio: float = 0.8
@@ -557,20 +583,27 @@ class _Sifter:
         g[constrained] = h[constrained]  # exact, so passive components give exactly zero IMFs
         return g
 
-
     def corrected(self, imf: np.ndarray, info: dict) -> np.ndarray:
-        """``f_k − m_k``, the IMF without its local mean (module notes); ``info`` records ``mean_share``."""
+        """``f_k − m_k``, the IMF without its local mean (module notes); ``info`` records ``mean_share``.
+
+        ``d_k`` is the larger of the extrema spacing and ``π / ω_k`` with ``ω_k² = f_kᵀ L f_k /
+        f_kᵀ M f_k`` (the RMS wavenumber): extrema crowding in one region overstate the scale,
+        spikes at bad triangles understate it, and only an understated scale is harmful (the
+        filter then takes the IMF itself).
+        """
         c = self.options.mean_correction
-        if c is None:
+        stiffness = float(imf @ (self.surface.stiffness @ imf))
+        if c is None or not stiffness > 0:
             return imf
         e = self.solver.energies
-        stiffness = float(imf @ (self.surface.stiffness @ imf))
-        if not stiffness > 0:
-            return imf
-        t = (c * np.pi) ** 2 * float(np.dot(self.mass * imf, imf)) / stiffness  # (c d_k)², d_k = π / ω_k
-        data = t * t * e.bilaplacian
+        spacing = max(extrema_spacing(self.surface, info["n_maxima"] + info["n_minima"]),
+                      np.pi * np.sqrt(float(np.dot(self.mass * imf, imf)) / stiffness))
+        data = (c * spacing) ** 4 * e.smoothing
         data[e.diagonal] += self.mass
-        mean = self.solver.factorize(e.matrix(data)).solve(self.mass * imf)
+        try:
+            mean = self.solver.factorize(e.matrix(data)).solve(self.mass * imf)
+        except NumericalError:  # not definite in floating point: leave the IMF as sifted
+            return imf
         info["mean_share"] = float(np.sqrt(self.energy(mean) / max(self.energy(imf), 1e-300)))
         info["factorizations"] += 1
         return imf - mean
@@ -585,13 +618,21 @@ class _Sifter:
 
         Tries the tensions of the cancellation guard in turn and keeps the
         first extraction within the tolerance, else the one that cancels least.
+        A retry whose envelope system is not numerically definite (the
+        membrane ``L`` of caps with angles near 180° can be so) is skipped.
         """
         o = self.options
         start, factorizations = time.perf_counter(), self.solver.n_factorizations
         reference = self.energy(residue)
-        best, attempts = None, 0
+        best, attempts, skipped = None, 0, []
         for tension in o.tensions:
-            sifted = self._sift(residue, tension, reference)
+            try:
+                sifted = self._sift(residue, tension, reference)
+            except NumericalError:
+                if best is None:
+                    raise
+                skipped.append(None if math.isinf(tension) else tension)
+                continue
             if sifted is None:
                 return None
             attempts += 1
@@ -609,6 +650,7 @@ class _Sifter:
             "envelope": "harmonic" if math.isinf(tension) else ("biharmonic" if tension == 0 else "tension"),
             "tension": None if math.isinf(tension) else tension,
             "attempts": attempts,
+            "skipped_tensions": skipped,
             "step_energy_ratio": sifted.step_energy_ratio,
             "factorizations": self.solver.n_factorizations - factorizations,
             "seconds": time.perf_counter() - start,
@@ -685,7 +727,7 @@ def _rfg_excess(mean: np.ndarray, amplitude: np.ndarray, mass: np.ndarray) -> fl
 def emd(surface: Surface, signal, *, max_imfs: int = 10, stopping: str = "sd",
         sd_threshold: float = 0.2, s_number: int = 4, fixed_sifts: int = 10, max_sifts: int = 50,
         envelope: str = "tension", tension: float = 3.0, cancellation_tolerance: float | None = 0.05,
-        mean_correction: float | None = 0.7, extrema: str = "strict", ring: int = 2, ratio: float = 0.8,
+        mean_correction: float | None = 0.6, extrema: str = "strict", ring: int = 2, ratio: float = 0.8,
         energy_threshold: float = 1e-8, backend: str | None = None) -> EMDResult:
     """Empirical mode decomposition of a signal on a surface (Sec. 4.1, Eq. 1).
 
@@ -742,7 +784,7 @@ def emd(surface: Surface, signal, *, max_imfs: int = 10, stopping: str = "sd",
     mean_correction : float or None
         ``c`` of the local-mean correction (module notes): the part of each
         IMF slower than ``c`` times its extrema spacing moves to the
-        residue; default 0.7, ``None`` off.  :data:`PAPER_OPTIONS` give the
+        residue; default 0.6, ``None`` off.  :data:`PAPER_OPTIONS` give the
         paper's method.
     extrema : {"strict", "ring"}
         Extremum rule of :func:`local_extrema`: 1-ring (default) or the

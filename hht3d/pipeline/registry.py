@@ -136,7 +136,7 @@ EMD = with_defaults(
           maximum=MAX_TENSION),
     Param("cancellation_tolerance", "float", "largest energy increase one IMF may cause before more tension "
           "is tried (null: no guard)", minimum=0, maximum=1, nullable=True),
-    Param("mean_correction", "float", "move each IMF's part slower than this many extrema spacings to the "
+    Param("mean_correction", "float", "move each IMF's part slower than this many of its wavelengths to the "
           "residue (null: off)", minimum=0, maximum=10, nullable=True),
     Param("extrema", "choice", "extremum rule: 1-ring, or ratio of the ring-ring", choices=EXTREMA_RULES),
     Param("ring", "int", "neighbourhood of extrema: ring", minimum=1, maximum=MAX_RING),
