@@ -112,3 +112,14 @@ def test_riesz_tasks_default_to_the_worker_count(cluster_client):
     surface = graph.from_surface(_surfaces()[0])
     tasks = dict(graph.riesz_potential(surface, np.ones((2, 642))).__dask_graph__())
     assert sum(_prefix(k) == "_quadrature_part" for k in tasks) == 2  # the 2-worker cluster
+
+
+def test_shift_groups_sharing_one_analysis_on_threads():
+    # three shift-group tasks share one analysis (one live factor) in one process: they take turns
+    surface = _surfaces()[0]
+    s = graph.from_surface(surface)
+    lazy = graph.riesz_potential(s, np.stack([mean_curvature(surface), surface.vertices[:, 0]]), riesz_tasks=3)
+    (threads,) = graph.compute(lazy, scheduler="threads", workers=3, progress=False)
+    (sync,) = graph.compute(lazy, scheduler="synchronous", progress=False)
+    np.testing.assert_allclose(threads, sync, rtol=0, atol=1e-13 * np.abs(sync).max())
+    assert [k for k in surface.cache if k.startswith("graph:shift_analysis")]
