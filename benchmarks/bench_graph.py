@@ -17,11 +17,12 @@ Results: ``benchmarks/results/graph.json`` and ``graph.md``.
 
 Usage::
 
-    python benchmarks/bench_graph.py [--skip-riesz]
+    python benchmarks/bench_graph.py [--parts dataset riesz overhead]
 """
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import os
 import subprocess
@@ -31,11 +32,13 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from common import ROOT, machine, model_path, peak_rss_mb, table, write_results  # noqa: E402
+from common import RESULTS, ROOT, machine, model_path, peak_rss_mb, table, write_results  # noqa: E402
 
 DATASET = ["sphere_oct4098", "spot", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti",
            "office_kinect_colored", "bunny_scan_bun000"]
 RIESZ_MODEL = "igea"
+#: (workers, riesz_tasks) of the dataset runs; "default" lets the graph choose (one per worker).
+DATASET_RUNS = [(1, "default"), (2, "default"), (2, "1")]
 SCRATCH = ROOT / "benchmarks" / "results" / "scratch"
 
 
@@ -51,15 +54,17 @@ def _run(args: list[str], threads: int) -> dict:
 
 # -- workers (run in subprocesses) ---------------------------------------------------------------
 
-def worker_dataset(workers: int) -> dict:
+def worker_dataset(workers: int, riesz_tasks: str) -> dict:
     from hht3d.dataset import run_dataset
 
     inputs = [p for p in map(model_path, DATASET) if p is not None]
+    options = {} if riesz_tasks == "default" else {"riesz_tasks": int(riesz_tasks)}
     with tempfile.TemporaryDirectory() as out:
         start = time.perf_counter()
-        rows = run_dataset(inputs, out, scheduler="distributed", workers=workers, progress=False)
+        rows = run_dataset(inputs, out, scheduler="distributed", workers=workers, progress=False, **options)
         seconds = time.perf_counter() - start
-    return {"workers": workers, "seconds": seconds, "items": [r.__dict__ for r in rows]}
+    return {"workers": workers, "riesz_tasks": riesz_tasks, "seconds": seconds, "items": [r.__dict__ for r in rows],
+            "load_average_1min": os.getloadavg()[0]}
 
 
 def _riesz_imfs():
@@ -84,17 +89,23 @@ def worker_riesz(mode: str, tasks: int) -> dict:
     from hht3d import graph
     from hht3d.monogenic import monogenic
 
+    from hht3d.scheduling import open_client
+
     surface, imfs = _riesz_imfs()
     _ = surface.stiffness, surface.normals, surface.gradient("lsq")  # operators outside the timing
-    start = time.perf_counter()
     if mode == "sequential":
+        start = time.perf_counter()
         result = monogenic(surface, imfs)
+        seconds = time.perf_counter() - start
     else:
-        s = graph.from_surface(surface)
-        potential = graph.riesz_potential(s, imfs, riesz_tasks=tasks)
-        lazy = graph.monogenic(s, imfs, potential)
-        (result,) = graph.compute(lazy, scheduler="distributed", workers=2, progress=False)
-    seconds = time.perf_counter() - start
+        with open_client(2, log=None) as client:  # started, and hht3d imported, before the timing
+            client.run(importlib.import_module, "hht3d.monogenic")
+            start = time.perf_counter()
+            s = graph.from_surface(surface)
+            potential = graph.riesz_potential(s, imfs, riesz_tasks=tasks)
+            lazy = graph.monogenic(s, imfs, potential)
+            (result,) = graph.compute(lazy, client=client, progress=False)
+            seconds = time.perf_counter() - start
     return {"mode": mode, "tasks": tasks, "seconds": seconds, "imfs": len(imfs),
             "vertices": surface.n_vertices, "peak_rss_mb": peak_rss_mb(),
             "checksum": float(np.sum(result.amplitude))}
@@ -131,27 +142,35 @@ def worker_overhead(scheduler: str, count: int) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--skip-riesz", action="store_true", help="skip the igea Riesz part")
+    parser.add_argument("--parts", nargs="+", choices=["dataset", "riesz", "overhead"],
+                        default=["dataset", "riesz", "overhead"],
+                        help="parts to run; the others are kept from the previous graph.json")
     parser.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
         kind, *rest = args.worker
-        result = {"dataset": lambda: worker_dataset(int(rest[0])),
+        result = {"dataset": lambda: worker_dataset(int(rest[0]), rest[1]),
                   "riesz": lambda: worker_riesz(rest[0], int(rest[1])),
                   "overhead": lambda: worker_overhead(rest[0], int(rest[1]))}[kind]()
         print(json.dumps(result, default=str))
         return 0
 
-    records = {"machine": machine(), "dataset": [], "riesz": [], "overhead": []}
-    for workers in (1, 2):
-        records["dataset"].append(_run(["dataset", str(workers)], threads=1))
-        print(f"dataset, {workers} worker(s): {records['dataset'][-1]['seconds']:.1f} s", file=sys.stderr)
-    if not args.skip_riesz and model_path(RIESZ_MODEL):
-        for mode, tasks, threads in [("sequential", 1, 1), ("sequential", 1, 2), ("graph", 2, 1), ("graph", 4, 1)]:
+    previous = RESULTS / "graph.json"
+    records = json.loads(previous.read_text()) if previous.is_file() else {}
+    records["machine"] = machine()
+    for part in args.parts:
+        records[part] = []
+    for workers, riesz_tasks in DATASET_RUNS if "dataset" in args.parts else []:
+        records["dataset"].append(_run(["dataset", str(workers), riesz_tasks], threads=1))
+        print(f"dataset, {workers} worker(s), riesz_tasks {riesz_tasks}: "
+              f"{records['dataset'][-1]['seconds']:.1f} s", file=sys.stderr)
+    if "riesz" in args.parts and model_path(RIESZ_MODEL):
+        for mode, tasks, threads in [("sequential", 1, 1), ("sequential", 1, 2), ("graph", 1, 1), ("graph", 2, 1),
+                                     ("graph", 4, 1)]:
             r = _run(["riesz", mode, str(tasks)], threads=threads) | {"threads": threads}
             records["riesz"].append(r)
             print(f"riesz {mode} tasks={tasks} threads={threads}: {r['seconds']:.1f} s", file=sys.stderr)
-    for scheduler in ("synchronous", "threads", "processes", "distributed"):
+    for scheduler in ("synchronous", "threads", "processes", "distributed") if "overhead" in args.parts else ():
         records["overhead"].append(_run(["overhead", scheduler, "400"], threads=1))
     paths = write_results("graph", records, markdown(records))
     print("\n".join(map(str, paths)))
@@ -160,7 +179,7 @@ def main(argv=None) -> int:
 
 def markdown(records: dict) -> str:
     m = records["machine"]
-    one, two = records["dataset"]
+    one, two, *others = records["dataset"]
     ok = [i for i in two["items"] if i["status"] == "ok"]
     lines = [
         "# Dask layer benchmark", "",
@@ -172,7 +191,11 @@ def markdown(records: dict) -> str:
         "",
         f"{len(ok)} of {len(two['items'])} items ok.  Wall time: 1 worker {one['seconds']:.1f} s, "
         f"2 workers {two['seconds']:.1f} s: **speed-up {one['seconds'] / two['seconds']:.2f}x** "
-        "(LocalCluster, one thread per worker).", "",
+        "(LocalCluster, one thread per worker; Riesz shift groups per file: the graph's default, one per "
+        "worker)." + "".join(f"  With riesz_tasks = {o['riesz_tasks']} on {o['workers']} workers: {o['seconds']:.1f} s, "
+                             f"speed-up {one['seconds'] / o['seconds']:.2f}x." for o in others)
+        + "  1-minute load average after each run: "
+        + ", ".join(f"{r.get('load_average_1min', float('nan')):.1f}" for r in records["dataset"]) + ".", "",
     ]
     if records["riesz"]:
         base = {(r["mode"], r["threads"], r["tasks"]): r["seconds"] for r in records["riesz"]}
@@ -184,8 +207,10 @@ def markdown(records: dict) -> str:
                    "peak RSS MB (driver)"],
                   [[r["mode"], r["tasks"], r["threads"], f"{r['seconds']:.2f}", f"{seq1 / r['seconds']:.2f}x",
                     f"{r['peak_rss_mb']:.0f}"] for r in records["riesz"]]),
-            "", "Operators (L, M, gradient) are built before the timing; the graph rows include shipping "
-            "the surface and IMFs to the workers and rebuilding the operators there.", "",
+            "", "Operators (L, M, gradient) are built before the timing in the driver; the graph rows "
+            "include shipping the surface and IMFs to the workers and building the operators there once "
+            "per worker (tasks then share them and the shift analysis, `graph.resident`), not the start "
+            "of the 2-worker LocalCluster (started and warmed up first).", "",
         ]
     lines += ["## Scheduler overhead (400 no-op tasks)", "",
               table(["scheduler", "ms per task", "includes pool start-up"],

@@ -69,12 +69,20 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import (DATA, PAPER_TABLE1, RESULTS, machine, mkl_environment, model_path,  # noqa: E402
                     peak_rss_mb, status_mb, table, write_results)
 
+from hht3d.linalg import BACKEND_VARIABLE  # noqa: E402
+
 SCRATCH = RESULTS / "scratch"
 LADDER = ["spot", "sphere_oct4098", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti",
           "office_kinect_colored", "igea"]
 SCALING_SOURCE = "igea"
 #: name -> (decimated base vertices, Loop levels); vertices after = 4^levels * base - O(1).
-SCALING = {"250k": (62_500, 1), "500k": (125_000, 1), "1m": (62_500, 2)}
+SCALING = {"250k": (62_500, 1), "500k": (125_000, 1), "1m": (62_500, 2), "4m": (62_500, 3)}
+#: Sizes run unless --sizes says otherwise (4m needs about 14 GB and half an hour).
+DEFAULT_SIZES = ["250k", "500k", "1m"]
+#: Models and backends of the backend comparison (superlu only with --with-superlu: minutes per model).
+BACKEND_MODELS = ["nefertiti", "igea"]
+NO_MKL_TARGET = 1.5  # no-MKL total <= 1.5 x PARDISO total
+MILLION_TARGET_S, MILLION_TARGET_MB = 120, 4096  # the 1M case: total seconds and peak RSS
 STAGES = ["load", "operators", "signal", "emd", "rt"]
 TARGET_FACTOR = 5  # ours <= paper total / 5
 
@@ -96,7 +104,7 @@ class Recorder:
     def __init__(self):
         self.stages: dict[str, dict] = {}
         self.label = "setup"
-        self.pardiso: dict[str, dict] = {}
+        self.solver: dict[str, dict] = {}  # per label: phases of the sparse solver
         self.timers: dict[str, float] = {}
         self.peaks: dict[str, float] = {}  # peak RSS MB during a wrapped sub-step
         self.peak_resets = True
@@ -148,8 +156,47 @@ class Recorder:
                 self.peaks[f"before {key}"] = max(self.peaks.get(f"before {key}", 0.0), before)
         return wrapper
 
+    def _entry(self) -> dict:
+        return self.solver.setdefault(self.label, {
+            "analysis_s": 0.0, "analysis": 0, "factorization_s": 0.0, "factorization": 0,
+            "solve_s": 0.0, "solve": 0, "solve_columns": 0, "peak_kb": 0, "factor_nnz": 0, "n": 0})
+
+    def _count(self, kind: str, start: float, cpu_start: float) -> None:
+        entry = self._entry()
+        entry[kind + "_s"] = entry.get(kind + "_s", 0.0) + time.perf_counter() - start
+        entry[kind + "_cpu_s"] = entry.get(kind + "_cpu_s", 0.0) + time.process_time() - cpu_start
+        entry[kind] = entry.get(kind, 0) + 1
+
+    def _instrument_backend(self, impl) -> None:
+        """Time analysis (construction), numeric factorization and solves of a non-PARDISO backend."""
+        recorder = self
+        init, factorize = impl.__init__, impl.factorize
+
+        def timed_init(pattern, *args):
+            start, cpu_start = time.perf_counter(), time.process_time()
+            init(pattern, *args)
+            recorder._count("analysis", start, cpu_start)
+
+        def timed_factorize(pattern, a):
+            start, cpu_start = time.perf_counter(), time.process_time()
+            factor = factorize(pattern, a)
+            recorder._count("factorization", start, cpu_start)
+            solve = factor._solve
+
+            def timed_solve(b):
+                start, cpu_start = time.perf_counter(), time.process_time()
+                out = solve(b)
+                recorder._count("solve", start, cpu_start)
+                recorder._entry()["solve_columns"] += 1 if b.ndim == 1 else b.shape[1]
+                return out
+
+            factor._solve = timed_solve
+            return factor
+
+        impl.__init__, impl.factorize = timed_init, timed_factorize
+
     def instrument(self) -> None:
-        """Wrap the PARDISO phases and a few sub-steps (benchmark only)."""
+        """Wrap the solver phases of every backend and a few sub-steps (benchmark only)."""
         import importlib
 
         # the package namespace re-exports functions named like the modules: import the modules
@@ -162,14 +209,8 @@ class Recorder:
         def run(pattern, phase, upper, b):
             start, cpu_start = time.perf_counter(), time.process_time()
             out = original(pattern, phase, upper, b)
-            cpu = time.process_time() - cpu_start
-            entry = recorder.pardiso.setdefault(recorder.label, {
-                "analysis_s": 0.0, "analysis": 0, "factorization_s": 0.0, "factorization": 0,
-                "solve_s": 0.0, "solve": 0, "solve_columns": 0, "peak_kb": 0, "factor_nnz": 0, "n": 0})
-            kind = names.get(phase, f"phase{phase}")
-            entry[kind + "_s"] = entry.get(kind + "_s", 0.0) + time.perf_counter() - start
-            entry[kind + "_cpu_s"] = entry.get(kind + "_cpu_s", 0.0) + cpu
-            entry[kind] = entry.get(kind, 0) + 1
+            recorder._count(names.get(phase, f"phase{phase}"), start, cpu_start)
+            entry = recorder._entry()
             if phase == 33:
                 entry["solve_columns"] += 1 if b.ndim == 1 else b.shape[1]
             else:
@@ -180,6 +221,8 @@ class Recorder:
             return out
 
         linalg._PardisoPattern._run = run
+        for impl in (linalg._CholmodPattern, linalg._SuperLUPattern):
+            self._instrument_backend(impl)
         riesz.spectral_bounds = self.timed("rt_bounds", riesz.spectral_bounds, "bounds")
         mono_module.monogenic_from_potential = self.timed("rt_quantities", mono_module.monogenic_from_potential)
         emd_module.envelope_operator = self.timed("emd_operator_q", emd_module.envelope_operator)
@@ -238,7 +281,7 @@ def run_case(name: str, path: Path, max_imfs: int | None) -> dict:
         "backend": linalg.default_backend(), "max_imfs": max_imfs if max_imfs is not None else 10,
         "imfs": info["n_imfs"], "sifts": info["sifts"], "factorizations": info["factorizations"],
         "stop_reason": info["stop_reason"], "shifts": shifts, "condition": mbar / m,
-        "stages": stages, "operators_detail": timings, "timers": rec.timers, "pardiso": rec.pardiso,
+        "stages": stages, "operators_detail": timings, "timers": rec.timers, "solver": rec.solver,
         "substep_peak_mb": rec.peaks,
         "signal_mean": float(np.mean(signal)), "signal_relative_std": float(np.std(signal) / np.mean(np.abs(signal))),
         "cpu_seconds": {s: stages[s]["cpu_seconds"] for s in STAGES}
@@ -311,9 +354,14 @@ def _cpu(r: dict, stage: str) -> float:
     return r.get("cpu_seconds", {}).get(stage, np.nan)
 
 
+def _phases(r: dict) -> dict:
+    """Solver phases per stage label (records before the CHOLMOD backend called them ``pardiso``)."""
+    return r.get("solver", r.get("pardiso", {}))
+
+
 def stage_parts(r: dict) -> dict:
     """Seconds per sub-step: operators, EMD (factorization/solve/other), RT (bounds/shifts/quantities)."""
-    p = r["pardiso"]
+    p = _phases(r)
     emd_p = p.get("emd", {})
     rt_p = p.get("rt", {})
     t = r["timers"]
@@ -369,24 +417,24 @@ SCALING_QUANTITIES = [
     ("EMD s", lambda r: r["seconds"]["emd"]),
     ("EMD s per factorization", lambda r: r["seconds"]["emd"] / max(r["factorizations"], 1)),
     ("EMD numeric factorization s (each)",
-     lambda r: r["pardiso"].get("emd", {}).get("factorization_s", np.nan)
-     / max(r["pardiso"].get("emd", {}).get("factorization", 0), 1)),
+     lambda r: _phases(r).get("emd", {}).get("factorization_s", np.nan)
+     / max(_phases(r).get("emd", {}).get("factorization", 0), 1)),
     ("RT s", lambda r: r["seconds"]["rt"]),
     ("RT s per IMF", lambda r: r["seconds"]["rt"] / max(r["imfs"], 1)),
     ("RT shift factorization s (each)",
-     lambda r: r["pardiso"].get("rt", {}).get("factorization_s", np.nan)
-     / max(r["pardiso"].get("rt", {}).get("factorization", 0), 1)),
+     lambda r: _phases(r).get("rt", {}).get("factorization_s", np.nan)
+     / max(_phases(r).get("rt", {}).get("factorization", 0), 1)),
     ("RT lambda_1 bounds s", lambda r: r["timers"].get("rt_bounds", np.nan)),
     ("RT monogenic quantities s", lambda r: r["timers"].get("rt_quantities", np.nan)),
     ("total s", lambda r: r["seconds"]["total"]),
     ("EMD CPU s per factorization (both threads)", lambda r: _cpu(r, "emd") / max(r["factorizations"], 1)),
     ("EMD numeric factorization CPU s (each)",
-     lambda r: r["pardiso"].get("emd", {}).get("factorization_cpu_s", np.nan)
-     / max(r["pardiso"].get("emd", {}).get("factorization", 0), 1)),
+     lambda r: _phases(r).get("emd", {}).get("factorization_cpu_s", np.nan)
+     / max(_phases(r).get("emd", {}).get("factorization", 0), 1)),
     ("RT CPU s per IMF", lambda r: _cpu(r, "rt") / max(r["imfs"], 1)),
     ("total CPU s", lambda r: _cpu(r, "total")),
     ("peak RSS MB", lambda r: r["peak_rss_mb"]),
-    ("EMD PARDISO MB", lambda r: r["pardiso"].get("emd", {}).get("peak_kb", np.nan) / 1024),
+    ("EMD PARDISO MB", lambda r: _phases(r).get("emd", {}).get("peak_kb", np.nan) / 1024),
 ]
 
 
@@ -460,7 +508,7 @@ def markdown(results: dict) -> str:
     if scaling:
         family = [r for r in ladder if r["case"] == SCALING_SOURCE] + sorted(scaling, key=lambda r: r["vertices"])
         capped = sorted({r["max_imfs"] for r in scaling if r["max_imfs"] != 10})
-        out += ["## Scaling: igea decimated + Loop-subdivided to 250k, 500k and 1M vertices", ""]
+        out += [f"## Scaling: igea decimated + Loop-subdivided to {', '.join(results.get('generated', {}))} vertices", ""]
         if capped:
             out += [(f"**EMD capped at max_imfs = {capped} for the scaling cases** (time budget on the shared "
                     "2-core machine); the RT then covers those IMFs."), ""]
@@ -472,8 +520,8 @@ def markdown(results: dict) -> str:
         rows = []
         for r in family:
             s = r["seconds"]
-            pe = r["pardiso"].get("emd", {})
-            prt = r["pardiso"].get("rt", {})
+            pe = _phases(r).get("emd", {})
+            prt = _phases(r).get("rt", {})
             rows.append([r["case"], f"{r['vertices']:,}", f"{r['imfs']} ({r['stop_reason']})", r["factorizations"],
                          _f(s["load"]), _f(s["operators"]), _f(s["signal"]), _f(s["emd"]),
                          _f(s["emd"] / max(r["factorizations"], 1)), r["shifts"], _f(s["rt"]), _f(s["total"]),
@@ -486,6 +534,14 @@ def markdown(results: dict) -> str:
                        "EMD s/fact.", "shifts", "RT s", "total s", "peak MB: ops", "peak MB: EMD",
                        "peak MB: RT", "PARDISO MB: EMD", "PARDISO MB: RT", "EMD factor nnz / #V", "EMD CPU s",
                        "total CPU s", "load avg before/after"], rows), ""]
+        million = next((r for r in family if r["case"] == f"{SCALING_SOURCE}_1m"), None)
+        if million:
+            seconds, peak = million["seconds"]["total"], million["peak_rss_mb"]
+            out += [(f"Targets at 1M vertices: total <= {MILLION_TARGET_S} s: {seconds:.0f} s, "
+                     f"{'met' if seconds <= MILLION_TARGET_S else '**missed**'} (CPU {_cpu(million, 'total'):.0f} s, "
+                     f"1-minute load average {'/'.join(f'{x:.1f}' for x in million['load_average_1min'])}); "
+                     f"peak <= {MILLION_TARGET_MB / 1024:.0f} GiB: {peak:,.0f} MB, "
+                     f"{'met' if peak <= MILLION_TARGET_MB else '**missed**'}."), ""]
         out += ["Where the time goes (seconds, as above):", "", _breakdown(family), ""]
         everything = ladder + scaling
         rows = []
@@ -499,6 +555,9 @@ def markdown(results: dict) -> str:
                        "all cases >= 30k vertices"], rows), ""]
         largest = max(family, key=lambda r: r["vertices"])
         out += ["Memory at the largest case (what dominates its peak):", "", _memory(largest), ""]
+    backend_runs = [r for r in results.get("backends", []) if "error" not in r]
+    if backend_runs:
+        out += _backends_section(backend_runs)
     out += ["## How to read it", "",
             ("*Total* includes loading, cleaning and every operator, so it is the wall time from the file to "
             "the spectra; *EMD+RT* is the part the paper's EMD and RT columns count.  The paper row is the "
@@ -514,6 +573,36 @@ def markdown(results: dict) -> str:
             "case); wall times of the same case varied up to 2x between runs."),
             ""]
     return "\n".join(out)
+
+
+def _backends_section(runs: list[dict]) -> list[str]:
+    """The whole HHT per sparse solver, each model's backends run back to back."""
+    rows = []
+    for name in dict.fromkeys(r["case"] for r in runs):
+        mine = [r for r in runs if r["case"] == name]
+        base = next((r for r in mine if r["backend"] == "pardiso"), None)
+        _, _, paper_imfs, _, _, paper_total = nearest_paper(mine[0]["vertices"])
+        paper_per_imf = paper_total / paper_imfs
+        for r in mine:
+            s, p = r["seconds"], stage_parts(r)
+            ratio = s["total"] / base["seconds"]["total"] if base else np.nan
+            verdict = "" if r["backend"] == "pardiso" or base is None else (
+                "met" if ratio <= NO_MKL_TARGET else "**missed**")
+            rows.append([name, f"{r['vertices']:,}", r["backend"], r["imfs"], r["factorizations"], _f(s["emd"]),
+                         _f(p["emd_factorization"]), _f(p["emd_solve"]), _f(s["rt"]),
+                         _f(p["rt_shift_factorization"]), _f(p["rt_shift_solve"]), _f(s["total"]),
+                         _f(ratio) + "x", verdict, _f(s["total"] / max(r["imfs"], 1)),
+                         _f(paper_per_imf / (s["total"] / max(r["imfs"], 1)), 1) + "x", _mb(r["peak_rss_mb"]),
+                         "/".join(f"{x:.1f}" for x in r["load_average_1min"])])
+    return ["## Sparse solver backends: the whole HHT without MKL", "",
+            ("Each model runs with every backend back to back in one run (environment variable "
+             f"`{BACKEND_VARIABLE}`), so the ratio to PARDISO compares like with like.  EMD/RT fact. = symbolic "
+             "analyses + numeric factorizations of the envelope / shifted systems; solve = their solves.  "
+             f"Target: no-MKL total <= {NO_MKL_TARGET} x PARDISO's.  *Under paper per IMF*: the paper's s/IMF "
+             "(Table 1 total / IMFs of the row nearest in vertex count) / ours."), "",
+            table(["model", "#V", "backend", "#IMFs", "factorizations", "EMD s", "EMD fact. s", "EMD solve s",
+                   "RT s", "RT fact. s", "RT solve s", "total s", "total / PARDISO", f"<= {NO_MKL_TARGET}x",
+                   "s/IMF", "under paper per IMF", "peak RSS MB", "load avg before/after"], rows), ""]
 
 
 def _breakdown(records: list[dict]) -> str:
@@ -532,11 +621,11 @@ def _breakdown(records: list[dict]) -> str:
 def _memory(r: dict) -> str:
     m = r["memory_mb"]
     st = r["stages"]
-    pe = r["pardiso"].get("emd", {})
-    prt = r["pardiso"].get("rt", {})
+    pe = _phases(r).get("emd", {})
+    prt = _phases(r).get("rt", {})
     lines = [
         (f"- case `{r['case']}`, {r['vertices']:,} vertices: peak RSS **{r['peak_rss_mb']:,.0f} MB** "
-        f"({r['peak_rss_mb'] / 1024:.1f} GiB; machine 24 GiB, target 16 GiB)."),
+        f"({r['peak_rss_mb'] / 1024:.1f} GiB; machine 24 GiB shared with other jobs)."),
         f"- Interpreter + libraries at start: {r['baseline_rss_mb']:,.0f} MB.  Resident after each stage: "
         + ", ".join(f"{s} {st[s]['rss_end_mb']:,.0f} MB" for s in STAGES)
         + "; peak during each stage: " + ", ".join(f"{s} {st[s]['peak_mb']:,.0f} MB" for s in STAGES) + ".",
@@ -581,9 +670,15 @@ def _log(msg: str) -> None:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--parts", nargs="+", choices=["ladder", "scaling"], default=["ladder", "scaling"])
-    parser.add_argument("--models", nargs="+", default=None, help=f"ladder models (default: {' '.join(LADDER)})")
-    parser.add_argument("--sizes", nargs="+", choices=list(SCALING), default=list(SCALING))
+    parser.add_argument("--parts", nargs="+", choices=["ladder", "scaling", "backends"],
+                        default=["ladder", "scaling", "backends"])
+    parser.add_argument("--models", nargs="+", default=None,
+                        help=f"models of the ladder (default: {' '.join(LADDER)}) and of the backends part "
+                             f"(default: {' '.join(BACKEND_MODELS)})")
+    parser.add_argument("--sizes", nargs="+", choices=list(SCALING), default=DEFAULT_SIZES)
+    parser.add_argument("--backend", default=None,
+                        help="sparse solver of the ladder and scaling cases (default: the fastest installed)")
+    parser.add_argument("--with-superlu", action="store_true", help="add SciPy SuperLU to the backends part")
     parser.add_argument("--max-imfs", type=int, default=None, help="cap on IMFs for the ladder (default: emd's 10)")
     parser.add_argument("--scaling-max-imfs", type=int, default=None,
                         help="cap on IMFs for the scaling cases (default: emd's 10)")
@@ -605,6 +700,8 @@ def main(argv=None) -> int:
 
     env, lookup = mkl_environment()
     env["OPENBLAS_NUM_THREADS"] = str(args.blas_threads)
+    if args.backend:
+        env[BACKEND_VARIABLE] = args.backend
     SCRATCH.mkdir(parents=True, exist_ok=True)
     out = SCRATCH / f"hht_worker_{os.getpid()}.json"
     previous = RESULTS / "hht.json"
@@ -612,9 +709,12 @@ def main(argv=None) -> int:
     results.setdefault("ladder", [])
     results.setdefault("scaling", [])
     results.setdefault("generated", {})
+    results.setdefault("backends", [])
 
     def store(part: str, record: dict) -> None:
-        results[part] = [r for r in results[part] if r["case"] != record["case"]] + [record]
+        results[part] = [r for r in results[part] if (r["case"], r.get("backend")) != (record["case"],
+                                                                                    record.get("backend"))]
+        results[part].append(record)
 
     if "ladder" in args.parts:
         for name in args.models or LADDER:
@@ -654,6 +754,22 @@ def main(argv=None) -> int:
             store("scaling", r)
             _log(f"  {r['vertices']:,} V, {r['imfs']} IMFs, EMD {r['seconds']['emd']:.1f} s, RT "
                  f"{r['seconds']['rt']:.1f} s, total {r['seconds']['total']:.1f} s, peak {r['peak_rss_mb']:.0f} MB")
+    if "backends" in args.parts:
+        from hht3d.linalg import available_backends
+
+        backends = [b for b in available_backends() if b != "superlu" or args.with_superlu]
+        for name in [m for m in args.models or BACKEND_MODELS if model_path(m) is not None]:
+            for backend in backends:  # interleaved per model: every ratio comes from one run
+                _log(f"backends {name} {backend} ...")
+                try:
+                    r = _worker(["case", name, str(model_path(name)), "none"], env | {BACKEND_VARIABLE: backend}, out)
+                except RuntimeError as exc:
+                    _log(str(exc))
+                    store("backends", {"case": name, "backend": backend, "error": str(exc)[-2000:]})
+                    continue
+                store("backends", r)
+                _log(f"  EMD {r['seconds']['emd']:.1f} s, RT {r['seconds']['rt']:.1f} s, total "
+                     f"{r['seconds']['total']:.1f} s, peak {r['peak_rss_mb']:.0f} MB")
     order = {n: i for i, n in enumerate(LADDER)}
     results["ladder"].sort(key=lambda r: order.get(r["case"], len(order)))
     results["scaling"].sort(key=lambda r: r.get("vertices", 0))

@@ -5,6 +5,7 @@
 ``hht3d ops [OP]``                list the operations, their parameters and defaults;
 ``hht3d info FILE``               what a mesh or point cloud holds;
 ``hht3d view FILE.npz|FILE.ply``  write the interactive HTML page of a saved result and print its path;
+``hht3d info --backends``         which sparse solver runs, and why;
 ``hht3d demo``                    run the demo pipeline shipped in the package.
 
 Exit codes: 0 on success; 1 with a one-line ``hht3d: error: ...`` reason for
@@ -119,10 +120,24 @@ def _ops(args) -> int:
     return 0
 
 
+def _backends() -> None:
+    from .linalg import backend_report
+
+    statuses, reason = backend_report()
+    chosen = next(s.name for s in statuses if s.default)
+    print(f"sparse solver: {chosen} ({reason})")
+    for s in statuses:
+        print(f"  {'*' if s.default else ' '} {s.name:<8} {'available' if s.available else 'missing  '}  {s.detail}")
+
+
 def _info(args) -> int:
     from .io import load
     from .topology import describe
 
+    if args.backends:
+        _backends()
+    if args.file is None:
+        return 0
     info = describe(load(args.file, clean=not args.no_clean))
     if args.json:
         print(json.dumps(info, indent=2))
@@ -173,8 +188,10 @@ def build_parser() -> argparse.ArgumentParser:
     ops.add_argument("op", nargs="*", help="only these operations")
     ops.set_defaults(run=_ops)
 
-    info = sub.add_parser("info", help="vertices, faces, components, boundary, manifoldness, bounding box")
-    info.add_argument("file")
+    info = sub.add_parser("info", help="vertices, faces, components, boundary, manifoldness, bounding box; "
+                                       "--backends: the sparse solver that will run and why")
+    info.add_argument("file", nargs="?")
+    info.add_argument("--backends", action="store_true", help="list the sparse solver backends")
     info.add_argument("--json", action="store_true", help="print JSON")
     info.add_argument("--no-clean", action="store_true", help="describe the file as stored, before cleaning")
     info.set_defaults(run=_info)
@@ -198,7 +215,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command == "info" and args.file is None and not args.backends:
+        parser.error("hht3d info needs a FILE, or --backends")
     try:
         return args.run(args)
     except HHT3DError as exc:

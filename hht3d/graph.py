@@ -15,17 +15,32 @@ Parallelism follows the method:
   tasks of their own (:func:`eemd`);
 * the Riesz transform of all IMFs is a sum over quadrature shifts
   (:mod:`hht3d.riesz`): one task finds the spectral bounds and shifts, then
-  ``riesz_tasks`` independent *shift-group* tasks each factorize their shifts
-  once and solve all IMFs as one multi-column right-hand side; they depend
-  only on the EMD task and the surface, and factorizations never leave a task.
-  (One task per IMF would repeat every factorization once per IMF.);
+  ``riesz_tasks`` independent *shift-group* tasks (default: one per worker,
+  :func:`hht3d.scheduling.worker_count`) each factorize their shifts once and
+  solve all IMFs as one multi-column right-hand side; they depend only on the
+  EMD task and the surface, and factorizations never leave a task.  (One task
+  per IMF would repeat every factorization once per IMF.);
 * the files of a dataset are independent subgraphs (:mod:`hht3d.dataset`).
 
 A surface or array enters a graph once, as one key, and is shared by
 reference between the tasks that use it.
+
+Worker-side caching
+-------------------
+A task receives a fresh copy of a surface whenever the scheduler pickles it
+(process pools, transfers between workers), and pickling drops the cached
+operators.  Every task therefore passes its surfaces through
+:func:`resident`: tasks on the same geometry in one process share one cache,
+so a worker builds ``L``, ``M``, the gradient, the spectral bounds and the
+symbolic analysis of the shifted systems once for all the tasks it runs on
+that surface.
 """
 from __future__ import annotations
 
+import contextlib
+import functools
+import threading
+from collections import OrderedDict
 from pathlib import Path
 
 import numpy as np
@@ -38,9 +53,11 @@ from .emd import emd as _emd
 from .hht import HHTResult
 from .io import load as _load
 from .monogenic import monogenic_from_potential
-from .riesz import combine_quadrature_parts, fractional_laplacian, quadrature_part, quadrature_plan
+from .linalg import default_backend
+from .riesz import (combine_quadrature_parts, fractional_laplacian, quadrature_part, quadrature_plan,
+                    shift_analysis)
 from .signals import signal as _signal
-from .scheduling import compute
+from .scheduling import compute, worker_count
 from .surface import Surface
 
 __all__ = [
@@ -49,6 +66,7 @@ __all__ = [
     "load",
     "from_surface",
     "as_key",
+    "resident",
     "operators",
     "signal",
     "emd",
@@ -89,12 +107,91 @@ class Builder:
         In-memory surfaces and arrays among its arguments enter the graph once,
         as their own keys (:func:`as_key`), instead of being copied into every task.
         """
+        func = _OnWorker(func)
         wrapped = delayed(func if self.guard is None else self.guard(step, func), pure=True)
 
         def call(*args, **kwargs):
             return wrapped(*map(as_key, args), **{k: as_key(v) for k, v in kwargs.items()})
 
         return call
+
+
+#: Geometries whose caches a process keeps across tasks (the least recently used is dropped).
+RESIDENT_SURFACES = 2
+_RESIDENT: OrderedDict = OrderedDict()
+_RESIDENT_LOCK = threading.Lock()
+
+
+def resident(surface: Surface) -> Surface:
+    """``surface``, sharing this process's cache for its geometry (operators, bounds, analyses).
+
+    The cache is keyed by the vertices, faces, Laplacian options and given
+    normals; the :data:`RESIDENT_SURFACES` most recently used ones are kept.
+    Returns the same object, whose ``cache`` is now the shared one.
+    """
+    key = tokenize(surface.vertices, surface.faces, surface.laplacian, surface.n_neighbors,
+                   surface.cache.get("normals"))
+    with _RESIDENT_LOCK:
+        cache = _RESIDENT.pop(key, surface.cache)
+        for name, value in surface.cache.items():
+            cache.setdefault(name, value)
+        _RESIDENT[key] = cache
+        while len(_RESIDENT) > RESIDENT_SURFACES:
+            _RESIDENT.popitem(last=False)
+    surface.cache = cache
+    return surface
+
+
+class _OnWorker:
+    """A task function that receives its surfaces through :func:`resident`."""
+
+    def __init__(self, func):
+        self.func = func
+        functools.update_wrapper(self, func)
+
+    def __call__(self, *args, **kwargs):
+        def local(value):
+            return resident(value) if isinstance(value, Surface) else value
+
+        return self.func(*map(local, args), **{k: local(v) for k, v in kwargs.items()})
+
+    def __dask_tokenize__(self):
+        return "hht3d.graph._OnWorker", tokenize(self.func)
+
+
+class _SharedAnalysis:
+    """A surface's shift analysis (:func:`hht3d.riesz.shift_analysis`), one task at a time.
+
+    PARDISO and CHOLMOD keep one numeric factor per analysis, so tasks sharing
+    it in one process (threads) take turns.
+    """
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._symbolic = None
+
+    @classmethod
+    @contextlib.contextmanager
+    def of(cls, surface: Surface, backend: str | None):
+        backend = default_backend() if backend is None else backend
+        with _RESIDENT_LOCK:
+            shared = surface.cache.setdefault(f"graph:shift_analysis:{backend}", cls())
+        with shared._lock:
+            if shared._symbolic is None:
+                shared._symbolic = shift_analysis(surface, backend)
+            yield shared._symbolic
+
+
+def _quadrature_plan(surface: Surface, tol: float, backend: str | None):
+    """:func:`hht3d.riesz.quadrature_plan` with this process's shared shift analysis."""
+    with _SharedAnalysis.of(surface, backend) as symbolic:
+        return quadrature_plan(surface, tol, symbolic=symbolic)
+
+
+def _quadrature_part(surface: Surface, f, plan, group: int, groups: int, backend: str | None):
+    """:func:`hht3d.riesz.quadrature_part` with this process's shared shift analysis."""
+    with _SharedAnalysis.of(surface, backend) as symbolic:
+        return quadrature_part(surface, f, plan, group, groups, symbolic=symbolic)
 
 
 _PLAIN = Builder()
@@ -126,7 +223,7 @@ def _with_operators(surface: Surface) -> Surface:
 
 
 def operators(surface):
-    """Lazy operator build: under a process scheduler each task rebuilds them anyway."""
+    """Lazy operator build; later tasks in the same process reuse them (:func:`resident`)."""
     return _PLAIN.task("operators", _with_operators)(surface)
 
 
@@ -153,18 +250,20 @@ def _imfs(decomposition) -> object:
 
 
 def riesz_potential(surface, imfs, *, method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
-                    backend: str | None = None, riesz_tasks: int = 4, builder: Builder = _PLAIN):
+                    backend: str | None = None, riesz_tasks: int | None = None, builder: Builder = _PLAIN):
     """Lazy ``L^{-1/2}`` of all IMFs, ``(k, n)``.
 
     ``method="quadrature"``: a bounds task, ``riesz_tasks`` shift-group tasks
-    (:func:`hht3d.riesz.quadrature_part`) and a summing task.  Other methods:
-    one task (:func:`hht3d.riesz.fractional_laplacian`).
+    (:func:`hht3d.riesz.quadrature_part`; default one per worker of the
+    scheduler, :func:`hht3d.scheduling.worker_count`) and a summing task.
+    Other methods: one task (:func:`hht3d.riesz.fractional_laplacian`).
     """
     if method != "quadrature":
         return builder.task("riesz", fractional_laplacian)(
             surface, imfs, -0.5, method, tol, eigenpairs, backend)
-    plan = builder.task("riesz_bounds", quadrature_plan)(surface, tol, backend)
-    part = builder.task("riesz_shifts", quadrature_part)
+    riesz_tasks = worker_count() if riesz_tasks is None else riesz_tasks
+    plan = builder.task("riesz_bounds", _quadrature_plan)(surface, tol, backend)
+    part = builder.task("riesz_shifts", _quadrature_part)
     parts = [part(surface, imfs, plan, group, riesz_tasks, backend) for group in range(riesz_tasks)]
     return builder.task("riesz_sum", combine_quadrature_parts)(surface, parts)
 
@@ -178,7 +277,7 @@ def monogenic(surface, imfs, potential, *, gradient: str = "lsq", frequency: str
 def transform(builder: Builder, surface, signal, *, emd_options: dict | None = None,
               ensemble: dict | None = None,
               gradient: str = "lsq", frequency: str = "phase", method: str = "quadrature", tol: float = 1e-8,
-              eigenpairs: int = 300, backend: str | None = None, riesz_tasks: int = 4) -> dict:
+              eigenpairs: int = 300, backend: str | None = None, riesz_tasks: int | None = None) -> dict:
     """The tasks of one HHT, by stage name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
 
     ``ensemble``: EEMD options (``ensemble_size``, ``noise_std``, ``seed``)

@@ -5,24 +5,36 @@ matrices that share one sparsity pattern.  A :class:`SymbolicFactorization`
 analyses that pattern once (fill-reducing ordering, symbolic factorization)
 and then only refactorizes numerically.
 
-Backends
---------
+Backends, in order of preference
+--------------------------------
 ``"pardiso"``
-    Intel MKL PARDISO through the ``pypardiso`` package (extra ``fast``):
-    real SPD mode (``mtype=2``) on the upper triangle, symbolic phase 11 once,
-    numeric phase 22 per matrix, solve phase 33.
+    Intel MKL PARDISO through the ``pypardiso`` package (extra ``fast``,
+    x86-64 only): real SPD mode (``mtype=2``) on the upper triangle, METIS
+    nested-dissection ordering and symbolic phase 11 once, numeric phase 22
+    per matrix, solve phase 33.
+``"cholmod"``
+    CHOLMOD's supernodal Cholesky ``P A Pᵀ = L Lᵀ`` through ``cvxopt``
+    (wheels with their own BLAS for Linux, macOS and Windows; no MKL):
+    AMD ordering and supernodal symbolic analysis once
+    (``cholmod.symbolic``), numeric factorization per matrix
+    (``cholmod.numeric``).
 ``"superlu"``
     SciPy's SuperLU, always available.  SciPy exposes no symbolic reuse, so
     each factorization orders and factorizes from scratch.
 
-The default is the fastest installed backend; every backend gives the same
-results to solver round-off.
+The default is the first installed backend of :data:`BACKENDS`, unless the
+environment variable :data:`BACKEND_VARIABLE` names another; a ``backend=``
+argument overrides both.  :func:`backend_report` says which one runs and
+why.  Every backend gives the same results to solver round-off.
 """
 from __future__ import annotations
 
 import functools
+import importlib.metadata
 import os
+import threading
 import weakref
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -35,32 +47,108 @@ try:  # optional speed-up
 except ImportError:  # pragma: no cover - depends on the environment
     _pypardiso = None
 
+try:  # core dependency where cvxopt has wheels (pyproject.toml)
+    import cvxopt as _cvxopt
+    from cvxopt import cholmod as _cholmod
+except ImportError:  # pragma: no cover - depends on the environment
+    _cvxopt = _cholmod = None
+
 __all__ = [
+    "BACKENDS",
+    "BACKEND_VARIABLE",
     "available_backends",
     "default_backend",
+    "backend_report",
+    "BackendStatus",
     "factorize",
     "Factor",
     "SymbolicFactorization",
 ]
 
+#: Every backend, fastest first.
+BACKENDS = ("pardiso", "cholmod", "superlu")
+#: Environment variable naming the default backend (e.g. ``HHT3D_BACKEND=superlu``).
+BACKEND_VARIABLE = "HHT3D_BACKEND"
+
+_MODULES = {"pardiso": _pypardiso, "cholmod": _cholmod, "superlu": spla}
+_DISTRIBUTIONS = {"pardiso": "pypardiso", "cholmod": "cvxopt", "superlu": "scipy"}
+_ALGORITHMS = {
+    "pardiso": "MKL PARDISO, supernodal, METIS ordering, symbolic analysis reused",
+    "cholmod": "CHOLMOD supernodal Cholesky, AMD ordering, symbolic analysis reused",
+    "superlu": "SciPy SuperLU, ordered and factorized from scratch per matrix",
+}
+_MISSING = {
+    "pardiso": "pypardiso is not installed (MKL, x86-64 only): pip install 'hht3d[fast]'",
+    "cholmod": "cvxopt is not installed (no wheel for this platform?): pip install cvxopt",
+}
+
 
 def available_backends() -> list[str]:
     """Names of the installed backends, fastest first."""
-    return (["pardiso"] if _pypardiso is not None else []) + ["superlu"]
+    return [name for name in BACKENDS if _MODULES[name] is not None]
 
 
 def default_backend() -> str:
-    """The backend used when none is requested: the fastest installed one."""
+    """The backend used when none is requested.
+
+    The one named by the environment variable :data:`BACKEND_VARIABLE` if set,
+    else the fastest installed one.
+    """
+    chosen = os.environ.get(BACKEND_VARIABLE, "").strip()
+    if chosen:
+        return _check_backend(chosen, f"{BACKEND_VARIABLE}={chosen!r}")
     return available_backends()[0]
 
 
-def _check_backend(backend: str | None) -> str:
-    backend = default_backend() if backend is None else backend
+@dataclass(frozen=True)
+class BackendStatus:
+    """One backend as seen by this process (:func:`backend_report`)."""
+
+    name: str
+    available: bool
+    default: bool
+    detail: str
+
+
+def backend_report() -> tuple[list[BackendStatus], str]:
+    """Every backend's availability and the reason the default was chosen.
+
+    Returns
+    -------
+    statuses : list of BackendStatus
+        In order of preference (:data:`BACKENDS`).
+    reason : str
+        Why :func:`default_backend` is what it is.
+    """
+    chosen = os.environ.get(BACKEND_VARIABLE, "").strip()
+    default = default_backend()
+    installed = available_backends()
+    if chosen:
+        reason = f"set by the environment variable {BACKEND_VARIABLE}={chosen}"
+    else:
+        faster = BACKENDS[:BACKENDS.index(default)]
+        reason = ("the fastest backend" if not faster else
+                  f"the fastest installed backend ({', '.join(faster)} not installed)")
+        reason += f"; override with {BACKEND_VARIABLE}=NAME or backend=NAME"
+    statuses = []
+    for name in BACKENDS:
+        if name in installed:
+            version = importlib.metadata.version(_DISTRIBUTIONS[name])
+            detail = f"{_DISTRIBUTIONS[name]} {version}: {_ALGORITHMS[name]}"
+        else:
+            detail = _MISSING[name]
+        statuses.append(BackendStatus(name, name in installed, name == default, detail))
+    return statuses, reason
+
+
+def _check_backend(backend: str | None, where: str = "backend") -> str:
+    if backend is None:
+        return default_backend()
+    if backend not in BACKENDS:
+        raise InputError(f"unknown sparse solver backend {backend!r} ({where}); choose one of {BACKENDS}")
     if backend not in available_backends():
-        raise InputError(
-            f"sparse solver backend {backend!r} is not available; installed: "
-            f"{available_backends()} (install the 'fast' extra for 'pardiso')"
-        )
+        raise InputError(f"sparse solver backend {backend!r} ({where}) is not available: "
+                         f"{_MISSING[backend]}; installed: {available_backends()}")
     return backend
 
 
@@ -81,19 +169,71 @@ class Factor:
         return x
 
 
+class _Pattern:
+    """The analysed sparsity pattern: every matrix factorized must have exactly it."""
+
+    def __init__(self, pattern: sp.csr_matrix):
+        self.n = pattern.shape[0]
+        self._indptr, self._indices = pattern.indptr.copy(), pattern.indices.copy()
+
+    def check(self, a: sp.csr_matrix) -> sp.csr_matrix:
+        if not (np.array_equal(a.indptr, self._indptr) and np.array_equal(a.indices, self._indices)):
+            raise InputError("matrix sparsity pattern differs from the analysed one")
+        return a
+
+
+class _UpperTriangle(_Pattern):
+    """The upper triangle of matrices on one analysed pattern, by a fixed index map.
+
+    For a symmetric matrix the CSR upper triangle is also the CSC lower
+    triangle: the same three arrays.
+    """
+
+    def __init__(self, pattern: sp.csr_matrix):
+        super().__init__(pattern)
+        rows = np.repeat(np.arange(self.n), np.diff(pattern.indptr))
+        self._mask = pattern.indices >= rows
+        self.rows = rows[self._mask]
+        self.indices = pattern.indices[self._mask]
+        self.indptr = np.concatenate([[0], np.cumsum(np.bincount(self.rows, minlength=self.n))])
+
+    def data(self, a: sp.csr_matrix) -> np.ndarray:
+        """The upper-triangle values of ``a``."""
+        return self.check(a).data[self._mask]
+
+    def csr(self, a: sp.csr_matrix) -> sp.csr_matrix:
+        return sp.csr_matrix((self.data(a), self.indices, self.indptr), shape=(self.n, self.n))
+
+
 class _SuperLUPattern:
     """SuperLU: no symbolic reuse, a fresh ``splu`` per matrix."""
 
     def __init__(self, pattern: sp.csr_matrix):
-        self.n = pattern.shape[0]
+        self._pattern = _Pattern(pattern)
 
     def factorize(self, a: sp.csr_matrix) -> Factor:
         try:
-            lu = spla.splu(a.tocsc(), permc_spec="MMD_AT_PLUS_A",
+            lu = spla.splu(self._pattern.check(a).tocsc(), permc_spec="MMD_AT_PLUS_A",
                            options={"SymmetricMode": True})
         except RuntimeError as exc:  # "Factor is exactly singular"
             raise NumericalError(f"SuperLU factorization failed: {exc}") from exc
-        return Factor(lu.solve, self.n)
+        return Factor(lu.solve, self._pattern.n)
+
+
+class _Latest:
+    """Backends that keep one factor per analysis: only the latest may solve."""
+
+    def __init__(self, backend: str):
+        self._backend = backend
+        self._current = None
+
+    def claim(self):
+        self._current = token = object()
+        return token
+
+    def check(self, token) -> None:
+        if self._current is not token:
+            raise NumericalError(f"this {self._backend} factor was replaced by a later factorization")
 
 
 @functools.lru_cache(maxsize=1)
@@ -112,28 +252,16 @@ class _PardisoPattern:
 
     def __init__(self, pattern: sp.csr_matrix):
         self.n = pattern.shape[0]
-        self._indptr, self._indices = pattern.indptr.copy(), pattern.indices.copy()
-        rows = np.repeat(np.arange(self.n), np.diff(pattern.indptr))
-        self._upper_mask = pattern.indices >= rows
-        upper_rows = rows[self._upper_mask]
-        self._upper_indices = pattern.indices[self._upper_mask]
-        self._upper_indptr = np.concatenate([[0], np.cumsum(np.bincount(upper_rows, minlength=self.n))])
+        self._upper = _UpperTriangle(pattern)
         _locate_mkl()
         self._solver = _pypardiso.PyPardisoSolver(mtype=2)  # MKL's SPD defaults
         weakref.finalize(self, self._solver.free_memory, True)
-        self._current = None
-        self._run(11, self._upper(pattern), np.zeros((self.n, 1)))
+        self._latest = _Latest("PARDISO")
+        self._run(11, self._upper.csr(pattern), np.zeros((self.n, 1)))
         # keep the defaults MKL filled in, minus iterative refinement: SPD
         # solves are accurate to ~1e-13 without it and 5x faster on many columns
         self._solver.iparm[0] = 1
         self._solver.iparm[7] = 0
-
-    def _upper(self, a: sp.csr_matrix) -> sp.csr_matrix:
-        """The upper triangle of ``a`` by the index map of the analysed pattern."""
-        if not (np.array_equal(a.indptr, self._indptr) and np.array_equal(a.indices, self._indices)):
-            raise InputError("matrix sparsity pattern differs from the analysed one")
-        return sp.csr_matrix((a.data[self._upper_mask], self._upper_indices, self._upper_indptr),
-                             shape=(self.n, self.n))
 
     def _run(self, phase: int, upper: sp.csr_matrix, b: np.ndarray) -> np.ndarray:
         self._solver.set_phase(phase)
@@ -143,17 +271,68 @@ class _PardisoPattern:
             raise NumericalError(f"PARDISO phase {phase} failed: {exc}") from exc
 
     def factorize(self, a: sp.csr_matrix) -> Factor:
-        upper = self._upper(a)
+        upper = self._upper.csr(a)
         self._run(22, upper, np.zeros((self.n, 1)))
-        token = object()
-        self._current = token
+        token = self._latest.claim()
 
         def solve(b: np.ndarray) -> np.ndarray:
-            if self._current is not token:
-                raise NumericalError("this PARDISO factor was replaced by a later factorization")
+            self._latest.check(token)
             return self._run(33, upper, np.asfortranarray(b))
 
         return Factor(solve, self.n)
+
+
+#: cvxopt keeps CHOLMOD's workspace in one process-wide ``cholmod_common``.
+_CHOLMOD_LOCK = threading.Lock()
+
+
+class _CholmodPattern:
+    """CHOLMOD (cvxopt) supernodal Cholesky with the ordering and symbolic analysis done once.
+
+    One cvxopt sparse matrix holds the lower triangle in CSC order; each
+    factorization overwrites its values and refactorizes numerically in
+    place, so (as with PARDISO) only the latest factor is valid.
+    """
+
+    def __init__(self, pattern: sp.csr_matrix):
+        self.n = pattern.shape[0]
+        self._lower = _UpperTriangle(pattern)  # CSR upper == CSC lower
+        # CSC lower: column = CSR row, row = CSR column; values 1 so that none is dropped
+        self._matrix = _cvxopt.spmatrix(1.0, self._lower.indices.astype(np.int64),
+                                        self._lower.rows.astype(np.int64), (self.n, self.n))
+        if len(self._matrix.V) != len(self._lower.rows):  # pragma: no cover - cvxopt invariant
+            raise NumericalError("cvxopt changed the sparsity pattern of the matrix")
+        with _CHOLMOD_LOCK:
+            try:
+                self._factor = _cholmod.symbolic(self._matrix, uplo="L")
+            except (ValueError, MemoryError) as exc:
+                raise NumericalError(f"CHOLMOD symbolic analysis failed: {exc}") from exc
+        self._latest = _Latest("CHOLMOD")
+
+    def factorize(self, a: sp.csr_matrix) -> Factor:
+        values = _cvxopt.matrix(self._lower.data(a))
+        with _CHOLMOD_LOCK:
+            self._matrix.V = values
+            try:
+                _cholmod.numeric(self._matrix, self._factor)
+            except ArithmeticError as exc:
+                raise NumericalError(f"CHOLMOD: the matrix is not positive definite (pivot {exc.args[0]} "
+                                     "of the permuted matrix)") from exc
+            except (ValueError, MemoryError) as exc:
+                raise NumericalError(f"CHOLMOD factorization failed: {exc}") from exc
+        token = self._latest.claim()
+
+        def solve(b: np.ndarray) -> np.ndarray:
+            self._latest.check(token)
+            x = _cvxopt.matrix(b)
+            with _CHOLMOD_LOCK:
+                _cholmod.solve(self._factor, x)
+            return np.array(x).reshape(b.shape)
+
+        return Factor(solve, self.n)
+
+
+_IMPLEMENTATIONS = {"pardiso": _PardisoPattern, "cholmod": _CholmodPattern, "superlu": _SuperLUPattern}
 
 
 class SymbolicFactorization:
@@ -164,21 +343,21 @@ class SymbolicFactorization:
     pattern : sparse matrix
         Symmetric matrix whose stored entries (explicit zeros included)
         define the pattern.
-    backend : {"pardiso", "superlu"}, optional
+    backend : {"pardiso", "cholmod", "superlu"}, optional
         Defaults to :func:`default_backend`.
 
     Notes
     -----
-    With the ``pardiso`` backend only the most recent :class:`Factor` of one
-    ``SymbolicFactorization`` is valid (PARDISO keeps one factor per handle);
-    create one ``SymbolicFactorization`` per factor that must stay alive.
+    With the ``pardiso`` and ``cholmod`` backends only the most recent
+    :class:`Factor` of one ``SymbolicFactorization`` is valid (both keep one
+    factor per analysis); create one ``SymbolicFactorization`` per factor
+    that must stay alive.
     """
 
     def __init__(self, pattern, backend: str | None = None):
         pattern = _as_square_csr(pattern)
         self.backend = _check_backend(backend)
-        impl = _PardisoPattern if self.backend == "pardiso" else _SuperLUPattern
-        self._impl = impl(pattern)
+        self._impl = _IMPLEMENTATIONS[self.backend](pattern)
         self.n_factorizations = 0
 
     def factorize(self, a) -> Factor:

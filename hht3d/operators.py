@@ -180,7 +180,12 @@ def k_ring(adj: sp.csr_matrix, k: int) -> sp.csr_matrix:
     return reach
 
 
-def tangent_gradient(vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matrix) -> sp.csr_matrix:
+#: Vertices per block when assembling the least-squares gradient (bounds its transient memory).
+GRADIENT_BLOCK = 1 << 16
+
+
+def tangent_gradient(vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matrix,
+                     block: int = GRADIENT_BLOCK) -> sp.csr_matrix:
     """Tangent-plane least-squares gradient of Eq. (17) as a sparse ``(3n, n)`` operator.
 
     At vertex ``i`` with unit normal ``n_i`` and neighbours ``j``, ``P_ij`` is
@@ -189,11 +194,47 @@ def tangent_gradient(vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matr
     tangent vectors (the paper writes ``f_i - f_j``; that is the negative
     gradient).  Exact for linear functions on planar neighbourhoods.  Vertices
     whose neighbours do not span the plane get the minimum-norm solution.
+
+    The CSR arrays are written ``block`` vertices at a time, so the transient
+    memory is that of one block, not of all edges (about 2.7 GB at a million
+    vertices otherwise).
     """
     n = len(vertices)
     adj = sp.csr_matrix(adj)
-    rows = np.repeat(np.arange(n), np.diff(adj.indptr))
-    cols = adj.indices
+    degree = np.diff(adj.indptr)
+    # row 3i+k holds vertex i's neighbours and, if it has any, i itself: sorted columns
+    length = degree + (degree > 0)
+    start = np.concatenate([[0], np.cumsum(length)])
+    nnz = 3 * int(start[-1])
+    index = np.int32 if max(nnz, n) < np.iinfo(np.int32).max else np.int64
+    data, indices = np.empty(nnz), np.empty(nnz, dtype=index)
+    for first in range(0, n, block):
+        last = min(first + block, n)
+        edges = slice(adj.indptr[first], adj.indptr[last])
+        coef = _gradient_coefficients(vertices, normals, adj, first, last)  # (edges, 3)
+        rows = np.repeat(np.arange(first, last), degree[first:last])
+        cols = adj.indices[edges]
+        # each vertex's entries: its neighbours, then itself with minus their sum
+        diagonal = np.flatnonzero(degree[first:last]) + first
+        sums = np.stack([np.bincount(rows - first, coef[:, k], last - first) for k in range(3)], axis=1)
+        entry_vertex = np.concatenate([rows, diagonal])
+        entry_col = np.concatenate([cols, diagonal])
+        entry_val = np.concatenate([coef, -sums[diagonal - first]])
+        order = np.lexsort((entry_col, entry_vertex))
+        entry_vertex, entry_col, entry_val = entry_vertex[order], entry_col[order], entry_val[order]
+        offset = np.arange(len(order)) - (start[entry_vertex] - start[first])
+        for k in range(3):
+            position = 3 * start[entry_vertex] + k * length[entry_vertex] + offset
+            data[position] = entry_val[:, k]
+            indices[position] = entry_col
+    indptr = np.concatenate([[0], np.cumsum(np.repeat(length, 3))]).astype(index)
+    return sp.csr_matrix((data, indices, indptr), shape=(3 * n, n))
+
+
+def _gradient_coefficients(vertices, normals, adj: sp.csr_matrix, first: int, last: int) -> np.ndarray:
+    """``(P^T P)^+ P_ij / |v_j - v_i|`` for the edges leaving vertices ``first..last-1``."""
+    rows = np.repeat(np.arange(first, last), np.diff(adj.indptr[first:last + 1]))
+    cols = adj.indices[adj.indptr[first]:adj.indptr[last]]
     d = vertices[cols] - vertices[rows]
     length = np.linalg.norm(d, axis=1)
     nrm = normals[rows]
@@ -203,20 +244,10 @@ def tangent_gradient(vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matr
     p = np.divide(p, p_len[:, None], out=np.zeros_like(p), where=ok[:, None])
     inv_len = np.divide(1.0, length, out=np.zeros_like(length), where=ok)
     # normal equations per vertex, solved in the tangent plane: (P^T P)^+ P^T
-    ptp = np.zeros((n, 3, 3))
-    np.add.at(ptp, rows, p[:, :, None] * p[:, None, :])
+    ptp = np.zeros((last - first, 3, 3))
+    np.add.at(ptp, rows - first, p[:, :, None] * p[:, None, :])
     pinv = np.linalg.pinv(ptp, rcond=1e-10, hermitian=True)
-    coef = np.einsum("eij,ej->ei", pinv[rows], p) * inv_len[:, None]  # (edges, 3)
-    # gradient_i = sum_j coef_ij (f_j - f_i)
-    r = (3 * rows[:, None] + np.arange(3)).ravel()
-    data_j = coef.ravel()
-    c_j = np.repeat(cols, 3)
-    c_i = np.repeat(rows, 3)
-    grad = sp.coo_matrix((np.concatenate([data_j, -data_j]),
-                          (np.concatenate([r, r]), np.concatenate([c_j, c_i]))),
-                         shape=(3 * n, n)).tocsr()
-    grad.sum_duplicates()
-    return grad
+    return np.einsum("eij,ej->ei", pinv[rows - first], p) * inv_len[:, None]
 
 
 def face_gradient(vertices: np.ndarray, faces: np.ndarray) -> sp.csr_matrix:

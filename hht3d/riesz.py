@@ -104,6 +104,8 @@ MIN_TOL = 1e-13
 SAFETY = 0.9
 #: λ sample points per quadrature check (log-spaced over ``[m, M̄]``).
 _CHECK_POINTS = 2000
+#: Power iterations tightening the upper spectral bound (:func:`_upper_bound`).
+_POWER_ITERATIONS = 10
 #: Most shifts :func:`quadrature_nodes` tries before giving up.
 _MAX_SHIFTS = 200
 
@@ -168,15 +170,34 @@ def remove_kernel(surface: Surface, f) -> np.ndarray:
 
 # -- spectral bounds and quadrature nodes --------------------------------------------------
 
-def _gershgorin_bound(surface: Surface) -> float:
-    """``M̄ = max_i Σ_j |L_ij| / M_ii ≥ λ_max``.
+def _upper_bound(surface: Surface) -> float:
+    """``M̄ ≥ λ_max``: the Collatz–Wielandt bound for ``M⁻¹|L|`` (cached on the surface).
 
-    Gershgorin's theorem for ``M⁻¹L``.  With non-positive off-diagonals this
-    is ``max 2 L_ii/M_ii``; cotangent weights of obtuse triangles can be
-    positive, hence the absolute row sums.
+    ``λ_max(M⁻¹L) ≤ ρ(M⁻¹|L|)`` because ``|xᵀLx| ≤ |x|ᵀ|L||x|``, and for the
+    non-negative ``M⁻¹|L|`` and any positive ``w``,
+    ``ρ ≤ max_i (M⁻¹|L|w)_i / w_i`` (Collatz–Wielandt).  With ``w = 1`` this
+    is Gershgorin's bound ``max_i Σ_j |L_ij| / M_ii``; power iterations
+    ``w ← M⁻¹|L|w`` tighten it towards ``ρ``.  Every iterate gives a valid
+    bound and the smallest is kept.  On meshes ``ρ`` is within a few per
+    cent of ``λ_max`` (the top eigenvector sits at the worst-shaped
+    vertices), where Gershgorin is 1.3–2× above it.
     """
-    row_sums = np.asarray(abs(surface.stiffness).sum(axis=1)).ravel()
-    return float(np.max(row_sums / surface.mass_diagonal))
+    key = "riesz:upper_bound"
+    if key not in surface.cache:
+        lap = abs(surface.stiffness)
+        inv_mass = 1.0 / surface.mass_diagonal
+        w = np.ones(surface.n_vertices)
+        best = np.inf
+        for _ in range(_POWER_ITERATIONS):
+            y = inv_mass * (lap @ w)
+            top = float(np.max(y))
+            best = min(best, float(np.max(y / w)))
+            if top == 0:
+                break
+            # rows of |L| that are zero give 0 whatever w is: keep w positive there
+            w = np.where(y > 0, y / top, 1.0)
+        surface.cache[key] = best
+    return surface.cache[key]
 
 
 class _ShiftedSystems:
@@ -330,8 +351,9 @@ def spectral_bounds(surface: Surface, *, backend: str | None = None,
     complement of the kernel, with the sparse factorization of
     :mod:`hht3d.linalg`; ``m = 0.9·λ_1``.  If ARPACK does not converge,
     LOBPCG preconditioned with the same factorization is used, and ``m`` is
-    then half its estimate.  ``M̄`` is the Gershgorin bound
-    ``max_i Σ_j |L_ij| / M_ii``.  Cached on the surface.
+    then half its estimate.  ``M̄`` is a Collatz–Wielandt bound, Gershgorin's
+    ``max_i Σ_j |L_ij| / M_ii`` tightened by a few power iterations.  Cached
+    on the surface.
 
     Parameters
     ----------
@@ -352,7 +374,7 @@ def spectral_bounds(surface: Surface, *, backend: str | None = None,
             raise InputError(f"{surface.name}: every connected component is a single vertex; "
                              "the Laplacian has no non-zero eigenvalue")
         symbolic = symbolic or shift_analysis(surface, backend)
-        mbar = _gershgorin_bound(surface)
+        mbar = _upper_bound(surface)
         try:
             m = SAFETY * float(np.min(_arpack_smallest(surface, 1, symbolic, mbar, False, tol=1e-6)))
         except (spla.ArpackNoConvergence, spla.ArpackError):
@@ -534,7 +556,7 @@ def smallest_eigenpairs(surface: Surface, count: int, *,
     key = "riesz:eigenpairs"
     cached = surface.cache.get(key)
     if cached is None or len(cached[0]) < count:
-        mbar = _gershgorin_bound(surface)
+        mbar = _upper_bound(surface)
         values, vectors = _arpack_smallest(surface, count, shift_analysis(surface, backend), mbar, True)
         order = np.argsort(values)
         cached = surface.cache[key] = (values[order], vectors[:, order])

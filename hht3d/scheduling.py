@@ -27,7 +27,8 @@ from dask.callbacks import Callback
 
 from .errors import InputError
 
-__all__ = ["SCHEDULERS", "MAX_WORKERS", "PROGRESS_INTERVAL", "ProgressLines", "compute", "open_client"]
+__all__ = ["SCHEDULERS", "MAX_WORKERS", "PROGRESS_INTERVAL", "ProgressLines", "compute", "open_client",
+           "worker_count"]
 
 SCHEDULERS = ("synchronous", "threads", "processes", "distributed")
 #: The most workers a run may ask for: threads, processes or local-cluster workers.
@@ -37,6 +38,21 @@ PROGRESS_INTERVAL = 10.0
 
 #: Environment that keeps each worker process's BLAS/OpenMP/MKL to one thread.
 SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+
+
+def worker_count() -> int:
+    """Workers of the scheduler a graph built now will most likely run on.
+
+    The workers of the current ``dask.distributed`` client if there is one,
+    else dask's configured ``num_workers``, else one per core (the default of
+    :func:`compute` for every scheduler).
+    """
+    try:
+        from distributed import default_client
+
+        return max(1, len(default_client().scheduler_info()["workers"]))
+    except (ImportError, ValueError):  # no distributed, or no client
+        return int(dask.config.get("num_workers", None) or os.cpu_count() or 1)
 
 
 def _limit_blas_threads() -> None:

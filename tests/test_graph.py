@@ -29,11 +29,11 @@ def test_riesz_stage_is_independent_shift_group_tasks():
     by_prefix = {}
     for key in tasks:
         by_prefix.setdefault(_prefix(key), []).append(key)
-    groups = by_prefix["quadrature_part"]
+    groups = by_prefix["_quadrature_part"]
     assert len(groups) == OPTIONS["riesz_tasks"]
     (emd_key,) = by_prefix["emd"]
     (imfs_key,) = by_prefix["_imfs"]
-    (plan_key,) = by_prefix["quadrature_plan"]
+    (plan_key,) = by_prefix["_quadrature_plan"]
     (surface_key,) = [k for k in tasks if _prefix(k).startswith("surface")]
     for key in groups:
         deps = get_dependencies(tasks, key)
@@ -92,3 +92,34 @@ def test_eemd_members_are_tasks():
     (a,) = graph.compute(lazy, scheduler="synchronous", progress=False)
     (b,) = graph.compute(lazy, scheduler="threads", progress=False)
     np.testing.assert_array_equal(a.imfs, b.imfs)
+
+
+def test_resident_surfaces_share_operators_across_copies():
+    import pickle
+
+    surface = _surfaces()[0]
+    first = graph.resident(pickle.loads(pickle.dumps(surface)))
+    lap = first.stiffness
+    second = graph.resident(pickle.loads(pickle.dumps(surface)))  # a task's fresh copy
+    assert second is not first and second.stiffness is lap
+    other = graph.resident(Surface(surface.vertices * 2, surface.faces))
+    assert other.stiffness is not lap
+    moved = Surface(surface.vertices, surface.faces, laplacian="robust")
+    assert graph.resident(moved).cache is not first.cache
+
+
+def test_riesz_tasks_default_to_the_worker_count(cluster_client):
+    surface = graph.from_surface(_surfaces()[0])
+    tasks = dict(graph.riesz_potential(surface, np.ones((2, 642))).__dask_graph__())
+    assert sum(_prefix(k) == "_quadrature_part" for k in tasks) == 2  # the 2-worker cluster
+
+
+def test_shift_groups_sharing_one_analysis_on_threads():
+    # three shift-group tasks share one analysis (one live factor) in one process: they take turns
+    surface = _surfaces()[0]
+    s = graph.from_surface(surface)
+    lazy = graph.riesz_potential(s, np.stack([mean_curvature(surface), surface.vertices[:, 0]]), riesz_tasks=3)
+    (threads,) = graph.compute(lazy, scheduler="threads", workers=3, progress=False)
+    (sync,) = graph.compute(lazy, scheduler="synchronous", progress=False)
+    np.testing.assert_allclose(threads, sync, rtol=0, atol=1e-13 * np.abs(sync).max())
+    assert [k for k in surface.cache if k.startswith("graph:shift_analysis")]

@@ -23,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from .. import graph
+from .. import graph, linalg
 from ..apps import hks_features, imf_enhancement, manifold_harmonics_filter, prominent_features
 from ..apps import filter_geometry as _filter_geometry
 from ..apps import reconstruct as _reconstruct
@@ -41,7 +41,7 @@ from .params import REQUIRED, Param, did_you_mean, with_defaults
 __all__ = ["Slot", "Operation", "OPERATIONS", "operation"]
 
 #: Sparse solver backends of :mod:`hht3d.linalg` (availability is checked when a step runs).
-SOLVERS = ("pardiso", "superlu")
+SOLVERS = linalg.BACKENDS
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,193 @@
+"""Sparse SPD solver backends (hht3d.linalg) against SciPy's dense and sparse solvers.
+
+The systems are the two kinds hht3d factorizes, built on the shipped model
+spot (2,930 vertices): the constrained biharmonic envelope system of EMD and
+the shifted systems ``L + σM`` of the ``L^{-1/2}`` quadrature at its smallest
+and largest shift.
+
+Tolerance: Cholesky is backward stable without pivoting growth, so each
+solver's relative forward error is at most about ``κ₂(A)·ε`` (Higham,
+*Accuracy and Stability of Numerical Algorithms*, Thm. 10.4 with Sec. 7.1);
+two solvers then differ by at most the sum of their errors.  ``κ₂`` is
+computed from the extreme eigenvalues (ARPACK), and the bound used is
+``20·κ₂·ε`` (a factor 10 per solver for the dimension-dependent constant,
+which is small in practice for sparse factors).
+"""
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+import hht3d
+from hht3d import linalg
+from hht3d.errors import InputError, NumericalError
+
+emd_module = importlib.import_module("hht3d.emd")
+riesz_module = importlib.import_module("hht3d.riesz")
+
+SPOT = Path(hht3d.__file__).parent / "data" / "spot.ply"
+BACKENDS = linalg.available_backends()
+#: Backends keeping one numeric factor per symbolic analysis.
+SINGLE_FACTOR = [b for b in BACKENDS if b in ("pardiso", "cholmod")]
+
+
+@pytest.fixture(scope="module")
+def spot():
+    return hht3d.load(SPOT)
+
+
+def envelope_system(surface, constrained: np.ndarray) -> sp.csr_matrix:
+    """``[Q_FF 0; 0 diag(Q)_CC]`` on Q's full pattern, as EMD builds it (hht3d.emd notes)."""
+    q = emd_module.envelope_operator(surface)
+    rows = np.repeat(np.arange(surface.n_vertices), np.diff(q.indptr))
+    free = ~constrained
+    data = q.data * (free[rows] & free[q.indices])
+    diagonal = np.flatnonzero(q.indices == rows)
+    data[diagonal[constrained]] = q.data[diagonal[constrained]]
+    return sp.csr_matrix((data, q.indices.copy(), q.indptr.copy()), shape=q.shape)
+
+
+def systems(surface):
+    """(name, SPD matrix) pairs: two envelope systems and the extreme quadrature shifts."""
+    rng = np.random.default_rng(0)
+    plan = riesz_module.quadrature_plan(surface, 1e-8, "superlu")
+    return [("envelope 5%", envelope_system(surface, rng.random(surface.n_vertices) < 0.05)),
+            ("envelope 30%", envelope_system(surface, rng.random(surface.n_vertices) < 0.3)),
+            ("smallest shift", riesz_module.shifted_matrix(surface, plan.sigmas[0])),
+            ("largest shift", riesz_module.shifted_matrix(surface, plan.sigmas[-1]))]
+
+
+@pytest.fixture(scope="module")
+def references(spot):
+    """Per system: name, matrix, right-hand sides, LAPACK and SuperLU solutions, error bound."""
+    rhs = np.random.default_rng(1).standard_normal((spot.n_vertices, 3))
+    out = []
+    for name, a in systems(spot):
+        largest = spla.eigsh(a, 1, which="LA", return_eigenvectors=False, tol=1e-6)[0]
+        smallest = spla.eigsh(a.tocsc(), 1, sigma=0, which="LM", return_eigenvectors=False, tol=1e-6)[0]
+        assert smallest > 0, name
+        bound = 20 * largest / smallest * np.finfo(float).eps
+        out.append((name, a, rhs, np.linalg.solve(a.toarray(), rhs), spla.spsolve(a.tocsc(), rhs), bound))
+    return out
+
+
+def relative_error(x, reference):
+    return np.linalg.norm(x - reference) / np.linalg.norm(reference)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_agrees_with_dense_and_spsolve(references, backend):
+    for name, a, rhs, dense, sparse, bound in references:
+        x = linalg.factorize(a, backend).solve(rhs)
+        assert relative_error(x, dense) <= bound, name
+        assert relative_error(x, sparse) <= bound, name
+        single = linalg.factorize(a, backend).solve(rhs[:, 0])
+        assert single.shape == (a.shape[0],)
+        assert relative_error(single, x[:, 0]) <= bound, name
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_refactorization_gives_the_new_answer(spot, backend):
+    (_, first), (_, second), *_ = systems(spot)
+    rhs = np.random.default_rng(2).standard_normal(spot.n_vertices)
+    symbolic = linalg.SymbolicFactorization(emd_module.envelope_operator(spot), backend)
+    x1 = symbolic.factorize(first).solve(rhs)
+    x2 = symbolic.factorize(second).solve(rhs)
+    exact1, exact2 = spla.spsolve(first.tocsc(), rhs), spla.spsolve(second.tocsc(), rhs)
+    assert relative_error(exact1, exact2) > 0.1  # the two systems really differ
+    assert relative_error(x1, exact1) < 1e-9
+    assert relative_error(x2, exact2) < 1e-9
+    assert symbolic.n_factorizations == 2 and symbolic.backend == backend
+
+
+@pytest.mark.parametrize("backend", SINGLE_FACTOR)
+def test_replaced_factor_refuses_to_solve(spot, backend):
+    (_, first), (_, second), *_ = systems(spot)
+    symbolic = linalg.SymbolicFactorization(first, backend)
+    old = symbolic.factorize(first)
+    symbolic.factorize(second)
+    with pytest.raises(NumericalError, match="replaced"):
+        old.solve(np.ones(spot.n_vertices))
+
+
+def singular(n: int = 6) -> sp.csr_matrix:
+    """A path-graph Laplacian plus identity with one row and column zeroed (explicit zeros kept)."""
+    a = sp.diags([-np.ones(n - 1), 3 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1], format="csr")
+    a.data[(np.repeat(np.arange(n), np.diff(a.indptr)) == 2) | (a.indices == 2)] = 0.0
+    return a
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_singular_matrix_raises_numerical_error(backend):
+    a = singular()
+    assert a.nnz == 16  # the zeros stay in the pattern
+    with pytest.raises(NumericalError):
+        linalg.factorize(a, backend).solve(np.ones(6))
+
+
+@pytest.mark.parametrize("backend", SINGLE_FACTOR)
+def test_indefinite_matrix_raises_numerical_error(spot, backend):
+    # L - σM with σ above the smallest non-zero eigenvalue is indefinite: no Cholesky factor
+    m, _ = riesz_module.spectral_bounds(spot, backend="superlu")
+    a = riesz_module.shifted_matrix(spot, -10 * m)
+    with pytest.raises(NumericalError):
+        linalg.factorize(a, backend).solve(np.ones(spot.n_vertices))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_input_errors(backend):
+    a = singular() + sp.eye(6)
+    symbolic = linalg.SymbolicFactorization(a, backend)
+    with pytest.raises(InputError, match="pattern differs"):
+        symbolic.factorize(sp.eye(6))
+    with pytest.raises(InputError, match="rows"):
+        symbolic.factorize(a).solve(np.ones(5))
+    with pytest.raises(InputError, match="square"):
+        linalg.factorize(sp.eye(6, 5), backend)
+
+
+def test_default_backend_and_override(monkeypatch):
+    monkeypatch.delenv(linalg.BACKEND_VARIABLE, raising=False)
+    assert linalg.default_backend() == BACKENDS[0]
+    assert BACKENDS[-1] == "superlu" and set(BACKENDS) <= set(linalg.BACKENDS)
+    statuses, reason = linalg.backend_report()
+    assert [s.name for s in statuses] == list(linalg.BACKENDS)
+    assert [s.name for s in statuses if s.default] == [BACKENDS[0]]
+    assert linalg.BACKEND_VARIABLE in reason
+
+    monkeypatch.setenv(linalg.BACKEND_VARIABLE, "superlu")
+    assert linalg.default_backend() == "superlu"
+    assert linalg.SymbolicFactorization(sp.eye(3)).backend == "superlu"
+    statuses, reason = linalg.backend_report()
+    assert [s.name for s in statuses if s.default] == ["superlu"] and "environment" in reason
+
+    monkeypatch.setenv(linalg.BACKEND_VARIABLE, "mumps")
+    with pytest.raises(InputError, match="HHT3D_BACKEND='mumps'"):
+        linalg.default_backend()
+    with pytest.raises(InputError, match="unknown sparse solver backend"):
+        linalg.factorize(sp.eye(3), "mumps")
+
+
+def test_missing_backend_is_explained(monkeypatch):
+    monkeypatch.setitem(linalg._MODULES, "cholmod", None)
+    monkeypatch.delenv(linalg.BACKEND_VARIABLE, raising=False)
+    assert "cholmod" not in linalg.available_backends()
+    with pytest.raises(InputError, match="cvxopt is not installed"):
+        linalg.factorize(sp.eye(3), "cholmod")
+    statuses, _ = linalg.backend_report()
+    assert not next(s for s in statuses if s.name == "cholmod").available
+
+
+def test_info_backends_names_the_solver_and_why(capsys, monkeypatch):
+    from hht3d.cli import main
+
+    monkeypatch.setenv(linalg.BACKEND_VARIABLE, "superlu")
+    assert main(["info", "--backends"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("sparse solver: superlu (set by the environment variable HHT3D_BACKEND=superlu)")
+    assert all(name in out for name in linalg.BACKENDS)
