@@ -16,10 +16,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from importlib import resources
 from pathlib import Path
 
 from .errors import HHT3DError, PipelineError, one_line, shown
+from .io import data_path
 from .scheduling import SCHEDULERS
 from .render import UP_AXES, VIEWS
 from .viewer import VERTEX_BUDGET
@@ -34,12 +34,12 @@ MAX_MESSAGE = 2000
 
 def demo_model_path() -> Path:
     """Path of the shipped demo model."""
-    return Path(str(resources.files("hht3d") / "data" / DEMO_MODEL))
+    return data_path(DEMO_MODEL)
 
 
 def demo_pipeline_path() -> Path:
     """Path of the shipped demo pipeline."""
-    return Path(str(resources.files("hht3d") / "data" / DEMO_PIPELINE))
+    return data_path(DEMO_PIPELINE)
 
 
 def _plan(path, overrides):

@@ -199,7 +199,7 @@ def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", li
     total = float(spectrum.imf_energy().sum())
     if not total > 0:
         raise InputError(f"{result.surface.name}: the IMFs carry no energy; there is no spectrum to plot")
-    limits = _frequency_limits(spectrum, scale) if limits is None else limits
+    limits = spectrum.frequency_limits(scale) if limits is None else limits
     edges, marginal = spectrum.marginal(bins, scale, limits)
     resolution = spectrum.resolution
     right_end = resolution.limit if edges[-1] < resolution.limit < 2 * edges[-1] else edges[-1]
@@ -249,21 +249,6 @@ def _plot_imfs(axes, spectrum: HilbertSpectrum, edges, scale: str, limits, total
         if np.isfinite(means[i]):
             axes.axvline(means[i], color=colors[i], linestyle="--", linewidth=0.9)
     axes.set_title("frequency–energy distribution of each IMF", fontsize=font)
-
-
-def _frequency_limits(spectrum: HilbertSpectrum, scale: str, tail: float = 1e-3) -> tuple[float, float]:
-    """Frequencies between which all but ``tail`` of the energy lies at each end."""
-    frequency = spectrum.frequency.ravel()
-    weight = (spectrum.energy * spectrum.area).ravel()
-    keep = (frequency > 0) if scale == "log" else np.isfinite(frequency)
-    frequency, weight = frequency[keep], weight[keep]
-    order = np.argsort(frequency)
-    cumulative = np.cumsum(weight[order])
-    if cumulative.size == 0 or cumulative[-1] <= 0:
-        raise InputError("no positive instantaneous frequency carries energy; give explicit limits")
-    low, high = np.searchsorted(cumulative, [tail * cumulative[-1], (1 - tail) * cumulative[-1]])
-    low_f, high_f = frequency[order[low]], frequency[order[min(high, len(order) - 1)]]
-    return (float(low_f), float(high_f)) if high_f > low_f else (float(frequency.min()), float(frequency.max()))
 
 
 # -- the standard set --------------------------------------------------------------------------------

@@ -75,6 +75,7 @@ import scipy.sparse as sp
 from .errors import InputError
 from .riesz import vertex_gradient
 from .surface import Surface
+from .validation import check_choice, check_surface
 
 __all__ = ["FREQUENCY_METHODS", "instantaneous_frequency", "resolvable_frequency", "resolvable_from_area",
            "ResolutionReport", "resolution_report"]
@@ -120,8 +121,7 @@ def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = "
         Radians per model unit of length, ``>= 0``; 0 where ``f`` and ``Rf``
         vanish (no amplitude) and at vertices without neighbours.
     """
-    if method not in FREQUENCY_METHODS:
-        raise InputError(f"unknown frequency method {method!r}; choose one of {FREQUENCY_METHODS}")
+    check_choice(method, FREQUENCY_METHODS, "frequency method")
     f = np.asarray(signals, dtype=np.float64)
     r = np.asarray(riesz, dtype=np.float64)
     if f.ndim != 2 or r.shape != (*f.shape, 3) or f.shape[1] != surface.n_vertices:
@@ -324,8 +324,7 @@ def resolvable_frequency(surface: Surface) -> np.ndarray:
     shorter than about two sample spacings aliases: its frequency cannot be
     read from the samples.
     """
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
+    check_surface(surface)
     return resolvable_from_area(surface.mass_diagonal)
 
 

@@ -20,9 +20,9 @@ from .emd import check_emd_options, emd
 from .errors import InputError
 from .monogenic import MonogenicSignal, monogenic
 from .quality import Quality, decomposition_quality
-from .signals import check_signal
 from .spectrum import HilbertSpectrum
 from .surface import Surface
+from .validation import check_signal
 
 __all__ = ["HHTResult", "hht"]
 

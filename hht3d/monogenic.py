@@ -27,8 +27,9 @@ import numpy as np
 from .errors import InputError
 from .frequency import (FREQUENCY_METHODS, ResolutionReport, instantaneous_frequency, resolution_report,
                         resolvable_frequency)
-from .riesz import GRADIENTS, _as_signals, _check_choice, fractional_laplacian, vertex_gradient
+from .riesz import GRADIENTS, fractional_laplacian, vertex_gradient
 from .surface import Surface
+from .validation import as_signals, check_choice, check_surface
 
 __all__ = ["MonogenicSignal", "monogenic", "monogenic_from_potential"]
 
@@ -109,16 +110,14 @@ def monogenic(surface: Surface, imfs, *, gradient: str = "lsq", frequency: str =
     MonogenicSignal
     """
     f = _signals(surface, imfs)
-    _check_choice(gradient, GRADIENTS, "gradient")
-    _check_choice(frequency, FREQUENCY_METHODS, "frequency")
+    check_choice(gradient, GRADIENTS, "gradient")
+    check_choice(frequency, FREQUENCY_METHODS, "frequency")
     potential = fractional_laplacian(surface, f, -0.5, method, tol, eigenpairs, backend)
     return monogenic_from_potential(surface, f, potential, gradient, frequency)
 
 
 def _signals(surface: Surface, imfs) -> np.ndarray:
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
-    return _as_signals(surface, imfs, "imfs")[0]
+    return as_signals(check_surface(surface), imfs, "imfs")[0]
 
 
 def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = "lsq",
@@ -141,11 +140,11 @@ def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = 
     MonogenicSignal
     """
     f = _signals(surface, imfs)
-    u = _as_signals(surface, potential, "potential")[0]
+    u = as_signals(surface, potential, "potential")[0]
     if u.shape != f.shape:
         raise InputError(f"potential has shape {u.shape}; the imfs have {f.shape}")
-    _check_choice(gradient, GRADIENTS, "gradient")
-    _check_choice(frequency, FREQUENCY_METHODS, "frequency")
+    check_choice(gradient, GRADIENTS, "gradient")
+    check_choice(frequency, FREQUENCY_METHODS, "frequency")
     rf = vertex_gradient(surface, u, gradient)
     q = np.linalg.norm(rf, axis=-1)
     omega = instantaneous_frequency(surface, f, rf, method=frequency, gradient=gradient)

@@ -29,6 +29,7 @@ import numpy as np
 
 from .errors import InputError
 from .surface import Surface
+from .validation import check_surface
 
 __all__ = [
     "Quality",
@@ -126,8 +127,7 @@ def decomposition_quality(surface: Surface, signal, imfs, residue) -> Quality:
     Quality
         A constant signal has ratio 1 and IO 0 (nothing to split).
     """
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
+    check_surface(surface)
     s = np.asarray(signal, dtype=np.float64)
     f = np.asarray(imfs, dtype=np.float64).reshape(-1, surface.n_vertices)
     r = np.asarray(residue, dtype=np.float64)

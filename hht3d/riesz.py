@@ -70,6 +70,7 @@ from scipy.special import ellipj, ellipk
 from . import linalg
 from .errors import InputError, NumericalError
 from .surface import Surface
+from .validation import as_signals, check_choice, check_surface
 
 __all__ = [
     "METHODS",
@@ -110,37 +111,6 @@ _POWER_ITERATIONS = 10
 _MAX_SHIFTS = 200
 
 
-# -- input handling -----------------------------------------------------------------------
-
-def _check_surface(surface) -> Surface:
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
-    return surface
-
-
-def _as_signals(surface: Surface, f, what: str = "signal") -> tuple[np.ndarray, bool]:
-    """``f`` as a (k, n) float array and whether it was a single (n,) signal."""
-    try:
-        a = np.asarray(f, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InputError(f"{what} is not numeric") from None
-    n = surface.n_vertices
-    if a.ndim not in (1, 2) or a.shape[-1] != n:
-        raise InputError(f"{what} must have shape ({n},) or (k, {n}) for {surface.name} "
-                         f"({n} vertices), got {a.shape}")
-    bad = ~np.isfinite(a)
-    if bad.any():
-        first = np.argwhere(bad)[0]
-        where = f"row {first[0]}, vertex {first[1]}" if a.ndim == 2 else f"vertex {first[0]}"
-        raise InputError(f"{what} has {int(bad.sum())} NaN or infinite values (first at {where})")
-    return np.atleast_2d(a), a.ndim == 1
-
-
-def _check_choice(value, choices, what: str):
-    if value not in choices:
-        raise InputError(f"unknown {what} {value!r}; choose one of {choices}")
-
-
 # -- kernel --------------------------------------------------------------------------------
 
 def remove_kernel(surface: Surface, f) -> np.ndarray:
@@ -157,8 +127,8 @@ def remove_kernel(surface: Surface, f) -> np.ndarray:
         ``f − Σ_c 1_c (1_cᵀ M f)/(1_cᵀ M 1_c)``: M-orthogonal to the kernel
         of ``L`` (the per-component constants).
     """
-    surface = _check_surface(surface)
-    a, single = _as_signals(surface, f)
+    surface = check_surface(surface)
+    a, single = as_signals(surface, f)
     labels = surface.component_labels
     mass = surface.mass_diagonal
     n = surface.n_vertices
@@ -241,7 +211,7 @@ def shifted_matrix(surface: Surface, sigma: float) -> sp.csr_matrix:
     sigma : float
         Shift; ``L + σM`` is SPD for ``σ > 0``.
     """
-    return _systems(_check_surface(surface)).matrix(float(sigma))
+    return _systems(check_surface(surface)).matrix(float(sigma))
 
 
 def shifted_solve(surface: Surface, sigma: float, rhs, *, backend: str | None = None,
@@ -367,7 +337,7 @@ def spectral_bounds(surface: Surface, *, backend: str | None = None,
     -------
     (m, M̄) : tuple of float
     """
-    surface = _check_surface(surface)
+    surface = check_surface(surface)
     key = "riesz:bounds"
     if key not in surface.cache:
         if surface.n_vertices - surface.n_components < 1:
@@ -544,7 +514,7 @@ def smallest_eigenpairs(surface: Surface, count: int, *,
     values : (count,) ndarray, ascending
     vectors : (n, count) ndarray, M-orthonormal columns
     """
-    surface = _check_surface(surface)
+    surface = check_surface(surface)
     available = surface.n_vertices - surface.n_components
     if int(count) != count or not 1 <= count <= available:
         raise InputError(f"eigenpairs must be an integer in [1, {available}] for {surface.name} "
@@ -603,9 +573,9 @@ def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str =
         ``L^{power} f̃``, M-orthogonal to the kernel: the per-component
         constants are removed from ``f`` first (see :func:`remove_kernel`).
     """
-    surface = _check_surface(surface)
-    a, single = _as_signals(surface, f)
-    _check_choice(method, METHODS, "method")
+    surface = check_surface(surface)
+    a, single = as_signals(surface, f)
+    check_choice(method, METHODS, "method")
     if not np.isfinite(power) or power == 0:
         raise InputError(f"power must be a finite non-zero number, got {power!r}")
     g = remove_kernel(surface, a)
@@ -642,8 +612,8 @@ def riesz(surface: Surface, f, *, gradient: str = "lsq", method: str = "quadratu
     (n, 3) or (k, n, 3) ndarray
         Tangent vectors, one per vertex (and signal).
     """
-    surface = _check_surface(surface)
-    _check_choice(gradient, GRADIENTS, "gradient")
+    surface = check_surface(surface)
+    check_choice(gradient, GRADIENTS, "gradient")
     u = fractional_laplacian(surface, f, -0.5, method, tol, eigenpairs, backend)
     return vertex_gradient(surface, u, gradient)
 
