@@ -375,10 +375,7 @@ class EnvelopeSolver:
     """
 
     def __init__(self, surface: Surface, backend: str | None):
-        self.backend = linalg.default_backend() if backend is None else backend
-        if self.backend not in linalg.available_backends():
-            raise InputError(f"sparse solver backend {self.backend!r} is not available; "
-                             f"installed: {linalg.available_backends()}")
+        self.backend = linalg.check_backend(backend)
         self.energies = _energies(surface)
         self._symbolic: linalg.SymbolicFactorization | None = None
 

@@ -40,8 +40,8 @@ from .params import REQUIRED, Param, did_you_mean, with_defaults
 
 __all__ = ["Slot", "Operation", "OPERATIONS", "operation"]
 
-#: Sparse solver backends of :mod:`hht3d.linalg` (availability is checked when a step runs).
-SOLVERS = linalg.BACKENDS
+#: Sparse solver backends of :data:`hht3d.linalg.SOLVER_BACKENDS` (availability is checked when a step runs).
+SOLVERS = tuple(linalg.SOLVER_BACKENDS)
 
 
 @dataclass(frozen=True)
