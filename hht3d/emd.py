@@ -117,6 +117,7 @@ from .validation import check_choice, check_int, check_signal, check_surface, di
 __all__ = [
     "EMDResult",
     "EMDOptions",
+    "EMD_DEFAULTS",
     "EnvelopeSolver",
     "Sifter",
     "emd",
@@ -158,6 +159,76 @@ _FLAT_RTOL = 1e3 * np.finfo(np.float64).eps
 MASS_FLOOR = 0.1
 #: Neighbouring values closer than this fraction of the signal's range are ties.
 TIE_RTOL = 1e-9
+
+
+# -- options -----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class EMDOptions:
+    """The options of :func:`emd`, checked; the field defaults are :func:`emd`'s defaults.
+
+    Frozen, so that one value describes one decomposition (it is recorded in
+    ``EMDResult.info["options"]``).  The fields and their meaning are the
+    keyword arguments of :func:`emd`; ``backend`` is not an option of the
+    method and is passed apart.
+
+    Raises
+    ------
+    InputError
+        An unknown choice, a negative or non-finite number, a non-integer count.
+
+    Examples
+    --------
+    >>> from hht3d.emd import EMDOptions
+    >>> EMDOptions().sd_threshold
+    0.2
+    >>> EMDOptions(envelope="biharmonic").tensions
+    (0.0, 3.0, 12.0, 48.0, inf)
+    """
+
+    max_imfs: int = 10
+    stopping: str = "sd"
+    sd_threshold: float = 0.2
+    s_number: int = 4
+    fixed_sifts: int = 10
+    max_sifts: int = 50
+    envelope: str = "tension"
+    tension: float = 3.0
+    cancellation_tolerance: float | None = 0.05
+    mean_correction: float | None = 0.6
+    extrema: str = "strict"
+    ring: int = 2
+    ratio: float = 0.8
+    energy_threshold: float = 1e-8
+
+    def __post_init__(self):
+        for name, allowed in (("stopping", STOPPING_RULES), ("envelope", ENVELOPES),
+                              ("extrema", EXTREMA_RULES)):
+            check_choice(getattr(self, name), allowed, f"EMD {name}", suggest=True)
+        check_int("max_imfs", self.max_imfs, 0)
+        for name in ("s_number", "fixed_sifts", "max_sifts", "ring"):
+            check_int(name, getattr(self, name), 1)
+        for name in ("sd_threshold", "energy_threshold", "tension"):
+            nonnegative(name, getattr(self, name))
+        for name in ("cancellation_tolerance", "mean_correction"):
+            if getattr(self, name) is not None:
+                nonnegative(name, getattr(self, name))
+        if not (isinstance(self.ratio, (int, float, np.number)) and 0.5 < self.ratio <= 1):
+            raise InputError(f"EMD option ratio must lie in (0.5, 1], got {self.ratio!r}")
+
+    @property
+    def tensions(self) -> tuple[float, ...]:
+        """The starting tension, then those the cancellation guard may try (module notes)."""
+        start = _start_tension(self.envelope, self.tension)
+        if self.cancellation_tolerance is None:
+            return (start,)
+        return (start, *(t for t in GUARD_TENSIONS if t > start), *((math.inf,) if start < math.inf else ()))
+
+
+#: The defaults of :func:`emd`.
+EMD_DEFAULTS = EMDOptions()
+#: Names of the EMD options, as :func:`emd` takes them.
+_OPTION_NAMES = tuple(EMDOptions.__dataclass_fields__)
 
 
 @dataclass
@@ -340,7 +411,7 @@ def _start_tension(envelope: str, tension: float) -> float:
     return {"tension": float(tension), "biharmonic": 0.0, "harmonic": math.inf}[envelope]
 
 
-def envelope_operator(surface: Surface, envelope: str = "biharmonic", *, tension: float = 3.0,
+def envelope_operator(surface: Surface, envelope: str = "biharmonic", *, tension: float = EMD_DEFAULTS.tension,
                       spacing: float | None = None) -> sp.csr_matrix:
     """The energy matrix ``Q`` of the envelope interpolation (Eqs. 8–11).
 
@@ -405,7 +476,7 @@ class EnvelopeSolver:
 
 
 def envelope_interpolation(surface: Surface, values, constrained, *, envelope: str = "biharmonic",
-                           tension: float = 3.0, backend: str | None = None) -> np.ndarray:
+                           tension: float = EMD_DEFAULTS.tension, backend: str | None = None) -> np.ndarray:
     """Interpolate ``values`` from the ``constrained`` vertices (Eq. 11).
 
     Solves ``min gᵀQg`` subject to ``g_C = values_C`` with ``Q`` from
@@ -443,74 +514,6 @@ def envelope_interpolation(surface: Surface, values, constrained, *, envelope: s
         raise InputError(f"{int((~covered).sum())} connected components of {surface.name} have no "
                          "constrained vertex; their interpolant is undefined")
     return EnvelopeSolver(surface, backend).solve(f, mask, start, extrema_spacing(surface, mask.sum()))
-
-
-# -- options -----------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class EMDOptions:
-    """The options of :func:`emd`, checked; the field defaults are :func:`emd`'s defaults.
-
-    Frozen, so that one value describes one decomposition (it is recorded in
-    ``EMDResult.info["options"]``).  The fields and their meaning are the
-    keyword arguments of :func:`emd`; ``backend`` is not an option of the
-    method and is passed apart.
-
-    Raises
-    ------
-    InputError
-        An unknown choice, a negative or non-finite number, a non-integer count.
-
-    Examples
-    --------
-    >>> from hht3d.emd import EMDOptions
-    >>> EMDOptions().sd_threshold
-    0.2
-    >>> EMDOptions(envelope="biharmonic").tensions
-    (0.0, 3.0, 12.0, 48.0, inf)
-    """
-
-    max_imfs: int = 10
-    stopping: str = "sd"
-    sd_threshold: float = 0.2
-    s_number: int = 4
-    fixed_sifts: int = 10
-    max_sifts: int = 50
-    envelope: str = "tension"
-    tension: float = 3.0
-    cancellation_tolerance: float | None = 0.05
-    mean_correction: float | None = 0.6
-    extrema: str = "strict"
-    ring: int = 2
-    ratio: float = 0.8
-    energy_threshold: float = 1e-8
-
-    def __post_init__(self):
-        for name, allowed in (("stopping", STOPPING_RULES), ("envelope", ENVELOPES),
-                              ("extrema", EXTREMA_RULES)):
-            check_choice(getattr(self, name), allowed, f"EMD {name}", suggest=True)
-        check_int("max_imfs", self.max_imfs, 0)
-        for name in ("s_number", "fixed_sifts", "max_sifts", "ring"):
-            check_int(name, getattr(self, name), 1)
-        for name in ("sd_threshold", "energy_threshold", "tension"):
-            nonnegative(name, getattr(self, name))
-        for name in ("cancellation_tolerance", "mean_correction"):
-            if getattr(self, name) is not None:
-                nonnegative(name, getattr(self, name))
-        if not (isinstance(self.ratio, (int, float, np.number)) and 0.5 < self.ratio <= 1):
-            raise InputError(f"EMD option ratio must lie in (0.5, 1], got {self.ratio!r}")
-
-    @property
-    def tensions(self) -> tuple[float, ...]:
-        """The starting tension, then those the cancellation guard may try (module notes)."""
-        start = _start_tension(self.envelope, self.tension)
-        if self.cancellation_tolerance is None:
-            return (start,)
-        return (start, *(t for t in GUARD_TENSIONS if t > start), *((math.inf,) if start < math.inf else ()))
-
-
-#: Names of the EMD options, as :func:`emd` takes them.
-_OPTION_NAMES = tuple(EMDOptions.__dataclass_fields__)
 
 
 def check_emd_options(options: dict) -> None:
@@ -716,11 +719,14 @@ def _rfg_excess(mean: np.ndarray, amplitude: np.ndarray, mass: np.ndarray) -> fl
 
 # -- decomposition -----------------------------------------------------------------------
 
-def emd(surface: Surface, signal, *, max_imfs: int = 10, stopping: str = "sd",
-        sd_threshold: float = 0.2, s_number: int = 4, fixed_sifts: int = 10, max_sifts: int = 50,
-        envelope: str = "tension", tension: float = 3.0, cancellation_tolerance: float | None = 0.05,
-        mean_correction: float | None = 0.6, extrema: str = "strict", ring: int = 2, ratio: float = 0.8,
-        energy_threshold: float = 1e-8, backend: str | None = None) -> EMDResult:
+def emd(surface: Surface, signal, *, max_imfs: int = EMD_DEFAULTS.max_imfs, stopping: str = EMD_DEFAULTS.stopping,
+        sd_threshold: float = EMD_DEFAULTS.sd_threshold, s_number: int = EMD_DEFAULTS.s_number,
+        fixed_sifts: int = EMD_DEFAULTS.fixed_sifts, max_sifts: int = EMD_DEFAULTS.max_sifts,
+        envelope: str = EMD_DEFAULTS.envelope, tension: float = EMD_DEFAULTS.tension,
+        cancellation_tolerance: float | None = EMD_DEFAULTS.cancellation_tolerance,
+        mean_correction: float | None = EMD_DEFAULTS.mean_correction, extrema: str = EMD_DEFAULTS.extrema,
+        ring: int = EMD_DEFAULTS.ring, ratio: float = EMD_DEFAULTS.ratio,
+        energy_threshold: float = EMD_DEFAULTS.energy_threshold, backend: str | None = None) -> EMDResult:
     """Empirical mode decomposition of a signal on a surface (Sec. 4.1, Eq. 1).
 
     Parameters
@@ -944,7 +950,7 @@ def combine_eemd(surface: Surface, signal, members) -> EMDResult:
 
 
 def eemd(surface: Surface, signal, *, ensemble_size: int = 100, noise_std: float = 0.2,
-         seed: int = 0, max_imfs: int = 10, **emd_options) -> EMDResult:
+         seed: int = 0, max_imfs: int = EMD_DEFAULTS.max_imfs, **emd_options) -> EMDResult:
     """Ensemble EMD (Wu & Huang 2009), the remedy for mode mixing.
 
     Runs :func:`eemd_member` for members ``0 .. ensemble_size − 1`` and

@@ -73,6 +73,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import InputError
+from .options import FREQUENCY_METHODS, RIESZ_DEFAULTS
 from .riesz import vertex_gradient
 from .surface import Surface
 from .validation import check_choice, check_surface
@@ -80,8 +81,6 @@ from .validation import check_choice, check_surface
 __all__ = ["FREQUENCY_METHODS", "instantaneous_frequency", "resolvable_frequency", "resolvable_from_area",
            "ResolutionReport", "resolution_report"]
 
-#: Estimators of Eq. 23 (see the module notes).
-FREQUENCY_METHODS = ("phase", "gradient")
 #: ``|Rf|`` below this fraction of its maximum (per signal) is round-off: a zero of ``Rf``.
 _ZERO_RTOL = 1e-10
 #: Below this fraction of the largest ``|Rf|`` on its ring, a vertex's own Riesz
@@ -96,8 +95,8 @@ _MAX_UNWRAP = 8
 _MIN_RESPONSE = 0.05
 
 
-def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = "phase",
-                            gradient: str = "lsq") -> np.ndarray:
+def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = RIESZ_DEFAULTS.frequency,
+                            gradient: str = RIESZ_DEFAULTS.gradient) -> np.ndarray:
     """Instantaneous frequency ``ω = |∇φ|`` (Eq. 23) of ``k`` signals from their Riesz transforms.
 
     Parameters

@@ -53,6 +53,7 @@ from .emd import emd as _emd
 from .hht import HHTResult
 from .io import load as _load
 from .monogenic import monogenic_from_potential
+from .options import RIESZ_DEFAULTS, RieszOptions
 from .linalg import default_backend
 from .riesz import (combine_quadrature_parts, fractional_laplacian, quadrature_part, quadrature_plan,
                     shift_analysis)
@@ -249,8 +250,9 @@ def _imfs(decomposition) -> object:
     return decomposition.imfs
 
 
-def riesz_potential(surface, imfs, *, method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
-                    backend: str | None = None, riesz_tasks: int | None = None, builder: Builder = _PLAIN):
+def riesz_potential(surface, imfs, *, method: str = RIESZ_DEFAULTS.method, tol: float = RIESZ_DEFAULTS.tol,
+                    eigenpairs: int = RIESZ_DEFAULTS.eigenpairs, backend: str | None = RIESZ_DEFAULTS.backend,
+                    riesz_tasks: int | None = None, builder: Builder = _PLAIN):
     """Lazy ``L^{-1/2}`` of all IMFs, ``(k, n)``.
 
     ``method="quadrature"``: a bounds task, ``riesz_tasks`` shift-group tasks
@@ -268,16 +270,18 @@ def riesz_potential(surface, imfs, *, method: str = "quadrature", tol: float = 1
     return builder.task("riesz_sum", combine_quadrature_parts)(surface, parts)
 
 
-def monogenic(surface, imfs, potential, *, gradient: str = "lsq", frequency: str = "phase",
-              builder: Builder = _PLAIN):
+def monogenic(surface, imfs, potential, *, gradient: str = RIESZ_DEFAULTS.gradient,
+              frequency: str = RIESZ_DEFAULTS.frequency, builder: Builder = _PLAIN):
     """Lazy :func:`hht3d.monogenic.monogenic_from_potential` (Eqs. 21–23)."""
     return builder.task("monogenic", monogenic_from_potential)(surface, imfs, potential, gradient, frequency)
 
 
 def transform(builder: Builder, surface, signal, *, emd_options: dict | None = None,
               ensemble: dict | None = None,
-              gradient: str = "lsq", frequency: str = "phase", method: str = "quadrature", tol: float = 1e-8,
-              eigenpairs: int = 300, backend: str | None = None, riesz_tasks: int | None = None) -> dict:
+              gradient: str = RIESZ_DEFAULTS.gradient, frequency: str = RIESZ_DEFAULTS.frequency,
+              method: str = RIESZ_DEFAULTS.method, tol: float = RIESZ_DEFAULTS.tol,
+              eigenpairs: int = RIESZ_DEFAULTS.eigenpairs, backend: str | None = RIESZ_DEFAULTS.backend,
+              riesz_tasks: int | None = None) -> dict:
     """The tasks of one HHT, by stage name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
 
     ``ensemble``: EEMD options (``ensemble_size``, ``noise_std``, ``seed``)
@@ -292,8 +296,7 @@ def transform(builder: Builder, surface, signal, *, emd_options: dict | None = N
     potential = riesz_potential(surface, imfs, method=method, tol=tol, eigenpairs=eigenpairs,
                                 backend=backend, riesz_tasks=riesz_tasks, builder=builder)
     mono = monogenic(surface, imfs, potential, gradient=gradient, frequency=frequency, builder=builder)
-    riesz_options = {"gradient": gradient, "frequency": frequency, "method": method, "tol": tol,
-                     "eigenpairs": eigenpairs}
+    riesz_options = RieszOptions(gradient, frequency, method, tol, eigenpairs, backend).recorded()
     result = builder.task("hht", HHTResult.from_parts)(surface, signal, decomposition, mono, riesz_options)
     return {"emd": decomposition, "imfs": imfs, "riesz": potential, "monogenic": mono, "hht": result}
 

@@ -19,6 +19,7 @@ from . import io
 from .emd import check_emd_options, emd
 from .errors import InputError
 from .monogenic import MonogenicSignal, monogenic
+from .options import RIESZ_DEFAULTS, RieszOptions
 from .quality import Quality, decomposition_quality
 from .spectrum import HilbertSpectrum
 from .surface import Surface
@@ -125,9 +126,10 @@ class HHTResult:
         return self.surface.to_open3d(self.vertex_attributes())
 
 
-def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: str = "lsq",
-        frequency: str = "phase", method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
-        backend: str | None = None) -> HHTResult:
+def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: str = RIESZ_DEFAULTS.gradient,
+        frequency: str = RIESZ_DEFAULTS.frequency, method: str = RIESZ_DEFAULTS.method,
+        tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
+        backend: str | None = RIESZ_DEFAULTS.backend) -> HHTResult:
     """Hilbert–Huang transform of a surface signal: EMD, then Algorithm 2 on all IMFs.
 
     Parameters
@@ -147,6 +149,7 @@ def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: 
     HHTResult
     """
     check_emd_options(emd_options or {})
+    riesz_options = RieszOptions(gradient, frequency, method, tol, eigenpairs, backend)
     options = {"backend": backend, **(emd_options or {})}
     start = time.perf_counter()
     decomposition = emd(surface, signal, **options)
@@ -154,7 +157,5 @@ def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: 
     mono = monogenic(surface, decomposition.imfs, gradient=gradient, frequency=frequency, method=method,
                      tol=tol, eigenpairs=eigenpairs, backend=backend)
     end = time.perf_counter()
-    riesz_options = {"gradient": gradient, "frequency": frequency, "method": method, "tol": tol,
-                     "eigenpairs": eigenpairs}
-    return HHTResult.from_parts(surface, signal, decomposition, mono, riesz_options,
+    return HHTResult.from_parts(surface, signal, decomposition, mono, riesz_options.recorded(),
                                 {"emd": middle - start, "spectra": end - middle})

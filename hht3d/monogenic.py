@@ -25,9 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
-from .frequency import (FREQUENCY_METHODS, ResolutionReport, instantaneous_frequency, resolution_report,
-                        resolvable_frequency)
-from .riesz import GRADIENTS, fractional_laplacian, vertex_gradient
+from .frequency import ResolutionReport, instantaneous_frequency, resolution_report, resolvable_frequency
+from .options import FREQUENCY_METHODS, GRADIENTS, RIESZ_DEFAULTS
+from .riesz import fractional_laplacian, vertex_gradient
 from .surface import Surface
 from .validation import as_signals, check_choice, check_surface
 
@@ -81,9 +81,10 @@ class MonogenicSignal:
         return resolution_report(self.frequency, self.resolvable, self.amplitude ** 2)
 
 
-def monogenic(surface: Surface, imfs, *, gradient: str = "lsq", frequency: str = "phase",
-              method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
-              backend: str | None = None) -> MonogenicSignal:
+def monogenic(surface: Surface, imfs, *, gradient: str = RIESZ_DEFAULTS.gradient,
+              frequency: str = RIESZ_DEFAULTS.frequency, method: str = RIESZ_DEFAULTS.method,
+              tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
+              backend: str | None = RIESZ_DEFAULTS.backend) -> MonogenicSignal:
     """Monogenic signal of every IMF: Algorithm 2, steps 2–5 (Eqs. 20–23).
 
     ``L^{-1/2}`` of all IMFs comes from one multi-signal call of
@@ -120,8 +121,8 @@ def _signals(surface: Surface, imfs) -> np.ndarray:
     return as_signals(check_surface(surface), imfs, "imfs")[0]
 
 
-def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = "lsq",
-                             frequency: str = "phase") -> MonogenicSignal:
+def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = RIESZ_DEFAULTS.gradient,
+                             frequency: str = RIESZ_DEFAULTS.frequency) -> MonogenicSignal:
     """Monogenic signal from precomputed ``L^{-1/2}`` of the IMFs (Eqs. 16, 20–23).
 
     Parameters

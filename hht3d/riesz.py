@@ -69,6 +69,7 @@ from scipy.special import ellipj, ellipk
 
 from . import linalg
 from .errors import InputError, NumericalError
+from .options import GRADIENTS, METHODS, MIN_TOL, RIESZ_DEFAULTS
 from .surface import Surface
 from .validation import as_signals, check_choice, check_surface
 
@@ -92,14 +93,8 @@ __all__ = [
     "vertex_gradient",
 ]
 
-#: Ways to apply ``L^{-α}``.
-METHODS = ("quadrature", "spectral", "dense")
-#: Vertex gradients: Eq. (17) least squares, or area-averaged per-face FEM gradients.
-GRADIENTS = ("lsq", "fem")
 #: Largest surface the ``"dense"`` method accepts (an n×n float64 eigendecomposition).
 DENSE_MAX_VERTICES = 6000
-#: Tightest quadrature tolerance: below it round-off in the weights dominates.
-MIN_TOL = 1e-13
 #: ``m = SAFETY · λ_1`` so that the lower bound stays below ``λ_1`` despite
 #: eigensolver error.
 SAFETY = 0.9
@@ -373,7 +368,7 @@ def _scalar_error(m: float, mbar: float, sigmas: np.ndarray, weights: np.ndarray
     return float(np.max(np.abs(approx * np.sqrt(lam) - 1.0)))
 
 
-def quadrature_nodes(m: float, mbar: float, tol: float = 1e-8) -> tuple[np.ndarray, np.ndarray]:
+def quadrature_nodes(m: float, mbar: float, tol: float = RIESZ_DEFAULTS.tol) -> tuple[np.ndarray, np.ndarray]:
     """Shifts and weights of ``λ^{-1/2} ≈ Σ_j w_j / (λ + σ_j)`` on ``[m, M̄]``.
 
     With ``t = √m · sn(u)/cn(u)`` (Jacobi functions of parameter
@@ -430,7 +425,7 @@ class QuadraturePlan:
     weights: np.ndarray
 
 
-def quadrature_plan(surface: Surface, tol: float = 1e-8, backend: str | None = None, *,
+def quadrature_plan(surface: Surface, tol: float = RIESZ_DEFAULTS.tol, backend: str | None = None, *,
                     symbolic: linalg.SymbolicFactorization | None = None) -> QuadraturePlan:
     """Bounds and nodes of the ``L^{-1/2}`` quadrature for ``surface`` at ``tol``."""
     bounds = spectral_bounds(surface, backend=backend, symbolic=symbolic)
@@ -540,9 +535,9 @@ def _apply_eigenpairs(surface: Surface, g: np.ndarray, values, vectors, power: f
 
 # -- public API ------------------------------------------------------------------------------
 
-def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str = "quadrature",
-                         tol: float = 1e-8, eigenpairs: int = 300,
-                         backend: str | None = None) -> np.ndarray:
+def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str = RIESZ_DEFAULTS.method,
+                         tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
+                         backend: str | None = RIESZ_DEFAULTS.backend) -> np.ndarray:
     """Apply ``L^{power}`` of the generalized problem ``L φ = λ M φ`` (Eqs. 13, 15, 18).
 
     Parameters
@@ -593,8 +588,9 @@ def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str =
     return out[0] if single else out
 
 
-def riesz(surface: Surface, f, *, gradient: str = "lsq", method: str = "quadrature", tol: float = 1e-8,
-          eigenpairs: int = 300, backend: str | None = None) -> np.ndarray:
+def riesz(surface: Surface, f, *, gradient: str = RIESZ_DEFAULTS.gradient, method: str = RIESZ_DEFAULTS.method,
+          tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
+          backend: str | None = RIESZ_DEFAULTS.backend) -> np.ndarray:
     """Riesz transform ``R f = ∇ L^{-1/2} f`` (Eqs. 14, 16; Eq. 18 with ``method="spectral"``).
 
     Parameters
@@ -618,7 +614,7 @@ def riesz(surface: Surface, f, *, gradient: str = "lsq", method: str = "quadratu
     return vertex_gradient(surface, u, gradient)
 
 
-def vertex_gradient(surface: Surface, u: np.ndarray, kind: str = "lsq") -> np.ndarray:
+def vertex_gradient(surface: Surface, u: np.ndarray, kind: str = RIESZ_DEFAULTS.gradient) -> np.ndarray:
     """Tangent gradients of (n,) or (k, n) per-vertex fields: (n, 3) or (k, n, 3)."""
     grad = surface.gradient(kind)
     n = surface.n_vertices

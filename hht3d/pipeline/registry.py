@@ -30,9 +30,8 @@ from ..apps import reconstruct as _reconstruct
 from ..emd import ENVELOPES, EXTREMA_RULES, STOPPING_RULES
 from ..emd import emd as _emd
 from ..errors import InputError, PipelineError, shown
-from ..frequency import FREQUENCY_METHODS
 from ..io import load as _load
-from ..riesz import GRADIENTS, METHODS, MIN_TOL
+from ..options import FREQUENCY_METHODS, GRADIENTS, METHODS, MIN_TOL
 from ..signals import SIGNALS, check_signal_path
 from ..signals import signal as _signal
 from ..surface import LAPLACIANS
