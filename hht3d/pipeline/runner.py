@@ -37,8 +37,8 @@ def _item(plan: Pipeline, source: Path, paths: list[Path]):
     results, parts = {}, {}
     for step in plan.steps:
         builder = _guarded(source, lambda task, s=step: s.id if task in (s.op.name, s.id) else f"{s.id} ({task})")
-        inputs = {slot: source if ref == FILE else results[ref] for slot, ref in step.refs.items()}
-        tasks = step.op.build(builder, inputs, dict(step.params))
+        inputs = {slot: str(source) if ref == FILE else results[ref] for slot, ref in step.refs.items()}
+        tasks = step.op.tasks(builder, inputs, dict(step.params))
         results[step.id] = tasks["result"]
         parts.update({t.key: t for t in tasks.values()})
     writes = []
