@@ -19,7 +19,8 @@ from .params import Param
 from .plan import Execution, Output, Pipeline, Step
 from .registry import OPERATIONS, Operation, Slot
 from .runner import failures, pipeline_graph, run_pipeline
-from .schema import VERSION, apply_overrides, builtin_models, load_pipeline, parse_pipeline
+from .document import apply_overrides
+from .schema import VERSION, builtin_models, load_pipeline, parse_pipeline
 
 __all__ = [
     "VERSION", "load_pipeline", "parse_pipeline", "apply_overrides", "builtin_models",
