@@ -197,11 +197,11 @@ class Recorder:
 
     def instrument(self) -> None:
         """Wrap the solver phases of every backend and a few sub-steps (benchmark only)."""
-        import importlib
+        import hht3d.emd as emd_module
+        import hht3d.linalg as linalg
+        import hht3d.monogenic as mono_module
+        import hht3d.riesz as riesz
 
-        # the package namespace re-exports functions named like the modules: import the modules
-        linalg, riesz, emd_module, mono_module = (importlib.import_module(f"hht3d.{m}")
-                                                  for m in ("linalg", "riesz", "emd", "monogenic"))
         recorder = self
         backends = linalg.SOLVER_BACKENDS
         original = backends["pardiso"].pattern.run
