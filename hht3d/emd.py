@@ -518,9 +518,10 @@ def envelope_interpolation(surface: Surface, values, constrained, *, envelope: s
 
 def check_emd_options(options: dict) -> None:
     """Raise :class:`InputError` for an option :func:`emd` does not take (``"backend"`` included)."""
+    known = (*_OPTION_NAMES, "backend")
     for key in options:
-        if key not in (*_OPTION_NAMES, "backend"):
-            raise InputError(f"unknown EMD option {key!r}{did_you_mean(str(key), (*_OPTION_NAMES, 'backend'), listing=False)}; "
+        if key not in known:
+            raise InputError(f"unknown EMD option {key!r}{did_you_mean(str(key), known, listing=False)}; "
                              f"EMD takes {', '.join(_OPTION_NAMES)} and backend")
 
 
@@ -819,6 +820,21 @@ def emd(surface: Surface, signal, *, max_imfs: int = EMD_DEFAULTS.max_imfs, stop
     ------
     InputError
         Wrong signal length, non-finite values or invalid options.
+
+    Examples
+    --------
+    The IMFs and the residue add up to the signal (Eq. 1):
+
+    >>> import numpy as np
+    >>> from hht3d import data_path, emd, load
+    >>> from hht3d.signals import mean_curvature
+    >>> surface = load(data_path("spot.ply"))
+    >>> signal = mean_curvature(surface)
+    >>> result = emd(surface, signal, max_imfs=2)
+    >>> result.imfs.shape
+    (2, 2930)
+    >>> np.allclose(result.imfs.sum(axis=0) + result.residue, signal)
+    True
     """
     options = EMDOptions(max_imfs, stopping, sd_threshold, s_number, fixed_sifts, max_sifts, envelope, tension,
                        cancellation_tolerance, mean_correction, extrema, ring, ratio, energy_threshold)
@@ -972,6 +988,17 @@ def eemd(surface: Surface, signal, *, ensemble_size: int = 100, noise_std: float
         Passed to every member.
     **emd_options
         Further :func:`emd` options.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d import data_path, eemd, load
+    >>> from hht3d.signals import mean_curvature
+    >>> surface = load(data_path("spot.ply"))
+    >>> signal = mean_curvature(surface)
+    >>> result = eemd(surface, signal, ensemble_size=4, max_imfs=2, seed=1)
+    >>> result.n_imfs, np.allclose(result.imfs.sum(axis=0) + result.residue, signal)
+    (2, True)
     """
     check_int("ensemble_size", ensemble_size, 1)
     f = _as_signal(surface, signal)

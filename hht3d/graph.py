@@ -214,7 +214,8 @@ def _quadrature_part(surface: Surface, f, plan, group: int, groups: int, backend
 _PLAIN = Builder()
 
 
-def mirror(func, build=None, *, tasks: str = "one task", extras: tuple[inspect.Parameter, ...] = ()):
+def mirror(func, build=None, *, tasks: str = "one task", extras: tuple[inspect.Parameter, ...] = (),
+           examples: str = ""):
     """The lazy twin of the core function ``func``: its name, signature and docstring; a ``Delayed`` result.
 
     Parameters
@@ -230,6 +231,8 @@ def mirror(func, build=None, *, tasks: str = "one task", extras: tuple[inspect.P
     extras : tuple of inspect.Parameter
         Keyword-only parameters of the twin beyond ``func``'s (scheduling
         options such as ``riesz_tasks``), passed on to ``build``.
+    examples : str
+        The twin's Examples section (``func``'s own is left out: it is eager).
 
     Returns
     -------
@@ -252,6 +255,8 @@ def mirror(func, build=None, *, tasks: str = "one task", extras: tuple[inspect.P
     lazy.__module__ = __name__
     eager = inspect.cleandoc(func.__doc__ or "").split("\nExamples\n--------")[0].rstrip()
     lazy.__doc__ = f"Lazy :func:`{func.__module__}.{func.__name__}`: {tasks}.\n\n{eager}\n"
+    if examples:
+        lazy.__doc__ += f"\nExamples\n--------\n{inspect.cleandoc(examples)}\n"
     return lazy
 
 
@@ -388,7 +393,25 @@ def _hht_tasks(builder: Builder, surface, signal, **options):
 
 hht = mirror(_hht, _hht_tasks, extras=(_ENSEMBLE, _RIESZ_TASKS),
              tasks="the tasks of :func:`transform` (``ensemble``: EEMD options, e.g. "
-                   "``{'ensemble_size': 20, 'noise_std': 0.2, 'seed': 0}``, to decompose by EEMD)")
+                   "``{'ensemble_size': 20, 'noise_std': 0.2, 'seed': 0}``, to decompose by EEMD)",
+             examples="""
+    The lazy result equals the eager one; only the order in which the shift
+    groups' parts of ``L^{-1/2}`` are summed differs:
+
+    >>> import numpy as np
+    >>> import hht3d
+    >>> from hht3d import data_path, graph
+    >>> from hht3d.signals import mean_curvature
+    >>> surface = hht3d.load(data_path("spot.ply"))
+    >>> lazy = graph.hht(graph.from_surface(surface), mean_curvature(surface), emd_options={"max_imfs": 2},
+    ...                  riesz_tasks=2)
+    >>> (result,) = graph.compute(lazy, scheduler="synchronous", progress=False)
+    >>> eager = hht3d.hht(surface, mean_curvature(surface), emd_options={"max_imfs": 2})
+    >>> np.array_equal(result.imfs, eager.imfs)
+    True
+    >>> np.allclose(result.monogenic.riesz, eager.monogenic.riesz, rtol=0, atol=1e-10)
+    True
+    """)
 
 
 def _save(result, path) -> Path:

@@ -92,6 +92,13 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
     ------
     InputError
         Missing or unreadable file, unknown extension, empty or invalid geometry.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> surface = load(data_path("spot.ply"))
+    >>> surface.n_vertices, len(surface.faces), surface.is_mesh
+    (2930, 5856, True)
     """
     path = Path(path)
     try:

@@ -567,6 +567,19 @@ def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str =
     ndarray, shape of ``f``
         ``L^{power} f̃``, M-orthogonal to the kernel: the per-component
         constants are removed from ``f`` first (see :func:`remove_kernel`).
+
+    Examples
+    --------
+    On the unit sphere ``z`` is a spherical harmonic of degree 1, an
+    eigenfunction with ``λ = l(l + 1) = 2``, so ``L^{-1/2} z = z / √2``:
+
+    >>> import numpy as np
+    >>> from hht3d import data_path, fractional_laplacian, load
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> z = sphere.vertices[:, 2]
+    >>> u = fractional_laplacian(sphere, z)
+    >>> bool(np.abs(np.sqrt(2) * u - z).max() < 1e-3)
+    True
     """
     surface = check_surface(surface)
     a, single = as_signals(surface, f)
@@ -607,6 +620,21 @@ def riesz(surface: Surface, f, *, gradient: str = RIESZ_DEFAULTS.gradient, metho
     -------
     (n, 3) or (k, n, 3) ndarray
         Tangent vectors, one per vertex (and signal).
+
+    Examples
+    --------
+    The Riesz transform is an isometry: ``∫|Rf|² dA = ∫f̃² dA`` for the signal
+    without its mean, ``f̃`` (with FEM gradients up to their vertex averaging):
+
+    >>> import numpy as np
+    >>> from hht3d import data_path, load, riesz
+    >>> from hht3d.riesz import remove_kernel
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> f = sphere.vertices[:, 0] * sphere.vertices[:, 1] + sphere.vertices[:, 2]
+    >>> rf = riesz(sphere, f, gradient="fem")
+    >>> area, f_tilde = sphere.mass_diagonal, remove_kernel(sphere, f)
+    >>> round(float(area @ (rf ** 2).sum(axis=1) / (area @ f_tilde ** 2)), 2)
+    1.0
     """
     surface = check_surface(surface)
     check_choice(gradient, GRADIENTS, "gradient")

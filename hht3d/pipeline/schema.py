@@ -169,7 +169,8 @@ class Validator:
     >>> add_implicit_load(document)
     >>> Validator("demo.yaml").pipeline(document)
     Traceback (most recent call last):
-    hht3d.errors.PipelineError: demo.yaml:3: step 'signal' (op signal): parameter kind must be one of ...; got 'mean_curvatur' (a string); did you mean 'mean_curvature'?
+    hht3d.errors.PipelineError: demo.yaml:3: step 'signal' (op signal): parameter kind must be one of
+    ...; got 'mean_curvatur' (a string); did you mean 'mean_curvature'?
     >>> document["steps"][1]["params"]["kind"] = "mean_curvature"
     >>> [step.id for step in Validator("demo.yaml").pipeline(document).steps]
     ['load', 'signal']
