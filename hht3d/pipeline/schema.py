@@ -62,15 +62,17 @@ from .params import Param, did_you_mean
 from .plan import FILE, PLACEHOLDERS, Execution, Output, Pipeline, Step
 from .registry import MAX_SEED, OPERATIONS, operation
 
-__all__ = ["VERSION", "EXECUTION", "load_pipeline", "parse_pipeline", "builtin_models", "Validator"]
+__all__ = ["VERSION", "EXECUTION", "TOP_KEYS", "STEP_KEYS", "OUTPUTS_KEYS", "FILE_KEYS", "load_pipeline",
+           "parse_pipeline", "builtin_models", "Validator"]
 
 #: The schema version this package reads.
 VERSION = 1
 
-_TOP = ("version", "name", "execution", "inputs", "steps", "outputs")
-_STEP = ("id", "op", "from", "params")
-_OUTPUTS = ("folder", "summary", "files")
-_FILE = ("from", "path", "format")
+#: The keys of a pipeline, of a step, of the outputs block and of an output file.
+TOP_KEYS = ("version", "name", "execution", "inputs", "steps", "outputs")
+STEP_KEYS = ("id", "op", "from", "params")
+OUTPUTS_KEYS = ("folder", "summary", "files")
+FILE_KEYS = ("from", "path", "format")
 #: Parameters of the ``execution`` block (also the checks of the CLI's --scheduler and --workers).
 EXECUTION = (
     Param("scheduler", "choice", "Dask scheduler", default="threads", choices=SCHEDULERS),
@@ -182,7 +184,7 @@ class Validator:
         self._vertex_counts: dict[Path, int] | None = None
 
     def pipeline(self, doc) -> Pipeline:
-        _known_keys(doc, _TOP, "the pipeline")
+        _known_keys(doc, TOP_KEYS, "the pipeline")
         self._version(doc)
         name = doc.get("name", Path(self.source).stem)
         if not isinstance(name, str) or not name:
@@ -255,7 +257,7 @@ class Validator:
         return _ordered(steps, entries)
 
     def _step(self, entry, execution: Execution):
-        _known_keys(entry, _STEP, "a step")
+        _known_keys(entry, STEP_KEYS, "a step")
         where = at(entry, "op")
         if "op" not in entry:
             raise PipelineError(f"{at(entry)}: a step needs an op (`hht3d ops` lists them)")
@@ -372,7 +374,7 @@ class Validator:
         if not isinstance(block, dict) or not block.get("files"):
             raise PipelineError(f"{at(doc, 'outputs') if 'outputs' in doc else self.source}: outputs must be a "
                                 "mapping with files: a list of {from: STEP, path: PATTERN} entries")
-        _known_keys(block, _OUTPUTS, "outputs")
+        _known_keys(block, OUTPUTS_KEYS, "outputs")
         folder = block.get("folder", "out")
         if not isinstance(folder, str) or not folder:
             raise PipelineError(f"{at(block, 'folder')}: outputs.folder must be a path, got {shown(folder)}")
@@ -407,9 +409,9 @@ class Validator:
             raise PipelineError(f"{context}: format {name} writes {fmt.suffix} files; end the path with {fmt.suffix}")
         known = [p.name for p in fmt.params]
         for key in entry:
-            if key not in _FILE and key not in known:
+            if key not in FILE_KEYS and key not in known:
                 raise PipelineError(f"{at(entry, key)}: output {shown(path)}: unknown option {shown(key)} for format "
-                                    f"{name}{did_you_mean(key, [*_FILE, *known])}")
+                                    f"{name}{did_you_mean(key, [*FILE_KEYS, *known])}")
         options = {p.name: p.check(entry[p.name], f"{at(entry, p.name)}: output {shown(path)}") if p.name in entry
                    else p.default for p in fmt.params}
         check_options(options, context)
