@@ -30,8 +30,7 @@ frequency of both routes and an independent spectral centroid:
 ``L φ = λ M φ`` (icosphere) or
 the DCT-I wavenumbers ``π|(i, j)|`` (grid); the RMS wavenumber too.  Target:
 means strictly decreasing with the IMF index, each adjacent ratio within 25%
-of the centroid ratio.  The EMD is being changed in parallel (envelopes,
-stopping): these numbers are for the EMD of this commit.
+of the centroid ratio.
 
 Part 4 — cost on igea (134k vertices).  The Riesz step ``riesz()`` (spectral
 bounds, elliptic quadrature at tol 1e-8, vertex gradients) of 7 and 15
@@ -318,8 +317,8 @@ def markdown(records: dict) -> str:
         lines += ["## White noise: IMF mean frequencies", "",
                   "Energy-weighted mean frequency per IMF and adjacent ratios IMF_i / IMF_{i+1}, against the "
                   "spectral-centroid ratio of an independent transform.  Target: strictly decreasing, each "
-                  "ratio within 25% of the centroid ratio.  EMD of this commit (the EMD is being changed in "
-                  "parallel).", ""]
+                  "ratio within 25% of the centroid ratio.  EMD with its defaults (tension envelopes, cancellation "
+                  "guard, local-mean correction).", ""]
         rows = []
         for label, c in noise.items():
             rows.append([label, "centroid (reference)", " / ".join(_f(x, 1) for x in c["centroid"]),

@@ -20,6 +20,7 @@ import csv
 import io as _stdio
 import json
 import time
+import warnings
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
@@ -30,7 +31,7 @@ from . import graph
 from .errors import InputError, one_line
 from .hht import HHTResult
 from .io import atomic_path, check_output_paths, read_npz_shapes, read_ply_header, resolve_inputs
-from .quality import decomposition_quality
+from .quality import QualityWarning, decomposition_quality
 from .scheduling import compute
 
 __all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary",
@@ -79,7 +80,9 @@ class Guarded:
             return failed
         start = time.perf_counter()
         try:
-            value = self.func(*args, **kwargs)
+            with warnings.catch_warnings():  # the summary row reports the quality figures instead
+                warnings.simplefilter("ignore", QualityWarning)
+                value = self.func(*args, **kwargs)
         except Exception as exc:  # a dataset item must never take the others down
             return Failure(self.step, self.source, one_line(f"{type(exc).__name__}: {exc}", MAX_ERROR))
         return _Timed(value, time.perf_counter() - start)
