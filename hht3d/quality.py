@@ -133,6 +133,9 @@ def decomposition_quality(surface: Surface, signal, imfs, residue) -> Quality:
     r = np.asarray(residue, dtype=np.float64)
     if s.shape != (surface.n_vertices,) or r.shape != s.shape:
         raise InputError(f"signal and residue must have shape ({surface.n_vertices},), got {s.shape} and {r.shape}")
+    scale = max(float(np.abs(s).max(initial=0.0)), float(np.abs(f).max(initial=0.0)), float(np.abs(r).max()))
+    if scale > 0:  # every figure is scale-free; this keeps signals near 1e±200 from overflowing
+        s, f, r = s / scale, f / scale, r / scale
     s_tilde = fluctuation(surface, s)
     parts = np.vstack([f, fluctuation(surface, r)[None]])
     mass = surface.mass_diagonal
