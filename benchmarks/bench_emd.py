@@ -60,28 +60,36 @@ def _replay_first_imf(surface, signal, backend: str) -> dict:
     import scipy.sparse.linalg as spla
 
     from hht3d import linalg
-    from hht3d.emd import _EnvelopeSolver, _Options, _Sifter, _weighted_norm2
+    from hht3d.emd import EMDOptions, EnvelopeSolver, Sifter, extrema_spacing
 
-    options = _Options(10, "sd", 0.2, 4, 10, 50, "biharmonic", "strict", 2, 0.8, 1e-8)
-    sifter = _Sifter(surface, options, backend)
-    superlu = _EnvelopeSolver(surface, "biharmonic", "superlu")
-    q = sifter.solver.q.tocsc()
+    options = EMDOptions(envelope="biharmonic")
+    sifter = Sifter(surface, options, backend)
+    superlu = EnvelopeSolver(surface, "superlu")
+    energies = sifter.solver.energies
+    q = energies.matrix(energies.data(0.0, 1.0))
     t0 = time.perf_counter()
-    sifter.solver._symbolic = linalg.SymbolicFactorization(sifter.solver.q, backend)
+    linalg.SymbolicFactorization(q, backend)  # what the first envelope of `ours` analyses once
     times = {"symbolic": time.perf_counter() - t0, "ours": 0.0, "superlu_pattern": 0.0, "baseline": 0.0}
+    q = q.tocsc()
     worst = 0.0
     envelopes = 0
     h = signal
+
+    def energy(f):
+        return float(np.dot(sifter.mass * f, f))
+
     while True:
         is_max, is_min, passive = sifter.extrema(h)
         if min(is_max.sum(), is_min.sum()) < 2:
             break
         means = []
-        for constrained in (is_max | passive, is_min | passive):
+        for extrema in (is_max, is_min):
+            constrained = extrema | passive
+            spacing = extrema_spacing(surface, extrema.sum())
             t0 = time.perf_counter()
-            g = sifter.solver.solve(h, constrained)
+            g = sifter.solver.solve(h, constrained, 0.0, spacing)
             t1 = time.perf_counter()
-            superlu.solve(h, constrained)
+            superlu.solve(h, constrained, 0.0, spacing)
             t2 = time.perf_counter()
             free = ~constrained
             q_free = q[free]
@@ -94,7 +102,7 @@ def _replay_first_imf(surface, signal, backend: str) -> dict:
             envelopes += 1
             means.append(g)
         mean = 0.5 * (means[0] + means[1])
-        sd = _weighted_norm2(mean, sifter.mass) / _weighted_norm2(h, sifter.mass)
+        sd = energy(mean) / energy(h)
         h = h - mean
         if sd < options.sd_threshold:
             break

@@ -181,7 +181,7 @@ class Recorder:
             start, cpu_start = time.perf_counter(), time.process_time()
             factor = factorize(pattern, a)
             recorder._count("factorization", start, cpu_start)
-            solve = factor._solve
+            solve = factor.solve
 
             def timed_solve(b):
                 start, cpu_start = time.perf_counter(), time.process_time()
@@ -190,20 +190,21 @@ class Recorder:
                 recorder._entry()["solve_columns"] += 1 if b.ndim == 1 else b.shape[1]
                 return out
 
-            factor._solve = timed_solve
+            factor.solve = timed_solve
             return factor
 
         impl.__init__, impl.factorize = timed_init, timed_factorize
 
     def instrument(self) -> None:
         """Wrap the solver phases of every backend and a few sub-steps (benchmark only)."""
-        import importlib
+        import hht3d.emd as emd_module
+        import hht3d.linalg as linalg
+        import hht3d.monogenic as mono_module
+        import hht3d.riesz as riesz
 
-        # the package namespace re-exports functions named like the modules: import the modules
-        linalg, riesz, emd_module, mono_module = (importlib.import_module(f"hht3d.{m}")
-                                                  for m in ("linalg", "riesz", "emd", "monogenic"))
         recorder = self
-        original = linalg._PardisoPattern._run
+        backends = linalg.SOLVER_BACKENDS
+        original = backends["pardiso"].pattern.run
         names = {11: "analysis", 22: "factorization", 33: "solve"}
 
         def run(pattern, phase, upper, b):
@@ -214,14 +215,14 @@ class Recorder:
             if phase == 33:
                 entry["solve_columns"] += 1 if b.ndim == 1 else b.shape[1]
             else:
-                ip = pattern._solver.iparm
+                ip = pattern.solver.iparm
                 entry["peak_kb"] = max(entry["peak_kb"], int(ip[14]), int(ip[15]) + int(ip[16]))
                 entry["factor_nnz"] = max(entry["factor_nnz"], int(ip[17]))
                 entry["n"] = pattern.n
             return out
 
-        linalg._PardisoPattern._run = run
-        for impl in (linalg._CholmodPattern, linalg._SuperLUPattern):
+        backends["pardiso"].pattern.run = run
+        for impl in (backends["cholmod"].pattern, backends["superlu"].pattern):
             self._instrument_backend(impl)
         riesz.spectral_bounds = self.timed("rt_bounds", riesz.spectral_bounds, "bounds")
         mono_module.monogenic_from_potential = self.timed("rt_quantities", mono_module.monogenic_from_potential)

@@ -16,10 +16,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from importlib import resources
 from pathlib import Path
 
 from .errors import HHT3DError, PipelineError, one_line, shown
+from .io import data_path
 from .scheduling import SCHEDULERS
 from .render import UP_AXES, VIEWS
 from .viewer import VERTEX_BUDGET
@@ -34,12 +34,12 @@ MAX_MESSAGE = 2000
 
 def demo_model_path() -> Path:
     """Path of the shipped demo model."""
-    return Path(str(resources.files("hht3d") / "data" / DEMO_MODEL))
+    return data_path(DEMO_MODEL)
 
 
 def demo_pipeline_path() -> Path:
     """Path of the shipped demo pipeline."""
-    return Path(str(resources.files("hht3d") / "data" / DEMO_PIPELINE))
+    return data_path(DEMO_PIPELINE)
 
 
 def _plan(path, overrides):
@@ -156,6 +156,19 @@ def _view(args) -> int:
     return 0
 
 
+def _schema(args) -> int:
+    from .io import atomic_path
+    from .pipeline.json_schema import schema_text
+
+    if args.output is None:
+        print(schema_text(), end="")
+        return 0
+    with atomic_path(Path(args.output)) as tmp:
+        Path(tmp).write_text(schema_text(), encoding="utf-8")
+    print(args.output)
+    return 0
+
+
 def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -> None:
     parser.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
                         help="override a pipeline value, e.g. steps.hht.params.max_imfs=4 or inputs=scans/ "
@@ -187,6 +200,11 @@ def build_parser() -> argparse.ArgumentParser:
     ops = sub.add_parser("ops", help="list the pipeline operations, their parameters and defaults")
     ops.add_argument("op", nargs="*", help="only these operations")
     ops.set_defaults(run=_ops)
+
+    schema = sub.add_parser("schema", help="print the JSON Schema of pipeline files (for editors; "
+                                           "shipped as hht3d/data/pipeline.schema.json)")
+    schema.add_argument("--output", default=None, help="write it to this file instead")
+    schema.set_defaults(run=_schema)
 
     info = sub.add_parser("info", help="vertices, faces, components, boundary, manifoldness, bounding box; "
                                        "--backends: the sparse solver that will run and why")

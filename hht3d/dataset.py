@@ -271,7 +271,37 @@ def write_summary(rows: list[ItemSummary], out_dir) -> list[Path]:
 
 def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int | None = None,
                 address: str | None = None, progress: bool = True, **options) -> list[ItemSummary]:
-    """Build :func:`dataset_graph`, compute it, write the summary, return its rows."""
+    """Build :func:`dataset_graph`, compute it, write the summary, return its rows.
+
+    Parameters
+    ----------
+    inputs, out_dir
+        As for :func:`dataset_graph`.
+    scheduler, workers, address, progress
+        As for :func:`hht3d.scheduling.compute`.
+    **options
+        Those of :func:`dataset_graph` (``signal``, ``formats``, ``resume``,
+        ``load_options``) and the HHT options of :func:`hht3d.graph.transform`.
+
+    Returns
+    -------
+    list of ItemSummary
+        One per input file; a failed file is a row with ``status="failed"``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d import data_path
+    >>> from hht3d.dataset import run_dataset
+    >>> out = Path(tempfile.mkdtemp())
+    >>> rows = run_dataset([data_path("spot.ply")], out, scheduler="synchronous", progress=False,
+    ...                    emd_options={"max_imfs": 2})
+    >>> [(row.status, row.vertices, row.imfs) for row in rows]
+    [('ok', 2930, 2)]
+    >>> sorted(path.name for path in out.iterdir())
+    ['spot_hht.npz', 'spot_hht.ply', 'summary.csv', 'summary.json']
+    """
     (rows,) = compute(dataset_graph(inputs, out_dir, **options), scheduler=scheduler, workers=workers,
                       address=address, progress=progress)
     write_summary(rows, out_dir)

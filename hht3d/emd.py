@@ -100,8 +100,6 @@ residue.
 """
 from __future__ import annotations
 
-import difflib
-import inspect
 import math
 import time
 import warnings
@@ -113,11 +111,15 @@ import scipy.sparse as sp
 from . import linalg
 from .errors import InputError, NumericalError
 from .quality import QualityWarning, Quality, decomposition_quality, fluctuation
-from .signals import check_signal
 from .surface import Surface
+from .validation import check_choice, check_int, check_signal, check_surface, did_you_mean, nonnegative
 
 __all__ = [
     "EMDResult",
+    "EMDOptions",
+    "EMD_DEFAULTS",
+    "EnvelopeSolver",
+    "Sifter",
     "emd",
     "eemd",
     "eemd_member",
@@ -157,6 +159,76 @@ _FLAT_RTOL = 1e3 * np.finfo(np.float64).eps
 MASS_FLOOR = 0.1
 #: Neighbouring values closer than this fraction of the signal's range are ties.
 TIE_RTOL = 1e-9
+
+
+# -- options -----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class EMDOptions:
+    """The options of :func:`emd`, checked; the field defaults are :func:`emd`'s defaults.
+
+    Frozen, so that one value describes one decomposition (it is recorded in
+    ``EMDResult.info["options"]``).  The fields and their meaning are the
+    keyword arguments of :func:`emd`; ``backend`` is not an option of the
+    method and is passed apart.
+
+    Raises
+    ------
+    InputError
+        An unknown choice, a negative or non-finite number, a non-integer count.
+
+    Examples
+    --------
+    >>> from hht3d.emd import EMDOptions
+    >>> EMDOptions().sd_threshold
+    0.2
+    >>> EMDOptions(envelope="biharmonic").tensions
+    (0.0, 3.0, 12.0, 48.0, inf)
+    """
+
+    max_imfs: int = 10
+    stopping: str = "sd"
+    sd_threshold: float = 0.2
+    s_number: int = 4
+    fixed_sifts: int = 10
+    max_sifts: int = 50
+    envelope: str = "tension"
+    tension: float = 3.0
+    cancellation_tolerance: float | None = 0.05
+    mean_correction: float | None = 0.6
+    extrema: str = "strict"
+    ring: int = 2
+    ratio: float = 0.8
+    energy_threshold: float = 1e-8
+
+    def __post_init__(self):
+        for name, allowed in (("stopping", STOPPING_RULES), ("envelope", ENVELOPES),
+                              ("extrema", EXTREMA_RULES)):
+            check_choice(getattr(self, name), allowed, f"EMD {name}", suggest=True)
+        check_int("max_imfs", self.max_imfs, 0)
+        for name in ("s_number", "fixed_sifts", "max_sifts", "ring"):
+            check_int(name, getattr(self, name), 1)
+        for name in ("sd_threshold", "energy_threshold", "tension"):
+            nonnegative(name, getattr(self, name))
+        for name in ("cancellation_tolerance", "mean_correction"):
+            if getattr(self, name) is not None:
+                nonnegative(name, getattr(self, name))
+        if not (isinstance(self.ratio, (int, float, np.number)) and 0.5 < self.ratio <= 1):
+            raise InputError(f"EMD option ratio must lie in (0.5, 1], got {self.ratio!r}")
+
+    @property
+    def tensions(self) -> tuple[float, ...]:
+        """The starting tension, then those the cancellation guard may try (module notes)."""
+        start = _start_tension(self.envelope, self.tension)
+        if self.cancellation_tolerance is None:
+            return (start,)
+        return (start, *(t for t in GUARD_TENSIONS if t > start), *((math.inf,) if start < math.inf else ()))
+
+
+#: The defaults of :func:`emd`.
+EMD_DEFAULTS = EMDOptions()
+#: Names of the EMD options, as :func:`emd` takes them.
+_OPTION_NAMES = tuple(EMDOptions.__dataclass_fields__)
 
 
 @dataclass
@@ -242,8 +314,7 @@ def local_extrema(surface: Surface, f, *, rule: str = "strict", ring: int | None
 def _extrema_masks(surface: Surface, f: np.ndarray, rule: str, ring: int | None,
                    ratio: float, tie_rtol: float = TIE_RTOL) -> tuple[np.ndarray, np.ndarray]:
     """Boolean maximum and minimum masks (see :func:`local_extrema`)."""
-    if rule not in EXTREMA_RULES:
-        raise InputError(f"unknown extrema rule {rule!r}; choose one of {EXTREMA_RULES}")
+    check_choice(rule, EXTREMA_RULES, "extrema rule")
     if rule == "strict":
         ring, ratio = (1 if ring is None else ring), 1.0
     else:
@@ -336,12 +407,11 @@ def _energies(surface: Surface) -> _EnvelopeEnergies:
 
 
 def _start_tension(envelope: str, tension: float) -> float:
-    if envelope not in ENVELOPES:
-        raise InputError(f"unknown envelope {envelope!r}; choose one of {ENVELOPES}")
+    check_choice(envelope, ENVELOPES, "envelope")
     return {"tension": float(tension), "biharmonic": 0.0, "harmonic": math.inf}[envelope]
 
 
-def envelope_operator(surface: Surface, envelope: str = "biharmonic", *, tension: float = 3.0,
+def envelope_operator(surface: Surface, envelope: str = "biharmonic", *, tension: float = EMD_DEFAULTS.tension,
                       spacing: float | None = None) -> sp.csr_matrix:
     """The energy matrix ``Q`` of the envelope interpolation (Eqs. 8–11).
 
@@ -360,14 +430,14 @@ def envelope_operator(surface: Surface, envelope: str = "biharmonic", *, tension
     spacing : float, optional
         ``d`` of ``"tension"`` (e.g. :func:`extrema_spacing`); required for it.
     """
-    start = _start_tension(envelope, _nonnegative("tension", tension))
+    start = _start_tension(envelope, nonnegative("tension", tension))
     if envelope == "tension" and spacing is None:
         raise InputError("the tension envelope needs the extrema spacing d (see extrema_spacing)")
-    energies = _energies(_check_surface(surface))
+    energies = _energies(check_surface(surface))
     return energies.matrix(energies.data(start, spacing or 1.0))
 
 
-class _EnvelopeSolver:
+class EnvelopeSolver:
     """Constrained envelope solves sharing one symbolic factorization.
 
     The fill-reducing ordering and symbolic analysis of the shared pattern
@@ -376,10 +446,7 @@ class _EnvelopeSolver:
     """
 
     def __init__(self, surface: Surface, backend: str | None):
-        self.backend = linalg.default_backend() if backend is None else backend
-        if self.backend not in linalg.available_backends():
-            raise InputError(f"sparse solver backend {self.backend!r} is not available; "
-                             f"installed: {linalg.available_backends()}")
+        self.backend = linalg.check_backend(backend)
         self.energies = _energies(surface)
         self._symbolic: linalg.SymbolicFactorization | None = None
 
@@ -409,7 +476,7 @@ class _EnvelopeSolver:
 
 
 def envelope_interpolation(surface: Surface, values, constrained, *, envelope: str = "biharmonic",
-                           tension: float = 3.0, backend: str | None = None) -> np.ndarray:
+                           tension: float = EMD_DEFAULTS.tension, backend: str | None = None) -> np.ndarray:
     """Interpolate ``values`` from the ``constrained`` vertices (Eq. 11).
 
     Solves ``min gᵀQg`` subject to ``g_C = values_C`` with ``Q`` from
@@ -433,7 +500,7 @@ def envelope_interpolation(surface: Surface, values, constrained, *, envelope: s
     (n,) ndarray
     """
     f = _as_signal(surface, values)
-    start = _start_tension(envelope, _nonnegative("tension", tension))
+    start = _start_tension(envelope, nonnegative("tension", tension))
     c = np.asarray(constrained)
     if c.dtype == bool and c.shape != f.shape:
         raise InputError(f"constrained mask has shape {c.shape}; expected {f.shape}")
@@ -446,91 +513,20 @@ def envelope_interpolation(surface: Surface, values, constrained, *, envelope: s
     if not covered.all():
         raise InputError(f"{int((~covered).sum())} connected components of {surface.name} have no "
                          "constrained vertex; their interpolant is undefined")
-    return _EnvelopeSolver(surface, backend).solve(f, mask, start, extrema_spacing(surface, mask.sum()))
-
-
-# -- options -----------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class _Options:
-    max_imfs: int = 10
-    stopping: str = "sd"
-    sd_threshold: float = 0.2
-    s_number: int = 4
-    fixed_sifts: int = 10
-    max_sifts: int = 50
-    envelope: str = "tension"
-    tension: float = 3.0
-    cancellation_tolerance: float | None = 0.05
-    mean_correction: float | None = 0.6
-    extrema: str = "strict"
-    ring: int = 2
-    ratio: float = 0.8
-    energy_threshold: float = 1e-8
-
-    def __post_init__(self):
-        for name, allowed in (("stopping", STOPPING_RULES), ("envelope", ENVELOPES),
-                              ("extrema", EXTREMA_RULES)):
-            if getattr(self, name) not in allowed:
-                raise InputError(f"unknown EMD {name} {getattr(self, name)!r}; choose one of {allowed}"
-                                 f"{_did_you_mean(getattr(self, name), allowed)}")
-        _check_int("max_imfs", self.max_imfs, 0)
-        for name in ("s_number", "fixed_sifts", "max_sifts", "ring"):
-            _check_int(name, getattr(self, name), 1)
-        for name in ("sd_threshold", "energy_threshold", "tension"):
-            _nonnegative(name, getattr(self, name))
-        for name in ("cancellation_tolerance", "mean_correction"):
-            if getattr(self, name) is not None:
-                _nonnegative(name, getattr(self, name))
-        if not (isinstance(self.ratio, (int, float, np.number)) and 0.5 < self.ratio <= 1):
-            raise InputError(f"EMD option ratio must lie in (0.5, 1], got {self.ratio!r}")
-
-    @property
-    def tensions(self) -> tuple[float, ...]:
-        """The starting tension, then those the cancellation guard may try (module notes)."""
-        start = _start_tension(self.envelope, self.tension)
-        if self.cancellation_tolerance is None:
-            return (start,)
-        return (start, *(t for t in GUARD_TENSIONS if t > start), *((math.inf,) if start < math.inf else ()))
-
-
-#: Names of the EMD options, as :func:`emd` takes them.
-_OPTION_NAMES = tuple(_Options.__dataclass_fields__)
-
-
-def _did_you_mean(word, known) -> str:
-    close = difflib.get_close_matches(str(word), [str(k) for k in known], n=1)
-    return f"; did you mean {close[0]!r}?" if close else ""
+    return EnvelopeSolver(surface, backend).solve(f, mask, start, extrema_spacing(surface, mask.sum()))
 
 
 def check_emd_options(options: dict) -> None:
     """Raise :class:`InputError` for an option :func:`emd` does not take (``"backend"`` included)."""
+    known = (*_OPTION_NAMES, "backend")
     for key in options:
-        if key not in (*_OPTION_NAMES, "backend"):
-            raise InputError(f"unknown EMD option {key!r}{_did_you_mean(key, (*_OPTION_NAMES, 'backend'))}; "
+        if key not in known:
+            raise InputError(f"unknown EMD option {key!r}{did_you_mean(str(key), known, listing=False)}; "
                              f"EMD takes {', '.join(_OPTION_NAMES)} and backend")
 
 
-def _check_int(name: str, value, minimum: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
-
-
-def _nonnegative(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) \
-            or not np.isfinite(value) or value < 0:
-        raise InputError(f"{name} must be a finite number >= 0, got {value!r}")
-    return float(value)
-
-
-def _check_surface(surface) -> Surface:
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
-    return surface
-
-
 def _as_signal(surface: Surface, signal) -> np.ndarray:
-    return check_signal(_check_surface(surface), signal)
+    return check_signal(check_surface(surface), signal)
 
 
 # -- sifting -----------------------------------------------------------------------------
@@ -547,13 +543,13 @@ class _Sifted:
     step_energy_ratio: float
 
 
-class _Sifter:
+class Sifter:
     """Extracts IMFs one at a time from a residue (Sec. 4.1, module notes)."""
 
-    def __init__(self, surface: Surface, options: _Options, backend: str | None):
+    def __init__(self, surface: Surface, options: EMDOptions, backend: str | None):
         self.surface = surface
         self.options = options
-        self.solver = _EnvelopeSolver(surface, backend)
+        self.solver = EnvelopeSolver(surface, backend)
         self.labels = surface.component_labels
         self.n_components = surface.n_components
         self.mass = surface.mass_diagonal
@@ -724,11 +720,14 @@ def _rfg_excess(mean: np.ndarray, amplitude: np.ndarray, mass: np.ndarray) -> fl
 
 # -- decomposition -----------------------------------------------------------------------
 
-def emd(surface: Surface, signal, *, max_imfs: int = 10, stopping: str = "sd",
-        sd_threshold: float = 0.2, s_number: int = 4, fixed_sifts: int = 10, max_sifts: int = 50,
-        envelope: str = "tension", tension: float = 3.0, cancellation_tolerance: float | None = 0.05,
-        mean_correction: float | None = 0.6, extrema: str = "strict", ring: int = 2, ratio: float = 0.8,
-        energy_threshold: float = 1e-8, backend: str | None = None) -> EMDResult:
+def emd(surface: Surface, signal, *, max_imfs: int = EMD_DEFAULTS.max_imfs, stopping: str = EMD_DEFAULTS.stopping,
+        sd_threshold: float = EMD_DEFAULTS.sd_threshold, s_number: int = EMD_DEFAULTS.s_number,
+        fixed_sifts: int = EMD_DEFAULTS.fixed_sifts, max_sifts: int = EMD_DEFAULTS.max_sifts,
+        envelope: str = EMD_DEFAULTS.envelope, tension: float = EMD_DEFAULTS.tension,
+        cancellation_tolerance: float | None = EMD_DEFAULTS.cancellation_tolerance,
+        mean_correction: float | None = EMD_DEFAULTS.mean_correction, extrema: str = EMD_DEFAULTS.extrema,
+        ring: int = EMD_DEFAULTS.ring, ratio: float = EMD_DEFAULTS.ratio,
+        energy_threshold: float = EMD_DEFAULTS.energy_threshold, backend: str | None = None) -> EMDResult:
     """Empirical mode decomposition of a signal on a surface (Sec. 4.1, Eq. 1).
 
     Parameters
@@ -821,12 +820,27 @@ def emd(surface: Surface, signal, *, max_imfs: int = 10, stopping: str = "sd",
     ------
     InputError
         Wrong signal length, non-finite values or invalid options.
+
+    Examples
+    --------
+    The IMFs and the residue add up to the signal (Eq. 1):
+
+    >>> import numpy as np
+    >>> from hht3d import data_path, emd, load
+    >>> from hht3d.signals import mean_curvature
+    >>> surface = load(data_path("spot.ply"))
+    >>> signal = mean_curvature(surface)
+    >>> result = emd(surface, signal, max_imfs=2)
+    >>> result.imfs.shape
+    (2, 2930)
+    >>> np.allclose(result.imfs.sum(axis=0) + result.residue, signal)
+    True
     """
-    options = _Options(max_imfs, stopping, sd_threshold, s_number, fixed_sifts, max_sifts, envelope, tension,
+    options = EMDOptions(max_imfs, stopping, sd_threshold, s_number, fixed_sifts, max_sifts, envelope, tension,
                        cancellation_tolerance, mean_correction, extrema, ring, ratio, energy_threshold)
     f = _as_signal(surface, signal)
     start = time.perf_counter()
-    sifter = _Sifter(surface, options, backend)
+    sifter = Sifter(surface, options, backend)
     magnitude = float(np.max(np.abs(f)))
     unit = f / magnitude if magnitude > 0 else f
     imfs, per_imf = [], []
@@ -900,9 +914,9 @@ def eemd_member(surface: Surface, signal, member_index: int, seed: int, noise_st
         the signal plus noise); average members with :func:`combine_eemd`.
     """
     f = _as_signal(surface, signal)
-    _check_int("member_index", member_index, 0)
-    _check_int("seed", seed, 0)
-    _nonnegative("noise_std", noise_std)
+    check_int("member_index", member_index, 0)
+    check_int("seed", seed, 0)
+    nonnegative("noise_std", noise_std)
     check_emd_options(emd_options)
     rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(member_index),)))
     noise = noise_std * np.std(f) * rng.standard_normal(len(f))
@@ -952,7 +966,7 @@ def combine_eemd(surface: Surface, signal, members) -> EMDResult:
 
 
 def eemd(surface: Surface, signal, *, ensemble_size: int = 100, noise_std: float = 0.2,
-         seed: int = 0, max_imfs: int = 10, **emd_options) -> EMDResult:
+         seed: int = 0, max_imfs: int = EMD_DEFAULTS.max_imfs, **emd_options) -> EMDResult:
     """Ensemble EMD (Wu & Huang 2009), the remedy for mode mixing.
 
     Runs :func:`eemd_member` for members ``0 .. ensemble_size − 1`` and
@@ -974,8 +988,19 @@ def eemd(surface: Surface, signal, *, ensemble_size: int = 100, noise_std: float
         Passed to every member.
     **emd_options
         Further :func:`emd` options.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d import data_path, eemd, load
+    >>> from hht3d.signals import mean_curvature
+    >>> surface = load(data_path("spot.ply"))
+    >>> signal = mean_curvature(surface)
+    >>> result = eemd(surface, signal, ensemble_size=4, max_imfs=2, seed=1)
+    >>> result.n_imfs, np.allclose(result.imfs.sum(axis=0) + result.residue, signal)
+    (2, True)
     """
-    _check_int("ensemble_size", ensemble_size, 1)
+    check_int("ensemble_size", ensemble_size, 1)
     f = _as_signal(surface, signal)
     members = [eemd_member(surface, f, i, seed, noise_std, max_imfs=max_imfs, **emd_options)
                for i in range(int(ensemble_size))]

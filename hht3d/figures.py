@@ -1,5 +1,9 @@
-"""Figures of an HHT result: the paper's Fig. 4 layout and plots of the Hilbert spectrum.
+"""Figures: one field with a title and a colour bar, an HHT result in the paper's Fig. 4 layout,
+and plots of the Hilbert spectrum.
 
+- :func:`field_figure` / :func:`render_png`: one field on the model (or
+  the shaded model) with a title and a colour bar; :func:`draw_image` and
+  :func:`draw_colorbar` place a rendering and a colour bar in any figure.
 - :func:`hht_figure`: the model (shaded), the signal, every IMF and the
   residue in one row; the instantaneous frequency (Eq. 23) and the local
   amplitude (Eq. 21) of each IMF in the two rows below, each panel with its
@@ -24,17 +28,142 @@ import numpy as np
 
 from .errors import InputError
 from .hht import HHTResult
-from .render import (_check_dpi, _check_size, _fractions, color_scale, draw_colorbar, draw_image, field_figure,
-                     font_points, model_aspect, renderer, save_figure)
+from .io import atomic_path
+from .render import ColorScale, Rendering, color_scale, model_aspect, renderer
+from .render.image import check_field, check_size
 from .spectrum import SCALES, HilbertSpectrum
+from .surface import Surface
 
-__all__ = ["FREQUENCY_CMAP", "AMPLITUDE_CMAP", "IMF_CMAP", "hht_figure", "spectrum_figure", "write_figures",
-           "save_figure"]
+__all__ = ["FREQUENCY_CMAP", "AMPLITUDE_CMAP", "IMF_CMAP", "field_figure", "render_png", "draw_image",
+           "draw_colorbar", "font_points", "hht_figure", "spectrum_figure", "write_figures", "save_figure"]
 
 #: Colour maps of the composite figure.
 IMF_CMAP = "RdBu_r"
 FREQUENCY_CMAP = "viridis"
 AMPLITUDE_CMAP = "plasma"
+
+
+# -- one field with a title and a colour bar -----------------------------------------------------
+def font_points(width_pixels: float, dpi: float) -> float:
+    """A readable font size (points) for a panel ``width_pixels`` wide: 1/20 of it, 7–16 pt."""
+    return float(np.clip(width_pixels / 20 * 72 / dpi, 7.0, 16.0))
+
+
+def draw_colorbar(fig, box, scale: ColorScale, *, label: str | None = None, orientation: str = "vertical",
+                  font: float = 10.0) -> None:
+    """A colour bar in ``box`` (figure fractions ``[left, bottom, width, height]``) with three
+    ticks: the limits and the middle (0 for a symmetric scale)."""
+    axes = fig.add_axes(box)
+    bar = fig.colorbar(scale.mappable(), cax=axes, orientation=orientation)
+    ticks = [scale.vmin, (scale.vmin + scale.vmax) / 2, scale.vmax]
+    bar.set_ticks(ticks, labels=[_tick_label(t, scale) for t in ticks])
+    bar.ax.tick_params(labelsize=font * 0.85, length=2, pad=1.5)
+    bar.outline.set_linewidth(0.5)
+    if label:
+        bar.set_label(label, fontsize=font * 0.85, labelpad=2)
+
+
+def _tick_label(value: float, scale: ColorScale) -> str:
+    """Three significant digits, without an exponent between 0.01 and 10⁵."""
+    size = abs(value)
+    if size < 1e-9 * max(abs(scale.vmin), abs(scale.vmax)):
+        return "0"
+    if 1e-2 <= size < 1e5:
+        return f"{value:.{max(0, 2 - int(np.floor(np.log10(size))))}f}"
+    return f"{value:.2e}"
+
+
+def draw_image(fig, box, rendering: Rendering, *, title: str | None = None, font: float = 10.0) -> None:
+    """Show a rendering in ``box`` (figure fractions) on white, with an optional title."""
+    axes = fig.add_axes(box)
+    axes.imshow(rendering.rgb(), interpolation="none")
+    axes.set_axis_off()
+    if title:
+        axes.set_title(title, fontsize=font, pad=2)
+
+
+def field_figure(surface: Surface, values=None, *, title: str | None = None, label: str | None = None,
+                 size=(800, 800), dpi: float = 100, view="front", up="y", cmap: str | None = None,
+                 limits=None, symmetric: bool | None = None, percentiles=(1.0, 99.0),
+                 backend: str = "auto", supersample: int = 2, point_size: float | None = None):
+    """A Matplotlib ``Figure`` of one field on the model with a title and a colour bar.
+
+    Parameters
+    ----------
+    surface, values
+        See :func:`hht3d.render.render`; ``values=None`` shows the shaded model without a colour bar.
+    title : str, optional
+        Default: the surface name.
+    label : str, optional
+        Colour bar label (e.g. the quantity and its unit).
+    size : (int, int)
+        Figure width and height in pixels.
+    dpi : float
+        Dots per inch (sets the font scale; the pixel size stays ``size``).
+    view, up, cmap, limits, symmetric, percentiles, backend, supersample, point_size
+        See :func:`hht3d.render.render`.
+    """
+    from matplotlib.figure import Figure
+
+    width, height = check_size(size)
+    _check_dpi(dpi)
+    font = font_points(min(width, height), dpi)
+    em = font * dpi / 72
+    top, pad = 2.4 * em, 0.6 * em
+    side = 6.5 * em if values is not None else 0.0
+    image_height = max(int(height - top - pad), 1)
+    image_width = max(int(min(width - side - 2 * pad, image_height / model_aspect(surface, view, up))), 1)
+    left = (width - image_width - side) / 2
+    field = None if values is None else check_field(surface, values)
+    scale = None if field is None else color_scale(field, cmap=cmap, limits=limits, symmetric=symmetric,
+                                                   percentiles=percentiles)
+    drawer = renderer(surface, view=view, up=up, size=(image_width, image_height), backend=backend,
+                      supersample=supersample, point_size=point_size)
+    fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi)
+    box = (round(left), round(pad), image_width, image_height)
+    draw_image(fig, _fractions(box, width, height), drawer.render(field, scale))
+    fig.text(0.5, 1 - 0.5 * top / height, surface.name if title is None else title, ha="center",
+             va="center", fontsize=font * 1.15)
+    if scale is not None:
+        bar = (left + image_width + 0.8 * em, height * 0.15, 0.9 * em, height * 0.7 - top)
+        draw_colorbar(fig, _fractions(bar, width, height), scale, label=label, font=font)
+    return fig
+
+
+def _fractions(box, width: float, height: float) -> list[float]:
+    """Pixel box ``(left, bottom, width, height)`` → figure fractions."""
+    left, bottom, w, h = box
+    return [left / width, bottom / height, w / width, h / height]
+
+
+def _check_dpi(dpi) -> None:
+    if not (isinstance(dpi, (int, float)) and 10 <= dpi <= 1200):
+        raise InputError(f"dpi must be a number in [10, 1200], got {dpi!r}")
+
+
+def save_figure(fig, path) -> Path:
+    """Write a Matplotlib figure to a PNG atomically at its own size and dpi; returns the path."""
+    path = _png_path(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=fig.dpi, facecolor="white")
+    return path
+
+
+def render_png(path, surface: Surface, values=None, **options):
+    """Render a field with a title and a colour bar to a PNG (atomically); returns the path.
+
+    ``options`` are those of :func:`field_figure` (``title``, ``label``,
+    ``size`` in pixels, ``dpi``, ``view``, ``up``, ``cmap``, ``limits``, ...).
+    """
+    path = _png_path(path)
+    return save_figure(field_figure(surface, values, **options), path)
+
+
+def _png_path(path) -> Path:
+    path = Path(path)
+    if path.suffix.lower() != ".png":
+        raise InputError(f"{path}: figures are written as PNG; use a .png file name")
+    return path
 
 
 # -- the composite figure (paper Fig. 4) --------------------------------------------------------
@@ -43,7 +172,7 @@ class _Grid:
     an image and a horizontal colour bar below it."""
 
     def __init__(self, columns: int, image_aspect: float, size, dpi: float, panel_width: int):
-        width, height = (columns * panel_width, None) if size is None else _check_size(size)
+        width, height = (columns * panel_width, None) if size is None else check_size(size)
         self.column_width = width / columns
         self.font = font_points(self.column_width, dpi)
         em = self.font * dpi / 72
@@ -192,14 +321,14 @@ def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", li
 
     _check_result(result)
     _check_dpi(dpi)
-    width, height = _check_size(size)
+    width, height = check_size(size)
     if scale not in SCALES:
         raise InputError(f"unknown frequency scale {scale!r}; choose one of {SCALES}")
     spectrum = result.spectrum
     total = float(spectrum.imf_energy().sum())
     if not total > 0:
         raise InputError(f"{result.surface.name}: the IMFs carry no energy; there is no spectrum to plot")
-    limits = _frequency_limits(spectrum, scale) if limits is None else limits
+    limits = spectrum.frequency_limits(scale) if limits is None else limits
     edges, marginal = spectrum.marginal(bins, scale, limits)
     resolution = spectrum.resolution
     right_end = resolution.limit if edges[-1] < resolution.limit < 2 * edges[-1] else edges[-1]
@@ -249,21 +378,6 @@ def _plot_imfs(axes, spectrum: HilbertSpectrum, edges, scale: str, limits, total
         if np.isfinite(means[i]):
             axes.axvline(means[i], color=colors[i], linestyle="--", linewidth=0.9)
     axes.set_title("frequency–energy distribution of each IMF", fontsize=font)
-
-
-def _frequency_limits(spectrum: HilbertSpectrum, scale: str, tail: float = 1e-3) -> tuple[float, float]:
-    """Frequencies between which all but ``tail`` of the energy lies at each end."""
-    frequency = spectrum.frequency.ravel()
-    weight = (spectrum.energy * spectrum.area).ravel()
-    keep = (frequency > 0) if scale == "log" else np.isfinite(frequency)
-    frequency, weight = frequency[keep], weight[keep]
-    order = np.argsort(frequency)
-    cumulative = np.cumsum(weight[order])
-    if cumulative.size == 0 or cumulative[-1] <= 0:
-        raise InputError("no positive instantaneous frequency carries energy; give explicit limits")
-    low, high = np.searchsorted(cumulative, [tail * cumulative[-1], (1 - tail) * cumulative[-1]])
-    low_f, high_f = frequency[order[low]], frequency[order[min(high, len(order) - 1)]]
-    return (float(low_f), float(high_f)) if high_f > low_f else (float(frequency.min()), float(frequency.max()))
 
 
 # -- the standard set --------------------------------------------------------------------------------

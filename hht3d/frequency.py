@@ -73,14 +73,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import InputError
+from .options import FREQUENCY_METHODS, RIESZ_DEFAULTS
 from .riesz import vertex_gradient
 from .surface import Surface
+from .validation import check_choice, check_surface
 
 __all__ = ["FREQUENCY_METHODS", "instantaneous_frequency", "resolvable_frequency", "resolvable_from_area",
            "ResolutionReport", "resolution_report"]
 
-#: Estimators of Eq. 23 (see the module notes).
-FREQUENCY_METHODS = ("phase", "gradient")
 #: ``|Rf|`` below this fraction of its maximum (per signal) is round-off: a zero of ``Rf``.
 _ZERO_RTOL = 1e-10
 #: Below this fraction of the largest ``|Rf|`` on its ring, a vertex's own Riesz
@@ -95,8 +95,8 @@ _MAX_UNWRAP = 8
 _MIN_RESPONSE = 0.05
 
 
-def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = "phase",
-                            gradient: str = "lsq") -> np.ndarray:
+def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = RIESZ_DEFAULTS.frequency,
+                            gradient: str = RIESZ_DEFAULTS.gradient) -> np.ndarray:
     """Instantaneous frequency ``ω = |∇φ|`` (Eq. 23) of ``k`` signals from their Riesz transforms.
 
     Parameters
@@ -120,8 +120,7 @@ def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = "
         Radians per model unit of length, ``>= 0``; 0 where ``f`` and ``Rf``
         vanish (no amplitude) and at vertices without neighbours.
     """
-    if method not in FREQUENCY_METHODS:
-        raise InputError(f"unknown frequency method {method!r}; choose one of {FREQUENCY_METHODS}")
+    check_choice(method, FREQUENCY_METHODS, "frequency method")
     f = np.asarray(signals, dtype=np.float64)
     r = np.asarray(riesz, dtype=np.float64)
     if f.ndim != 2 or r.shape != (*f.shape, 3) or f.shape[1] != surface.n_vertices:
@@ -324,8 +323,7 @@ def resolvable_frequency(surface: Surface) -> np.ndarray:
     shorter than about two sample spacings aliases: its frequency cannot be
     read from the samples.
     """
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
+    check_surface(surface)
     return resolvable_from_area(surface.mass_diagonal)
 
 

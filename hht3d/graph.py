@@ -1,13 +1,21 @@
 """Lazy task-graph API: every HHT stage as a ``dask.delayed`` task.
 
-This layer adds laziness only; each task calls one core function.  Stages
-compose freely and run on any scheduler of :mod:`hht3d.scheduling`:
+This layer adds laziness only.  Each public core function has a lazy twin
+here with the same name, signature and docstring (as dask-image mirrors
+SciPy's ndimage): ``graph.emd(surface, signal, max_imfs=3)`` takes what
+:func:`hht3d.emd.emd` takes, Delayed values included, and returns a
+``Delayed``.  :func:`mirror` makes such a twin from any core function.
+Stages compose freely and run on any scheduler of :mod:`hht3d.scheduling`.
 
->>> from hht3d import graph
->>> s = graph.load("model.ply")
+Examples
+--------
+>>> from hht3d import data_path, graph
+>>> s = graph.load(data_path("spot.ply"))
 >>> f = graph.signal(s, "mean_curvature")
->>> result = graph.hht(s, f)                  # EMD -> Riesz shift groups -> spectra
->>> graph.compute(graph.save(result, "out/model_hht.ply"), scheduler="processes")
+>>> lazy = graph.hht(s, f, emd_options={"max_imfs": 2})    # EMD -> Riesz shift groups -> spectra
+>>> (result,) = graph.compute(lazy, scheduler="synchronous", progress=False)
+>>> result.n_imfs
+2
 
 Parallelism follows the method:
 
@@ -19,7 +27,8 @@ Parallelism follows the method:
   :func:`hht3d.scheduling.worker_count`) each factorize their shifts once and
   solve all IMFs as one multi-column right-hand side; they depend only on the
   EMD task and the surface, and factorizations never leave a task.  (One task
-  per IMF would repeat every factorization once per IMF.);
+  per IMF would repeat every factorization once per IMF.)  :func:`monogenic`
+  and :func:`hht` take ``riesz_tasks`` beyond the eager signature;
 * the files of a dataset are independent subgraphs (:mod:`hht3d.dataset`).
 
 A surface or array enters a graph once, as one key, and is shared by
@@ -39,6 +48,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import inspect
 import threading
 from collections import OrderedDict
 from pathlib import Path
@@ -49,19 +59,24 @@ from dask.base import tokenize
 
 from . import apps
 from .emd import combine_eemd, eemd_member
+from .emd import eemd as _eemd
 from .emd import emd as _emd
 from .hht import HHTResult
+from .hht import hht as _hht
 from .io import load as _load
-from .monogenic import monogenic_from_potential
 from .linalg import default_backend
+from .monogenic import monogenic as _monogenic
+from .monogenic import monogenic_from_potential as _monogenic_from_potential
+from .options import RIESZ_DEFAULTS, RieszOptions
 from .riesz import (combine_quadrature_parts, fractional_laplacian, quadrature_part, quadrature_plan,
                     shift_analysis)
-from .signals import signal as _signal
 from .scheduling import compute, worker_count
+from .signals import signal as _signal
 from .surface import Surface
 
 __all__ = [
     "Builder",
+    "mirror",
     "compute",
     "load",
     "from_surface",
@@ -71,8 +86,10 @@ __all__ = [
     "signal",
     "emd",
     "eemd",
+    "eemd_tasks",
     "riesz_potential",
     "monogenic",
+    "monogenic_from_potential",
     "hht",
     "save",
     "transform",
@@ -197,9 +214,57 @@ def _quadrature_part(surface: Surface, f, plan, group: int, groups: int, backend
 _PLAIN = Builder()
 
 
-def load(path, **options):
-    """Lazy :func:`hht3d.io.load`."""
-    return _PLAIN.task("load", _load)(str(path), **options)
+def mirror(func, build=None, *, tasks: str = "one task", extras: tuple[inspect.Parameter, ...] = (),
+           examples: str = ""):
+    """The lazy twin of the core function ``func``: its name, signature and docstring; a ``Delayed`` result.
+
+    Parameters
+    ----------
+    func : callable
+        The eager core function.
+    build : callable, optional
+        ``build(builder, *args, **kwargs)`` making the tasks from the
+        arguments bound to the signature, defaults applied; returns the
+        result's ``Delayed``.  Default: one task calling ``func``.
+    tasks : str
+        How the twin's docstring describes its tasks.
+    extras : tuple of inspect.Parameter
+        Keyword-only parameters of the twin beyond ``func``'s (scheduling
+        options such as ``riesz_tasks``), passed on to ``build``.
+    examples : str
+        The twin's Examples section (``func``'s own is left out: it is eager).
+
+    Returns
+    -------
+    callable
+    """
+    signature = inspect.signature(func)
+    signature = signature.replace(parameters=[*signature.parameters.values(), *extras],
+                                  return_annotation="Delayed")
+
+    def lazy(*args, **kwargs):
+        bound = signature.bind(*args, **kwargs)
+        bound.apply_defaults()
+        if build is None:
+            return _PLAIN.task(func.__name__, func)(*bound.args, **bound.kwargs)
+        return build(_PLAIN, *bound.args, **bound.kwargs)
+
+    functools.update_wrapper(lazy, func)
+    del lazy.__wrapped__  # the twin's signature is its own (extras included)
+    lazy.__signature__ = signature
+    lazy.__module__ = __name__
+    eager = inspect.cleandoc(func.__doc__ or "").split("\nExamples\n--------")[0].rstrip()
+    lazy.__doc__ = f"Lazy :func:`{func.__module__}.{func.__name__}`: {tasks}.\n\n{eager}\n"
+    if examples:
+        lazy.__doc__ += f"\nExamples\n--------\n{inspect.cleandoc(examples)}\n"
+    return lazy
+
+
+def _load_tasks(builder: Builder, path, **options):
+    return builder.task("load", _load)(str(path), **options)
+
+
+load = mirror(_load, _load_tasks)
 
 
 def from_surface(surface: Surface):
@@ -227,30 +292,28 @@ def operators(surface):
     return _PLAIN.task("operators", _with_operators)(surface)
 
 
-def signal(surface, kind: str, **options):
-    """Lazy :func:`hht3d.signals.signal` (``"mean_curvature"``, ``"x"``, ``"stored"``, ...)."""
-    return _PLAIN.task("signal", _signal)(surface, kind, **options)
+signal = mirror(_signal)
+emd = mirror(_emd)
 
 
-def emd(surface, signal, **options):
-    """Lazy :func:`hht3d.emd.emd` of one signal: one task."""
-    return _PLAIN.task("emd", _emd)(surface, signal, **options)
-
-
-def eemd(surface, signal, *, ensemble_size: int = 100, noise_std: float = 0.2, seed: int = 0,
-         builder: Builder = _PLAIN, **options):
-    """Lazy ensemble EMD: one task per member (:func:`hht3d.emd.eemd_member`), one averaging task."""
+def eemd_tasks(builder: Builder, surface, signal, *, ensemble_size: int, noise_std: float, seed: int,
+               **emd_options):
+    """The tasks of ensemble EMD: one per member (:func:`hht3d.emd.eemd_member`), one averaging task."""
     member = builder.task("eemd_member", eemd_member)
-    members = [member(surface, signal, i, seed, noise_std, **options) for i in range(ensemble_size)]
+    members = [member(surface, signal, i, seed, noise_std, **emd_options) for i in range(ensemble_size)]
     return builder.task("eemd_combine", combine_eemd)(surface, signal, members)
+
+
+eemd = mirror(_eemd, eemd_tasks, tasks="one task per member, then one averaging task")
 
 
 def _imfs(decomposition) -> object:
     return decomposition.imfs
 
 
-def riesz_potential(surface, imfs, *, method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
-                    backend: str | None = None, riesz_tasks: int | None = None, builder: Builder = _PLAIN):
+def riesz_potential(surface, imfs, *, method: str = RIESZ_DEFAULTS.method, tol: float = RIESZ_DEFAULTS.tol,
+                    eigenpairs: int = RIESZ_DEFAULTS.eigenpairs, backend: str | None = RIESZ_DEFAULTS.backend,
+                    riesz_tasks: int | None = None, builder: Builder = _PLAIN):
     """Lazy ``L^{-1/2}`` of all IMFs, ``(k, n)``.
 
     ``method="quadrature"``: a bounds task, ``riesz_tasks`` shift-group tasks
@@ -268,16 +331,30 @@ def riesz_potential(surface, imfs, *, method: str = "quadrature", tol: float = 1
     return builder.task("riesz_sum", combine_quadrature_parts)(surface, parts)
 
 
-def monogenic(surface, imfs, potential, *, gradient: str = "lsq", frequency: str = "phase",
-              builder: Builder = _PLAIN):
-    """Lazy :func:`hht3d.monogenic.monogenic_from_potential` (Eqs. 21–23)."""
-    return builder.task("monogenic", monogenic_from_potential)(surface, imfs, potential, gradient, frequency)
+#: The lazy-only parameter of :func:`monogenic` and :func:`hht`.
+_RIESZ_TASKS = inspect.Parameter("riesz_tasks", inspect.Parameter.KEYWORD_ONLY, default=None,
+                                 annotation="int | None")
+
+
+def _monogenic_tasks(builder: Builder, surface, imfs, *, gradient: str, frequency: str, method: str, tol: float,
+                     eigenpairs: int, backend: str | None, riesz_tasks: int | None):
+    potential = riesz_potential(surface, imfs, method=method, tol=tol, eigenpairs=eigenpairs, backend=backend,
+                                riesz_tasks=riesz_tasks, builder=builder)
+    return builder.task("monogenic", _monogenic_from_potential)(surface, imfs, potential, gradient, frequency)
+
+
+monogenic = mirror(_monogenic, _monogenic_tasks, extras=(_RIESZ_TASKS,),
+                   tasks="the shift-group tasks of :func:`riesz_potential` (``riesz_tasks`` of them), then one "
+                         "task of :func:`hht3d.monogenic.monogenic_from_potential`")
+monogenic_from_potential = mirror(_monogenic_from_potential)
 
 
 def transform(builder: Builder, surface, signal, *, emd_options: dict | None = None,
               ensemble: dict | None = None,
-              gradient: str = "lsq", frequency: str = "phase", method: str = "quadrature", tol: float = 1e-8,
-              eigenpairs: int = 300, backend: str | None = None, riesz_tasks: int | None = None) -> dict:
+              gradient: str = RIESZ_DEFAULTS.gradient, frequency: str = RIESZ_DEFAULTS.frequency,
+              method: str = RIESZ_DEFAULTS.method, tol: float = RIESZ_DEFAULTS.tol,
+              eigenpairs: int = RIESZ_DEFAULTS.eigenpairs, backend: str | None = RIESZ_DEFAULTS.backend,
+              riesz_tasks: int | None = None) -> dict:
     """The tasks of one HHT, by stage name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
 
     ``ensemble``: EEMD options (``ensemble_size``, ``noise_std``, ``seed``)
@@ -285,15 +362,14 @@ def transform(builder: Builder, surface, signal, *, emd_options: dict | None = N
     """
     emd_options = {"backend": backend, **(emd_options or {})}
     if ensemble is not None:
-        decomposition = eemd(surface, signal, builder=builder, **ensemble, **emd_options)
+        decomposition = eemd_tasks(builder, surface, signal, **ensemble, **emd_options)
     else:
         decomposition = builder.task("emd", _emd)(surface, signal, **emd_options)
     imfs = builder.task("imfs", _imfs)(decomposition)
     potential = riesz_potential(surface, imfs, method=method, tol=tol, eigenpairs=eigenpairs,
                                 backend=backend, riesz_tasks=riesz_tasks, builder=builder)
-    mono = monogenic(surface, imfs, potential, gradient=gradient, frequency=frequency, builder=builder)
-    riesz_options = {"gradient": gradient, "frequency": frequency, "method": method, "tol": tol,
-                     "eigenpairs": eigenpairs}
+    mono = builder.task("monogenic", _monogenic_from_potential)(surface, imfs, potential, gradient, frequency)
+    riesz_options = RieszOptions(gradient, frequency, method, tol, eigenpairs, backend).recorded()
     result = builder.task("hht", HHTResult.from_parts)(surface, signal, decomposition, mono, riesz_options)
     return {"emd": decomposition, "imfs": imfs, "riesz": potential, "monogenic": mono, "hht": result}
 
@@ -301,14 +377,41 @@ def transform(builder: Builder, surface, signal, *, emd_options: dict | None = N
 def transform_file(builder: Builder, path, signal: str = "mean_curvature", load_options: dict | None = None,
                    **options) -> dict:
     """:func:`transform` of one file's signal, with its ``load`` and ``signal`` tasks."""
-    surface = builder.task("load", _load)(str(path), **(load_options or {}))
+    surface = _load_tasks(builder, path, **(load_options or {}))
     values = builder.task("signal", _signal)(surface, signal)
     return {"load": surface, "signal": values, **transform(builder, surface, values, **options)}
 
 
-def hht(surface, signal, **options):
-    """Lazy :class:`hht3d.hht.HHTResult` of one signal; options as in :func:`transform`."""
-    return transform(_PLAIN, surface, signal, **options)["hht"]
+#: The lazy-only parameter of :func:`hht`: EEMD options instead of EMD.
+_ENSEMBLE = inspect.Parameter("ensemble", inspect.Parameter.KEYWORD_ONLY, default=None,
+                              annotation="dict | None")
+
+
+def _hht_tasks(builder: Builder, surface, signal, **options):
+    return transform(builder, surface, signal, **options)["hht"]
+
+
+hht = mirror(_hht, _hht_tasks, extras=(_ENSEMBLE, _RIESZ_TASKS),
+             tasks="the tasks of :func:`transform` (``ensemble``: EEMD options, e.g. "
+                   "``{'ensemble_size': 20, 'noise_std': 0.2, 'seed': 0}``, to decompose by EEMD)",
+             examples="""
+    The lazy result equals the eager one; only the order in which the shift
+    groups' parts of ``L^{-1/2}`` are summed differs:
+
+    >>> import numpy as np
+    >>> import hht3d
+    >>> from hht3d import data_path, graph
+    >>> from hht3d.signals import mean_curvature
+    >>> surface = hht3d.load(data_path("spot.ply"))
+    >>> lazy = graph.hht(graph.from_surface(surface), mean_curvature(surface), emd_options={"max_imfs": 2},
+    ...                  riesz_tasks=2)
+    >>> (result,) = graph.compute(lazy, scheduler="synchronous", progress=False)
+    >>> eager = hht3d.hht(surface, mean_curvature(surface), emd_options={"max_imfs": 2})
+    >>> np.array_equal(result.imfs, eager.imfs)
+    True
+    >>> np.allclose(result.monogenic.riesz, eager.monogenic.riesz, rtol=0, atol=1e-10)
+    True
+    """)
 
 
 def _save(result, path) -> Path:
@@ -321,36 +424,10 @@ def save(result, path):
 
 
 # -- applications (Sec. 5, hht3d.apps): one task each ----------------------------------------
-def filter_signal(result, gain, *, builder: Builder = _PLAIN):
-    """Lazy :func:`hht3d.apps.filter_signal`: the signal of an HHT result through a gain (Eq. 26)."""
-    return builder.task("filter_signal", apps.filter_signal)(result, gain)
-
-
-def filter_geometry(result, gain, *, builder: Builder = _PLAIN, **options):
-    """Lazy :func:`hht3d.apps.filter_geometry`: Eq. (26) on the mean curvature, then Eq. (27)."""
-    return builder.task("filter_geometry", apps.filter_geometry)(result, gain, **options)
-
-
-def reconstruct(surface, signal, *, builder: Builder = _PLAIN, **options):
-    """Lazy :func:`hht3d.apps.reconstruct`: the surface whose mean curvature is ``signal`` (Eq. 27)."""
-    return builder.task("reconstruct", apps.reconstruct)(surface, signal, **options)
-
-
-def prominent_features(surface, imfs, *, builder: Builder = _PLAIN, **options):
-    """Lazy :func:`hht3d.apps.prominent_features` of an EMD or HHT result (Sec. 5.2)."""
-    return builder.task("features", apps.prominent_features)(surface, imfs, **options)
-
-
-def hks_features(surface, *, builder: Builder = _PLAIN, **options):
-    """Lazy :func:`hht3d.apps.hks_features` (heat-kernel-signature baseline)."""
-    return builder.task("hks_features", apps.hks_features)(surface, **options)
-
-
-def imf_enhancement(surface, imfs, *, builder: Builder = _PLAIN, **options):
-    """Lazy :func:`hht3d.apps.imf_enhancement` (IMF-scaling baseline, Hu et al. 2014)."""
-    return builder.task("imf_enhancement", apps.imf_enhancement)(surface, imfs, **options)
-
-
-def manifold_harmonics_filter(surface, gain, *, builder: Builder = _PLAIN, **options):
-    """Lazy :func:`hht3d.apps.manifold_harmonics_filter` (Vallet & Lévy 2008 baseline)."""
-    return builder.task("manifold_harmonics_filter", apps.manifold_harmonics_filter)(surface, gain, **options)
+filter_signal = mirror(apps.filter_signal)
+filter_geometry = mirror(apps.filter_geometry)
+reconstruct = mirror(apps.reconstruct)
+prominent_features = mirror(apps.prominent_features)
+hks_features = mirror(apps.hks_features)
+imf_enhancement = mirror(apps.imf_enhancement)
+manifold_harmonics_filter = mirror(apps.manifold_harmonics_filter)

@@ -19,10 +19,11 @@ from . import io
 from .emd import check_emd_options, emd
 from .errors import InputError
 from .monogenic import MonogenicSignal, monogenic
+from .options import RIESZ_DEFAULTS, RieszOptions
 from .quality import Quality, decomposition_quality
-from .signals import check_signal
 from .spectrum import HilbertSpectrum
 from .surface import Surface
+from .validation import check_signal
 
 __all__ = ["HHTResult", "hht"]
 
@@ -125,9 +126,10 @@ class HHTResult:
         return self.surface.to_open3d(self.vertex_attributes())
 
 
-def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: str = "lsq",
-        frequency: str = "phase", method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
-        backend: str | None = None) -> HHTResult:
+def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: str = RIESZ_DEFAULTS.gradient,
+        frequency: str = RIESZ_DEFAULTS.frequency, method: str = RIESZ_DEFAULTS.method,
+        tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
+        backend: str | None = RIESZ_DEFAULTS.backend) -> HHTResult:
     """Hilbert–Huang transform of a surface signal: EMD, then Algorithm 2 on all IMFs.
 
     Parameters
@@ -145,8 +147,23 @@ def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: 
     Returns
     -------
     HHTResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d import data_path, hht, load
+    >>> from hht3d.signals import mean_curvature
+    >>> surface = load(data_path("spot.ply"))
+    >>> result = hht(surface, mean_curvature(surface), emd_options={"max_imfs": 2})
+    >>> result.n_imfs, result.monogenic.frequency.shape
+    (2, (2, 2930))
+    >>> np.allclose(result.imfs.sum(axis=0) + result.residue, result.signal)
+    True
+    >>> result.info["riesz"]["tol"]
+    1e-08
     """
     check_emd_options(emd_options or {})
+    riesz_options = RieszOptions(gradient, frequency, method, tol, eigenpairs, backend)
     options = {"backend": backend, **(emd_options or {})}
     start = time.perf_counter()
     decomposition = emd(surface, signal, **options)
@@ -154,7 +171,5 @@ def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: 
     mono = monogenic(surface, decomposition.imfs, gradient=gradient, frequency=frequency, method=method,
                      tol=tol, eigenpairs=eigenpairs, backend=backend)
     end = time.perf_counter()
-    riesz_options = {"gradient": gradient, "frequency": frequency, "method": method, "tol": tol,
-                     "eigenpairs": eigenpairs}
-    return HHTResult.from_parts(surface, signal, decomposition, mono, riesz_options,
+    return HHTResult.from_parts(surface, signal, decomposition, mono, riesz_options.recorded(),
                                 {"emd": middle - start, "spectra": end - middle})

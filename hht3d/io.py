@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+from importlib import resources
 import re
 import sys
 import tempfile
@@ -25,6 +26,7 @@ from .errors import MAX_SHOWN, InputError, OutputError, one_line
 from .surface import Surface
 
 __all__ = [
+    "data_path",
     "MESH_EXTENSIONS",
     "POINT_CLOUD_EXTENSIONS",
     "load",
@@ -52,6 +54,23 @@ FLAT = 1e-9
 
 
 # -- reading -------------------------------------------------------------------------------
+def data_path(name: str) -> Path:
+    """Path of a file shipped in the package's ``data`` folder.
+
+    ``spot.ply`` (Keenan Crane's cow, 2,930 vertices, CC0), ``sphere_oct4098.ply``
+    (the paper's octahedral sphere) and ``demo.yaml`` (the demo pipeline).
+
+    Examples
+    --------
+    >>> from hht3d import data_path
+    >>> data_path("spot.ply").name
+    'spot.ply'
+    >>> data_path("spot.ply").is_file()
+    True
+    """
+    return Path(str(resources.files("hht3d") / "data" / name))
+
+
 def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int = 30,
          name: str | None = None) -> Surface:
     """Load a triangle mesh or point cloud as a :class:`~hht3d.surface.Surface`.
@@ -73,6 +92,13 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
     ------
     InputError
         Missing or unreadable file, unknown extension, empty or invalid geometry.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> surface = load(data_path("spot.ply"))
+    >>> surface.n_vertices, len(surface.faces), surface.is_mesh
+    (2930, 5856, True)
     """
     path = Path(path)
     try:

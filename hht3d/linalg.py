@@ -22,38 +22,41 @@ Backends, in order of preference
     SciPy's SuperLU, always available.  SciPy exposes no symbolic reuse, so
     each factorization orders and factorizes from scratch.
 
-The default is the first installed backend of :data:`BACKENDS`, unless the
-environment variable :data:`BACKEND_VARIABLE` names another; a ``backend=``
-argument overrides both.  :func:`backend_report` says which one runs and
-why.  Every backend gives the same results to solver round-off.
+The default is the first installed backend of :data:`SOLVER_BACKENDS`,
+unless the environment variable :data:`BACKEND_VARIABLE` names another; a
+``backend=`` argument overrides both.  :func:`backend_report` says which one
+runs and why.  Every backend gives the same results to solver round-off.
+
+Adding a backend
+----------------
+One :func:`register_backend` call with a :class:`Backend`: its package, the
+modules to import (only when a backend is first needed, so a missing or slow
+package costs nothing until then), a line for ``hht3d info --backends``, an
+install hint, and a class that analyses a pattern and factorizes matrices on
+it (see :class:`Backend`).  Pipelines (``backend:``), EMD, the Riesz
+transform and ``hht3d info`` read the registry.
 """
 from __future__ import annotations
 
 import functools
+import importlib
 import importlib.metadata
 import os
 import threading
 import weakref
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .errors import InputError, NumericalError
 
-try:  # optional speed-up
-    import pypardiso as _pypardiso
-except ImportError:  # pragma: no cover - depends on the environment
-    _pypardiso = None
-
-try:  # core dependency where cvxopt has wheels (pyproject.toml)
-    import cvxopt as _cvxopt
-    from cvxopt import cholmod as _cholmod
-except ImportError:  # pragma: no cover - depends on the environment
-    _cvxopt = _cholmod = None
-
 __all__ = [
+    "Backend",
+    "SOLVER_BACKENDS",
+    "register_backend",
+    "check_backend",
     "BACKENDS",
     "BACKEND_VARIABLE",
     "available_backends",
@@ -65,27 +68,74 @@ __all__ = [
     "SymbolicFactorization",
 ]
 
-#: Every backend, fastest first.
-BACKENDS = ("pardiso", "cholmod", "superlu")
 #: Environment variable naming the default backend (e.g. ``HHT3D_BACKEND=superlu``).
 BACKEND_VARIABLE = "HHT3D_BACKEND"
 
-_MODULES = {"pardiso": _pypardiso, "cholmod": _cholmod, "superlu": spla}
-_DISTRIBUTIONS = {"pardiso": "pypardiso", "cholmod": "cvxopt", "superlu": "scipy"}
-_ALGORITHMS = {
-    "pardiso": "MKL PARDISO, supernodal, METIS ordering, symbolic analysis reused",
-    "cholmod": "CHOLMOD supernodal Cholesky, AMD ordering, symbolic analysis reused",
-    "superlu": "SciPy SuperLU, ordered and factorized from scratch per matrix",
-}
-_MISSING = {
-    "pardiso": "pypardiso is not installed (MKL, x86-64 only): pip install 'hht3d[fast]'",
-    "cholmod": "cvxopt is not installed (no wheel for this platform?): pip install cvxopt",
-}
+
+@dataclass(frozen=True)
+class Backend:
+    """A sparse SPD solver backend: where it comes from and how it factorizes.
+
+    Parameters
+    ----------
+    name : str
+        The ``backend=`` value that selects it.
+    distribution : str
+        The package providing it (its version is reported by :func:`backend_report`).
+    modules : tuple of str
+        Modules imported, in order, the first time the backend is needed; the
+        backend is available when they all import.
+    algorithm : str
+        One line on what it does, for ``hht3d info --backends``.
+    missing : str
+        What to do when it is not installed.
+    pattern : callable
+        ``pattern(csr_matrix)`` analyses a sparsity pattern and returns an
+        object whose ``factorize(a)`` gives a :class:`Factor` of any matrix
+        with that pattern; it is called as ``pattern(csr, module)`` with
+        :meth:`module`.
+    """
+
+    name: str
+    distribution: str
+    modules: tuple[str, ...]
+    algorithm: str
+    missing: str
+    pattern: Callable = field(repr=False)
+
+    def module(self):
+        """The first of :attr:`modules`, all imported on first use; ``None`` if one is absent."""
+        if self.name not in _MODULES:
+            try:
+                _MODULES[self.name] = [importlib.import_module(m) for m in self.modules][0]
+            except ImportError:  # depends on the environment
+                _MODULES[self.name] = None
+        return _MODULES[self.name]
+
+    @property
+    def available(self) -> bool:
+        return self.module() is not None
+
+
+#: The registered backends by name, fastest first (:func:`register_backend` adds one).
+SOLVER_BACKENDS: dict[str, Backend] = {}
+#: Imported backend modules by backend name (``None``: not installed); filled on first use.
+_MODULES: dict[str, object] = {}
+
+
+def register_backend(backend: Backend, *, before: str | None = None) -> Backend:
+    """Add a solver backend, after the others or ahead of ``before`` in order of preference."""
+    entries = [b for b in SOLVER_BACKENDS.values() if b.name != backend.name]
+    at = next((i for i, b in enumerate(entries) if b.name == before), len(entries))
+    entries.insert(at, backend)
+    SOLVER_BACKENDS.clear()
+    SOLVER_BACKENDS.update((b.name, b) for b in entries)
+    return backend
 
 
 def available_backends() -> list[str]:
     """Names of the installed backends, fastest first."""
-    return [name for name in BACKENDS if _MODULES[name] is not None]
+    return [name for name, backend in SOLVER_BACKENDS.items() if backend.available]
 
 
 def default_backend() -> str:
@@ -96,7 +146,7 @@ def default_backend() -> str:
     """
     chosen = os.environ.get(BACKEND_VARIABLE, "").strip()
     if chosen:
-        return _check_backend(chosen, f"{BACKEND_VARIABLE}={chosen!r}")
+        return check_backend(chosen, f"{BACKEND_VARIABLE}={chosen!r}")
     return available_backends()[0]
 
 
@@ -116,7 +166,7 @@ def backend_report() -> tuple[list[BackendStatus], str]:
     Returns
     -------
     statuses : list of BackendStatus
-        In order of preference (:data:`BACKENDS`).
+        In order of preference (:data:`SOLVER_BACKENDS`).
     reason : str
         Why :func:`default_backend` is what it is.
     """
@@ -126,29 +176,32 @@ def backend_report() -> tuple[list[BackendStatus], str]:
     if chosen:
         reason = f"set by the environment variable {BACKEND_VARIABLE}={chosen}"
     else:
-        faster = BACKENDS[:BACKENDS.index(default)]
+        names = list(SOLVER_BACKENDS)
+        faster = names[:names.index(default)]
         reason = ("the fastest backend" if not faster else
                   f"the fastest installed backend ({', '.join(faster)} not installed)")
         reason += f"; override with {BACKEND_VARIABLE}=NAME or backend=NAME"
     statuses = []
-    for name in BACKENDS:
+    for name, backend in SOLVER_BACKENDS.items():
         if name in installed:
-            version = importlib.metadata.version(_DISTRIBUTIONS[name])
-            detail = f"{_DISTRIBUTIONS[name]} {version}: {_ALGORITHMS[name]}"
+            version = importlib.metadata.version(backend.distribution)
+            detail = f"{backend.distribution} {version}: {backend.algorithm}"
         else:
-            detail = _MISSING[name]
+            detail = backend.missing
         statuses.append(BackendStatus(name, name in installed, name == default, detail))
     return statuses, reason
 
 
-def _check_backend(backend: str | None, where: str = "backend") -> str:
+def check_backend(backend: str | None, where: str = "backend") -> str:
+    """The backend to use: ``backend`` if it is registered and installed, :func:`default_backend` for ``None``."""
     if backend is None:
         return default_backend()
-    if backend not in BACKENDS:
-        raise InputError(f"unknown sparse solver backend {backend!r} ({where}); choose one of {BACKENDS}")
-    if backend not in available_backends():
+    if backend not in SOLVER_BACKENDS:
+        raise InputError(f"unknown sparse solver backend {backend!r} ({where}); "
+                         f"choose one of {tuple(SOLVER_BACKENDS)}")
+    if not SOLVER_BACKENDS[backend].available:
         raise InputError(f"sparse solver backend {backend!r} ({where}) is not available: "
-                         f"{_MISSING[backend]}; installed: {available_backends()}")
+                         f"{SOLVER_BACKENDS[backend].missing}; installed: {available_backends()}")
     return backend
 
 
@@ -208,12 +261,13 @@ class _UpperTriangle(_Pattern):
 class _SuperLUPattern:
     """SuperLU: no symbolic reuse, a fresh ``splu`` per matrix."""
 
-    def __init__(self, pattern: sp.csr_matrix):
+    def __init__(self, pattern: sp.csr_matrix, module):
         self._pattern = _Pattern(pattern)
+        self._splu = module.splu
 
     def factorize(self, a: sp.csr_matrix) -> Factor:
         try:
-            lu = spla.splu(self._pattern.check(a).tocsc(), permc_spec="MMD_AT_PLUS_A",
+            lu = self._splu(self._pattern.check(a).tocsc(), permc_spec="MMD_AT_PLUS_A",
                            options={"SymmetricMode": True})
         except RuntimeError as exc:  # "Factor is exactly singular"
             raise NumericalError(f"SuperLU factorization failed: {exc}") from exc
@@ -237,47 +291,53 @@ class _Latest:
 
 
 @functools.lru_cache(maxsize=1)
-def _locate_mkl() -> None:
+def _locate_mkl(pypardiso) -> None:
     """Find MKL's runtime once per process and tell pypardiso where it is.
 
     pypardiso otherwise searches the whole installation tree for ``mkl_rt``
     every time a solver is created (0.3-0.7 s each).
     """
     if "PYPARDISO_MKL_RT" not in os.environ:
-        os.environ["PYPARDISO_MKL_RT"] = _pypardiso.PyPardisoSolver().libmkl._name
+        os.environ["PYPARDISO_MKL_RT"] = pypardiso.PyPardisoSolver().libmkl._name
 
 
 class _PardisoPattern:
-    """MKL PARDISO in SPD mode with the symbolic phase run once."""
+    """MKL PARDISO in SPD mode with the symbolic phase run once.
 
-    def __init__(self, pattern: sp.csr_matrix):
+    ``solver`` is the ``pypardiso.PyPardisoSolver`` (its ``iparm`` reports
+    memory and fill); every phase goes through :meth:`run`.
+    """
+
+    def __init__(self, pattern: sp.csr_matrix, module):
         self.n = pattern.shape[0]
         self._upper = _UpperTriangle(pattern)
-        _locate_mkl()
-        self._solver = _pypardiso.PyPardisoSolver(mtype=2)  # MKL's SPD defaults
-        weakref.finalize(self, self._solver.free_memory, True)
+        self._error = module.pardiso_wrapper.PyPardisoError
+        _locate_mkl(module)
+        self.solver = module.PyPardisoSolver(mtype=2)  # MKL's SPD defaults
+        weakref.finalize(self, self.solver.free_memory, True)
         self._latest = _Latest("PARDISO")
-        self._run(11, self._upper.csr(pattern), np.zeros((self.n, 1)))
+        self.run(11, self._upper.csr(pattern), np.zeros((self.n, 1)))
         # keep the defaults MKL filled in, minus iterative refinement: SPD
         # solves are accurate to ~1e-13 without it and 5x faster on many columns
-        self._solver.iparm[0] = 1
-        self._solver.iparm[7] = 0
+        self.solver.iparm[0] = 1
+        self.solver.iparm[7] = 0
 
-    def _run(self, phase: int, upper: sp.csr_matrix, b: np.ndarray) -> np.ndarray:
-        self._solver.set_phase(phase)
+    def run(self, phase: int, upper: sp.csr_matrix, b: np.ndarray) -> np.ndarray:
+        """PARDISO ``phase`` (11 analysis, 22 numeric factorization, 33 solve) on ``upper``."""
+        self.solver.set_phase(phase)
         try:
-            return self._solver._call_pardiso(upper, b)
-        except _pypardiso.pardiso_wrapper.PyPardisoError as exc:
+            return self.solver._call_pardiso(upper, b)
+        except self._error as exc:
             raise NumericalError(f"PARDISO phase {phase} failed: {exc}") from exc
 
     def factorize(self, a: sp.csr_matrix) -> Factor:
         upper = self._upper.csr(a)
-        self._run(22, upper, np.zeros((self.n, 1)))
+        self.run(22, upper, np.zeros((self.n, 1)))
         token = self._latest.claim()
 
         def solve(b: np.ndarray) -> np.ndarray:
             self._latest.check(token)
-            return self._run(33, upper, np.asfortranarray(b))
+            return self.run(33, upper, np.asfortranarray(b))
 
         return Factor(solve, self.n)
 
@@ -294,27 +354,28 @@ class _CholmodPattern:
     place, so (as with PARDISO) only the latest factor is valid.
     """
 
-    def __init__(self, pattern: sp.csr_matrix):
+    def __init__(self, pattern: sp.csr_matrix, module):
         self.n = pattern.shape[0]
+        self._cvxopt, self._cholmod = module, module.cholmod
         self._lower = _UpperTriangle(pattern)  # CSR upper == CSC lower
         # CSC lower: column = CSR row, row = CSR column; values 1 so that none is dropped
-        self._matrix = _cvxopt.spmatrix(1.0, self._lower.indices.astype(np.int64),
+        self._matrix = module.spmatrix(1.0, self._lower.indices.astype(np.int64),
                                         self._lower.rows.astype(np.int64), (self.n, self.n))
         if len(self._matrix.V) != len(self._lower.rows):  # pragma: no cover - cvxopt invariant
             raise NumericalError("cvxopt changed the sparsity pattern of the matrix")
         with _CHOLMOD_LOCK:
             try:
-                self._factor = _cholmod.symbolic(self._matrix, uplo="L")
+                self._factor = self._cholmod.symbolic(self._matrix, uplo="L")
             except (ValueError, MemoryError) as exc:
                 raise NumericalError(f"CHOLMOD symbolic analysis failed: {exc}") from exc
         self._latest = _Latest("CHOLMOD")
 
     def factorize(self, a: sp.csr_matrix) -> Factor:
-        values = _cvxopt.matrix(self._lower.data(a))
+        values = self._cvxopt.matrix(self._lower.data(a))
         with _CHOLMOD_LOCK:
             self._matrix.V = values
             try:
-                _cholmod.numeric(self._matrix, self._factor)
+                self._cholmod.numeric(self._matrix, self._factor)
             except ArithmeticError as exc:
                 raise NumericalError(f"CHOLMOD: the matrix is not positive definite (pivot {exc.args[0]} "
                                      "of the permuted matrix)") from exc
@@ -324,15 +385,29 @@ class _CholmodPattern:
 
         def solve(b: np.ndarray) -> np.ndarray:
             self._latest.check(token)
-            x = _cvxopt.matrix(b)
+            x = self._cvxopt.matrix(b)
             with _CHOLMOD_LOCK:
-                _cholmod.solve(self._factor, x)
+                self._cholmod.solve(self._factor, x)
             return np.array(x).reshape(b.shape)
 
         return Factor(solve, self.n)
 
 
-_IMPLEMENTATIONS = {"pardiso": _PardisoPattern, "cholmod": _CholmodPattern, "superlu": _SuperLUPattern}
+register_backend(Backend(
+    "pardiso", "pypardiso", ("pypardiso",),
+    "MKL PARDISO, supernodal, METIS ordering, symbolic analysis reused",
+    "pypardiso is not installed (MKL, x86-64 only): pip install 'hht3d[fast]'", _PardisoPattern))
+register_backend(Backend(
+    "cholmod", "cvxopt", ("cvxopt", "cvxopt.cholmod"),
+    "CHOLMOD supernodal Cholesky, AMD ordering, symbolic analysis reused",
+    "cvxopt is not installed (no wheel for this platform?): pip install cvxopt", _CholmodPattern))
+register_backend(Backend(
+    "superlu", "scipy", ("scipy.sparse.linalg",),
+    "SciPy SuperLU, ordered and factorized from scratch per matrix",
+    "scipy is always installed", _SuperLUPattern))
+
+#: Every backend's name, fastest first (the registry's order when this module was imported).
+BACKENDS = tuple(SOLVER_BACKENDS)
 
 
 class SymbolicFactorization:
@@ -356,8 +431,9 @@ class SymbolicFactorization:
 
     def __init__(self, pattern, backend: str | None = None):
         pattern = _as_square_csr(pattern)
-        self.backend = _check_backend(backend)
-        self._impl = _IMPLEMENTATIONS[self.backend](pattern)
+        self.backend = check_backend(backend)
+        entry = SOLVER_BACKENDS[self.backend]
+        self._impl = entry.pattern(pattern, entry.module())
         self.n_factorizations = 0
 
     def factorize(self, a) -> Factor:

@@ -25,10 +25,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
-from .frequency import (FREQUENCY_METHODS, ResolutionReport, instantaneous_frequency, resolution_report,
-                        resolvable_frequency)
-from .riesz import GRADIENTS, _as_signals, _check_choice, fractional_laplacian, vertex_gradient
+from .frequency import ResolutionReport, instantaneous_frequency, resolution_report, resolvable_frequency
+from .options import FREQUENCY_METHODS, GRADIENTS, RIESZ_DEFAULTS
+from .riesz import fractional_laplacian, vertex_gradient
 from .surface import Surface
+from .validation import as_signals, check_choice, check_surface
 
 __all__ = ["MonogenicSignal", "monogenic", "monogenic_from_potential"]
 
@@ -80,9 +81,10 @@ class MonogenicSignal:
         return resolution_report(self.frequency, self.resolvable, self.amplitude ** 2)
 
 
-def monogenic(surface: Surface, imfs, *, gradient: str = "lsq", frequency: str = "phase",
-              method: str = "quadrature", tol: float = 1e-8, eigenpairs: int = 300,
-              backend: str | None = None) -> MonogenicSignal:
+def monogenic(surface: Surface, imfs, *, gradient: str = RIESZ_DEFAULTS.gradient,
+              frequency: str = RIESZ_DEFAULTS.frequency, method: str = RIESZ_DEFAULTS.method,
+              tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
+              backend: str | None = RIESZ_DEFAULTS.backend) -> MonogenicSignal:
     """Monogenic signal of every IMF: Algorithm 2, steps 2–5 (Eqs. 20–23).
 
     ``L^{-1/2}`` of all IMFs comes from one multi-signal call of
@@ -107,22 +109,36 @@ def monogenic(surface: Surface, imfs, *, gradient: str = "lsq", frequency: str =
     Returns
     -------
     MonogenicSignal
+
+    Examples
+    --------
+    Amplitude and phase give the signals back, ``a cos φ = f`` (Eqs. 21-22),
+    with ``φ`` in ``[0, π]``:
+
+    >>> import numpy as np
+    >>> from hht3d import data_path, load, monogenic
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> x, y, z = sphere.vertices.T
+    >>> signals = np.stack([z, x * y])
+    >>> mono = monogenic(sphere, signals)
+    >>> np.allclose(mono.amplitude * np.cos(mono.phase), signals)
+    True
+    >>> bool(mono.phase.min() >= 0 and mono.phase.max() <= np.pi)
+    True
     """
     f = _signals(surface, imfs)
-    _check_choice(gradient, GRADIENTS, "gradient")
-    _check_choice(frequency, FREQUENCY_METHODS, "frequency")
+    check_choice(gradient, GRADIENTS, "gradient")
+    check_choice(frequency, FREQUENCY_METHODS, "frequency")
     potential = fractional_laplacian(surface, f, -0.5, method, tol, eigenpairs, backend)
     return monogenic_from_potential(surface, f, potential, gradient, frequency)
 
 
 def _signals(surface: Surface, imfs) -> np.ndarray:
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
-    return _as_signals(surface, imfs, "imfs")[0]
+    return as_signals(check_surface(surface), imfs, "imfs")[0]
 
 
-def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = "lsq",
-                             frequency: str = "phase") -> MonogenicSignal:
+def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = RIESZ_DEFAULTS.gradient,
+                             frequency: str = RIESZ_DEFAULTS.frequency) -> MonogenicSignal:
     """Monogenic signal from precomputed ``L^{-1/2}`` of the IMFs (Eqs. 16, 20–23).
 
     Parameters
@@ -141,11 +157,11 @@ def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = 
     MonogenicSignal
     """
     f = _signals(surface, imfs)
-    u = _as_signals(surface, potential, "potential")[0]
+    u = as_signals(surface, potential, "potential")[0]
     if u.shape != f.shape:
         raise InputError(f"potential has shape {u.shape}; the imfs have {f.shape}")
-    _check_choice(gradient, GRADIENTS, "gradient")
-    _check_choice(frequency, FREQUENCY_METHODS, "frequency")
+    check_choice(gradient, GRADIENTS, "gradient")
+    check_choice(frequency, FREQUENCY_METHODS, "frequency")
     rf = vertex_gradient(surface, u, gradient)
     q = np.linalg.norm(rf, axis=-1)
     omega = instantaneous_frequency(surface, f, rf, method=frequency, gradient=gradient)

@@ -29,6 +29,7 @@ import numpy as np
 
 from .errors import InputError
 from .surface import Surface
+from .validation import check_surface
 
 __all__ = [
     "Quality",
@@ -126,13 +127,15 @@ def decomposition_quality(surface: Surface, signal, imfs, residue) -> Quality:
     Quality
         A constant signal has ratio 1 and IO 0 (nothing to split).
     """
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
+    check_surface(surface)
     s = np.asarray(signal, dtype=np.float64)
     f = np.asarray(imfs, dtype=np.float64).reshape(-1, surface.n_vertices)
     r = np.asarray(residue, dtype=np.float64)
     if s.shape != (surface.n_vertices,) or r.shape != s.shape:
         raise InputError(f"signal and residue must have shape ({surface.n_vertices},), got {s.shape} and {r.shape}")
+    scale = max(float(np.abs(s).max(initial=0.0)), float(np.abs(f).max(initial=0.0)), float(np.abs(r).max()))
+    if scale > 0:  # every figure is scale-free; this keeps signals near 1e±200 from overflowing
+        s, f, r = s / scale, f / scale, r / scale
     s_tilde = fluctuation(surface, s)
     parts = np.vstack([f, fluctuation(surface, r)[None]])
     mass = surface.mass_diagonal

@@ -69,7 +69,9 @@ from scipy.special import ellipj, ellipk
 
 from . import linalg
 from .errors import InputError, NumericalError
+from .options import GRADIENTS, METHODS, MIN_TOL, RIESZ_DEFAULTS
 from .surface import Surface
+from .validation import as_signals, check_choice, check_surface
 
 __all__ = [
     "METHODS",
@@ -91,14 +93,8 @@ __all__ = [
     "vertex_gradient",
 ]
 
-#: Ways to apply ``L^{-α}``.
-METHODS = ("quadrature", "spectral", "dense")
-#: Vertex gradients: Eq. (17) least squares, or area-averaged per-face FEM gradients.
-GRADIENTS = ("lsq", "fem")
 #: Largest surface the ``"dense"`` method accepts (an n×n float64 eigendecomposition).
 DENSE_MAX_VERTICES = 6000
-#: Tightest quadrature tolerance: below it round-off in the weights dominates.
-MIN_TOL = 1e-13
 #: ``m = SAFETY · λ_1`` so that the lower bound stays below ``λ_1`` despite
 #: eigensolver error.
 SAFETY = 0.9
@@ -108,37 +104,6 @@ _CHECK_POINTS = 2000
 _POWER_ITERATIONS = 10
 #: Most shifts :func:`quadrature_nodes` tries before giving up.
 _MAX_SHIFTS = 200
-
-
-# -- input handling -----------------------------------------------------------------------
-
-def _check_surface(surface) -> Surface:
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
-    return surface
-
-
-def _as_signals(surface: Surface, f, what: str = "signal") -> tuple[np.ndarray, bool]:
-    """``f`` as a (k, n) float array and whether it was a single (n,) signal."""
-    try:
-        a = np.asarray(f, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InputError(f"{what} is not numeric") from None
-    n = surface.n_vertices
-    if a.ndim not in (1, 2) or a.shape[-1] != n:
-        raise InputError(f"{what} must have shape ({n},) or (k, {n}) for {surface.name} "
-                         f"({n} vertices), got {a.shape}")
-    bad = ~np.isfinite(a)
-    if bad.any():
-        first = np.argwhere(bad)[0]
-        where = f"row {first[0]}, vertex {first[1]}" if a.ndim == 2 else f"vertex {first[0]}"
-        raise InputError(f"{what} has {int(bad.sum())} NaN or infinite values (first at {where})")
-    return np.atleast_2d(a), a.ndim == 1
-
-
-def _check_choice(value, choices, what: str):
-    if value not in choices:
-        raise InputError(f"unknown {what} {value!r}; choose one of {choices}")
 
 
 # -- kernel --------------------------------------------------------------------------------
@@ -157,8 +122,8 @@ def remove_kernel(surface: Surface, f) -> np.ndarray:
         ``f − Σ_c 1_c (1_cᵀ M f)/(1_cᵀ M 1_c)``: M-orthogonal to the kernel
         of ``L`` (the per-component constants).
     """
-    surface = _check_surface(surface)
-    a, single = _as_signals(surface, f)
+    surface = check_surface(surface)
+    a, single = as_signals(surface, f)
     labels = surface.component_labels
     mass = surface.mass_diagonal
     n = surface.n_vertices
@@ -241,7 +206,7 @@ def shifted_matrix(surface: Surface, sigma: float) -> sp.csr_matrix:
     sigma : float
         Shift; ``L + σM`` is SPD for ``σ > 0``.
     """
-    return _systems(_check_surface(surface)).matrix(float(sigma))
+    return _systems(check_surface(surface)).matrix(float(sigma))
 
 
 def shifted_solve(surface: Surface, sigma: float, rhs, *, backend: str | None = None,
@@ -367,7 +332,7 @@ def spectral_bounds(surface: Surface, *, backend: str | None = None,
     -------
     (m, M̄) : tuple of float
     """
-    surface = _check_surface(surface)
+    surface = check_surface(surface)
     key = "riesz:bounds"
     if key not in surface.cache:
         if surface.n_vertices - surface.n_components < 1:
@@ -403,7 +368,7 @@ def _scalar_error(m: float, mbar: float, sigmas: np.ndarray, weights: np.ndarray
     return float(np.max(np.abs(approx * np.sqrt(lam) - 1.0)))
 
 
-def quadrature_nodes(m: float, mbar: float, tol: float = 1e-8) -> tuple[np.ndarray, np.ndarray]:
+def quadrature_nodes(m: float, mbar: float, tol: float = RIESZ_DEFAULTS.tol) -> tuple[np.ndarray, np.ndarray]:
     """Shifts and weights of ``λ^{-1/2} ≈ Σ_j w_j / (λ + σ_j)`` on ``[m, M̄]``.
 
     With ``t = √m · sn(u)/cn(u)`` (Jacobi functions of parameter
@@ -460,7 +425,7 @@ class QuadraturePlan:
     weights: np.ndarray
 
 
-def quadrature_plan(surface: Surface, tol: float = 1e-8, backend: str | None = None, *,
+def quadrature_plan(surface: Surface, tol: float = RIESZ_DEFAULTS.tol, backend: str | None = None, *,
                     symbolic: linalg.SymbolicFactorization | None = None) -> QuadraturePlan:
     """Bounds and nodes of the ``L^{-1/2}`` quadrature for ``surface`` at ``tol``."""
     bounds = spectral_bounds(surface, backend=backend, symbolic=symbolic)
@@ -544,7 +509,7 @@ def smallest_eigenpairs(surface: Surface, count: int, *,
     values : (count,) ndarray, ascending
     vectors : (n, count) ndarray, M-orthonormal columns
     """
-    surface = _check_surface(surface)
+    surface = check_surface(surface)
     available = surface.n_vertices - surface.n_components
     if int(count) != count or not 1 <= count <= available:
         raise InputError(f"eigenpairs must be an integer in [1, {available}] for {surface.name} "
@@ -570,9 +535,9 @@ def _apply_eigenpairs(surface: Surface, g: np.ndarray, values, vectors, power: f
 
 # -- public API ------------------------------------------------------------------------------
 
-def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str = "quadrature",
-                         tol: float = 1e-8, eigenpairs: int = 300,
-                         backend: str | None = None) -> np.ndarray:
+def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str = RIESZ_DEFAULTS.method,
+                         tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
+                         backend: str | None = RIESZ_DEFAULTS.backend) -> np.ndarray:
     """Apply ``L^{power}`` of the generalized problem ``L φ = λ M φ`` (Eqs. 13, 15, 18).
 
     Parameters
@@ -602,10 +567,23 @@ def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str =
     ndarray, shape of ``f``
         ``L^{power} f̃``, M-orthogonal to the kernel: the per-component
         constants are removed from ``f`` first (see :func:`remove_kernel`).
+
+    Examples
+    --------
+    On the unit sphere ``z`` is a spherical harmonic of degree 1, an
+    eigenfunction with ``λ = l(l + 1) = 2``, so ``L^{-1/2} z = z / √2``:
+
+    >>> import numpy as np
+    >>> from hht3d import data_path, fractional_laplacian, load
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> z = sphere.vertices[:, 2]
+    >>> u = fractional_laplacian(sphere, z)
+    >>> bool(np.abs(np.sqrt(2) * u - z).max() < 1e-3)
+    True
     """
-    surface = _check_surface(surface)
-    a, single = _as_signals(surface, f)
-    _check_choice(method, METHODS, "method")
+    surface = check_surface(surface)
+    a, single = as_signals(surface, f)
+    check_choice(method, METHODS, "method")
     if not np.isfinite(power) or power == 0:
         raise InputError(f"power must be a finite non-zero number, got {power!r}")
     g = remove_kernel(surface, a)
@@ -623,8 +601,9 @@ def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str =
     return out[0] if single else out
 
 
-def riesz(surface: Surface, f, *, gradient: str = "lsq", method: str = "quadrature", tol: float = 1e-8,
-          eigenpairs: int = 300, backend: str | None = None) -> np.ndarray:
+def riesz(surface: Surface, f, *, gradient: str = RIESZ_DEFAULTS.gradient, method: str = RIESZ_DEFAULTS.method,
+          tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
+          backend: str | None = RIESZ_DEFAULTS.backend) -> np.ndarray:
     """Riesz transform ``R f = ∇ L^{-1/2} f`` (Eqs. 14, 16; Eq. 18 with ``method="spectral"``).
 
     Parameters
@@ -641,14 +620,29 @@ def riesz(surface: Surface, f, *, gradient: str = "lsq", method: str = "quadratu
     -------
     (n, 3) or (k, n, 3) ndarray
         Tangent vectors, one per vertex (and signal).
+
+    Examples
+    --------
+    The Riesz transform is an isometry: ``∫|Rf|² dA = ∫f̃² dA`` for the signal
+    without its mean, ``f̃`` (with FEM gradients up to their vertex averaging):
+
+    >>> import numpy as np
+    >>> from hht3d import data_path, load, riesz
+    >>> from hht3d.riesz import remove_kernel
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> f = sphere.vertices[:, 0] * sphere.vertices[:, 1] + sphere.vertices[:, 2]
+    >>> rf = riesz(sphere, f, gradient="fem")
+    >>> area, f_tilde = sphere.mass_diagonal, remove_kernel(sphere, f)
+    >>> round(float(area @ (rf ** 2).sum(axis=1) / (area @ f_tilde ** 2)), 2)
+    1.0
     """
-    surface = _check_surface(surface)
-    _check_choice(gradient, GRADIENTS, "gradient")
+    surface = check_surface(surface)
+    check_choice(gradient, GRADIENTS, "gradient")
     u = fractional_laplacian(surface, f, -0.5, method, tol, eigenpairs, backend)
     return vertex_gradient(surface, u, gradient)
 
 
-def vertex_gradient(surface: Surface, u: np.ndarray, kind: str = "lsq") -> np.ndarray:
+def vertex_gradient(surface: Surface, u: np.ndarray, kind: str = RIESZ_DEFAULTS.gradient) -> np.ndarray:
     """Tangent gradients of (n,) or (k, n) per-vertex fields: (n, 3) or (k, n, 3)."""
     grad = surface.gradient(kind)
     n = surface.n_vertices

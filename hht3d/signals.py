@@ -14,6 +14,7 @@ from scipy.sparse.csgraph import connected_components
 from . import operators as ops
 from .errors import InputError
 from .surface import Surface
+from .validation import check_signal
 
 __all__ = [
     "mean_curvature",
@@ -231,31 +232,6 @@ def stored(surface: Surface, name: str) -> np.ndarray:
     return check_signal(surface, surface.attributes[name], f"attribute {name!r}")
 
 
-def check_signal(surface: Surface, values, what: str = "signal") -> np.ndarray:
-    """Validate a user signal: one finite real float per vertex.
-
-    Complex values are refused rather than cut to their real part.
-    """
-    if np.iscomplexobj(values):
-        raise InputError(f"{what} is complex; pass a real signal, e.g. its real part (values.real) or its "
-                         "magnitude (abs(values))")
-    try:
-        a = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InputError(f"{what} is not numeric") from None
-    if a.ndim != 1 or len(a) != surface.n_vertices:
-        hint = ""
-        if surface.clean_report is not None and surface.clean_report.changed and a.ndim == 1:
-            hint = (f"; cleaning changed the vertex count ({surface.clean_report.summary()}): "
-                    "index it with surface.clean_report.kept_vertices or load with clean=False")
-        raise InputError(f"{what} has shape {a.shape}; {surface.name} has {surface.n_vertices} vertices{hint}")
-    bad = ~np.isfinite(a)
-    if bad.any():
-        raise InputError(f"{what} has {int(bad.sum())} NaN or infinite values "
-                         f"(first at vertex {int(np.flatnonzero(bad)[0])})")
-    return a
-
-
 def check_signal_path(path) -> Path:
     """``path`` if it names an existing ``.npy`` file; else an :class:`InputError` saying what it is."""
     path = Path(path)
@@ -297,6 +273,18 @@ def signal(surface: Surface, kind: str, *, attribute: str | None = None, path=No
 
     ``kind`` is one of :data:`SIGNALS`, or ``"stored"`` (with ``attribute``),
     ``"file"`` (a ``.npy`` at ``path``) or ``"array"`` (``values``).
+
+    Examples
+    --------
+    The mean curvature signal of Eq. 24 is ``2H``, which is 2 on the unit sphere:
+
+    >>> import numpy as np
+    >>> from hht3d import data_path, load
+    >>> from hht3d.signals import signal
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> curvature = signal(sphere, "mean_curvature")
+    >>> round(float(np.median(curvature)), 4)
+    2.0
     """
     if kind in SIGNALS:
         return SIGNALS[kind](surface)

@@ -101,6 +101,24 @@ class HilbertSpectrum:
         weighted = (self.energy * self.frequency) @ self.area
         return np.divide(weighted, total, out=np.full_like(total, np.nan), where=total > 0)
 
+    def frequency_limits(self, scale: str = "linear", tail: float = 1e-3) -> tuple[float, float]:
+        """Frequencies between which all but ``tail`` of the energy lies at each end.
+
+        With ``scale="log"`` only positive frequencies count.  The limits of
+        the figures and the viewer's marginal spectrum.
+        """
+        frequency = self.frequency.ravel()
+        weight = (self.energy * self.area).ravel()
+        keep = (frequency > 0) if scale == "log" else np.isfinite(frequency)
+        frequency, weight = frequency[keep], weight[keep]
+        order = np.argsort(frequency)
+        cumulative = np.cumsum(weight[order])
+        if cumulative.size == 0 or cumulative[-1] <= 0:
+            raise InputError("no positive instantaneous frequency carries energy; give explicit limits")
+        low, high = np.searchsorted(cumulative, [tail * cumulative[-1], (1 - tail) * cumulative[-1]])
+        low_f, high_f = frequency[order[low]], frequency[order[min(high, len(order) - 1)]]
+        return (float(low_f), float(high_f)) if high_f > low_f else (float(frequency.min()), float(frequency.max()))
+
     def bin_edges(self, bins: int = 64, scale: str = "linear", limits=None) -> np.ndarray:
         """Frequency bin edges (bins + 1,).
 

@@ -244,12 +244,10 @@ def _figure_json(shown: list[Shown], labels: list[str], view, up) -> str:
 
 
 def _spectrum_data(spectrum: HilbertSpectrum) -> dict | None:
-    from .figures import _frequency_limits
-
     total = float(spectrum.imf_energy().sum())
     if not total > 0 or not np.any(spectrum.frequency > 0):
         return None
-    edges, marginal = spectrum.marginal(_SPECTRUM_BINS, "log", _frequency_limits(spectrum, "log"))
+    edges, marginal = spectrum.marginal(_SPECTRUM_BINS, "log", spectrum.frequency_limits("log"))
     per_imf = [100 * HilbertSpectrum(spectrum.frequency[k:k + 1], spectrum.amplitude[k:k + 1],
                                      spectrum.area).marginal(_SPECTRUM_BINS, "log", (edges[0], edges[-1]))[1] / total
                for k in range(len(spectrum.frequency))]

@@ -264,6 +264,9 @@ def test_scale_equivariance(small_sphere):
         assert scaled.n_imfs == base.n_imfs
         np.testing.assert_allclose(scaled.imfs, c * base.imfs, rtol=0, atol=1e-9 * abs(c))
         np.testing.assert_allclose(scaled.residue, c * base.residue, rtol=0, atol=1e-9 * abs(c))
+        # the quality figures are scale-free: equal to 1e-9 (round-off of sums of n ~ 1e3 terms)
+        assert scaled.quality.energy_ratio == pytest.approx(base.quality.energy_ratio, rel=1e-9)
+        assert scaled.quality.orthogonality_index == pytest.approx(base.quality.orthogonality_index, abs=1e-9)
 
 
 @pytest.mark.parametrize("value", [0.0, 3.25, -1e12])

@@ -123,3 +123,36 @@ def test_shift_groups_sharing_one_analysis_on_threads():
     (sync,) = graph.compute(lazy, scheduler="synchronous", progress=False)
     np.testing.assert_allclose(threads, sync, rtol=0, atol=1e-13 * np.abs(sync).max())
     assert [k for k in surface.cache if k.startswith("graph:shift_analysis")]
+
+
+def test_lazy_twins_have_the_eager_signatures_and_docstrings():
+    import inspect
+
+    from hht3d import apps
+    from hht3d.emd import eemd, emd
+    from hht3d.io import load
+    from hht3d.monogenic import monogenic, monogenic_from_potential
+    from hht3d.signals import signal
+
+    extras = {"monogenic": ["riesz_tasks"], "hht": ["ensemble", "riesz_tasks"]}
+    eager = [load, signal, emd, eemd, monogenic, monogenic_from_potential, eager_hht, apps.filter_signal,
+             apps.filter_geometry, apps.reconstruct, apps.prominent_features, apps.hks_features,
+             apps.imf_enhancement, apps.manifold_harmonics_filter]
+    for func in eager:
+        twin = getattr(graph, func.__name__)
+        lazy, core = inspect.signature(twin).parameters, inspect.signature(func).parameters
+        assert list(lazy) == list(core) + extras.get(func.__name__, []), func.__name__
+        assert all(lazy[name] == core[name] for name in core), func.__name__
+        assert twin.__doc__.startswith(f"Lazy :func:`{func.__module__}.{func.__name__}`")
+        assert inspect.cleandoc(func.__doc__).split("\nExamples\n")[0].rstrip() in twin.__doc__
+
+
+def test_lazy_monogenic_takes_the_eager_arguments():
+    from hht3d.monogenic import monogenic
+
+    surface = _surfaces()[0]
+    imfs = np.stack([mean_curvature(surface), surface.vertices[:, 0]])
+    (lazy,) = graph.compute(graph.monogenic(graph.from_surface(surface), imfs, gradient="fem", riesz_tasks=2),
+                            scheduler="synchronous", progress=False)
+    eager = monogenic(surface, imfs, gradient="fem")
+    np.testing.assert_allclose(lazy.riesz, eager.riesz, rtol=0, atol=1e-12 * np.abs(eager.riesz).max())

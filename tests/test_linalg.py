@@ -191,3 +191,33 @@ def test_info_backends_names_the_solver_and_why(capsys, monkeypatch):
     out = capsys.readouterr().out
     assert out.startswith("sparse solver: superlu (set by the environment variable HHT3D_BACKEND=superlu)")
     assert all(name in out for name in linalg.BACKENDS)
+
+
+class _DenseCholesky:
+    """A test backend: dense Cholesky of scipy.linalg on any pattern."""
+
+    def __init__(self, pattern, module):
+        self.n, self.module = pattern.shape[0], module
+
+    def factorize(self, a):
+        factor = self.module.cho_factor(a.toarray())
+        return linalg.Factor(lambda b: self.module.cho_solve(factor, b), self.n)
+
+
+def test_a_new_backend_is_one_registry_entry(monkeypatch):
+    monkeypatch.setattr(linalg, "SOLVER_BACKENDS", dict(linalg.SOLVER_BACKENDS))
+    monkeypatch.delenv(linalg.BACKEND_VARIABLE, raising=False)
+    linalg.register_backend(linalg.Backend("dense", "scipy", ("scipy.linalg",), "dense Cholesky",
+                                           "never missing", _DenseCholesky), before="superlu")
+    linalg.register_backend(linalg.Backend("absent", "absent", ("hht3d_no_such_module",), "nothing",
+                                           "pip install absent", _DenseCholesky))
+    assert list(linalg.SOLVER_BACKENDS)[-2:] == ["superlu", "absent"]
+    assert "dense" in linalg.available_backends() and "absent" not in linalg.available_backends()
+    a = sp.csr_matrix(np.array([[4.0, 1.0], [1.0, 3.0]]))
+    np.testing.assert_allclose(a @ linalg.factorize(a, "dense").solve(np.ones(2)), np.ones(2))
+    assert linalg.SymbolicFactorization(a, "dense").factorize(a).solve(np.ones(2)).shape == (2,)
+    with pytest.raises(InputError, match="pip install absent"):
+        linalg.factorize(a, "absent")
+    statuses = {s.name: s for s in linalg.backend_report()[0]}
+    assert statuses["dense"].available and "dense Cholesky" in statuses["dense"].detail
+    assert statuses["absent"].detail == "pip install absent"

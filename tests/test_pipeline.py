@@ -434,3 +434,36 @@ def test_every_operation_and_output_format_runs(tmp_path, mesh_file):
     amplitude = result.monogenic.amplitude[0]
     np.testing.assert_allclose(load(out / "amplitude_1.ply", clean=False).attributes["amplitude_1"], amplitude,
                                rtol=0, atol=1e-12 * amplitude.max())
+
+
+def _scaled(surface, signal, *, factor: float = 2.0):
+    """A made-up core function: the signal times a factor."""
+    return factor * np.asarray(signal)
+
+
+def test_a_new_operation_is_one_core_function_and_one_entry(monkeypatch, tmp_path, mesh_file):
+    from hht3d.pipeline import Operation, Param, Slot
+    from hht3d.pipeline.params import with_defaults
+
+    monkeypatch.setitem(OPERATIONS, "scaled", Operation(
+        "scaled", "the signal times a factor", (Slot("surface", ("surface",)), Slot("signal", ("signal",))),
+        "signal", with_defaults(_scaled, Param("factor", "float", "the factor", minimum=0)), func=_scaled))
+    text = textwrap.dedent(f"""\
+        version: 1
+        execution: {{scheduler: synchronous, progress: false}}
+        inputs: {mesh_file}
+        steps:
+          - {{op: signal, params: {{kind: mean_curvature}}}}
+          - {{id: tripled, op: scaled, params: {{factor: 3}}}}
+        outputs:
+          folder: {tmp_path / "out"}
+          files: [{{from: tripled, path: tripled.npz}}]
+        """)
+    plan = parse_pipeline(text)
+    assert plan.step("tripled").params == {"factor": 3.0}
+    (row,) = run_pipeline(plan)
+    assert row.status == "ok", row.error
+    np.testing.assert_array_equal(np.load(tmp_path / "out" / "tripled.npz")["signal"],
+                                  3.0 * mean_curvature(load(mesh_file)))
+    with pytest.raises(Exception, match="parameter factor must be a number >= 0"):
+        parse_pipeline(text.replace("factor: 3", "factor: -1"))

@@ -10,15 +10,21 @@
   enhancement (Hu et al. 2014), manifold-harmonics filtering (Vallet & Lévy
   2008) and heat-kernel-signature features (Sun et al. 2009).
 
->>> from hht3d import load
->>> from hht3d.hht import hht
+A band-stop of the Hilbert spectrum moves vertices and keeps the faces
+(Eqs. 26-27); prominent features are vertices of the mesh (Sec. 5.2):
+
+>>> import numpy as np
+>>> from hht3d import data_path, hht, load
 >>> from hht3d.signals import mean_curvature
 >>> from hht3d.apps import BandStop, filter_geometry, prominent_features
->>> surface = load("model.ply")
->>> result = hht(surface, mean_curvature(surface))
->>> smooth = filter_geometry(result, BandStop(low=40.0, high=120.0, width=10.0))
->>> smooth.to_open3d()                                   # or hht3d.io.write_ply(path, smooth)
->>> features = prominent_features(surface, result.imfs)  # features.vertices, features.counts
+>>> surface = load(data_path("spot.ply"))
+>>> result = hht(surface, mean_curvature(surface), emd_options={"max_imfs": 3})
+>>> smooth = filter_geometry(result, BandStop(low=40.0, high=120.0, width=10.0))  # a Surface: smooth.to_open3d()
+>>> bool(np.abs(smooth.vertices - surface.vertices).max() > 0), np.array_equal(smooth.faces, surface.faces)
+(True, True)
+>>> features = prominent_features(surface, result.imfs)   # features.vertices, features.counts
+>>> bool(set(features.vertices) <= set(range(surface.n_vertices)))
+True
 """
 from .baselines import (HKS_TIME_FRACTION, heat_kernel_signature, hks_features, imf_enhancement,
                         manifold_harmonics_filter)

@@ -26,8 +26,9 @@ from ..emd import local_extrema
 from ..errors import InputError
 from ..riesz import remove_kernel, smallest_eigenpairs
 from ..surface import Surface
-from .features import FeatureResult, _as_imfs, _check_radius, features_from_counts
-from .filters import _evaluate_gain
+from ..validation import as_imfs, check_distance, check_surface, finite
+from .features import FeatureResult, features_from_counts
+from .filters import evaluate_gain
 from .reconstruction import BOUNDARY_WEIGHT, INTERIOR_WEIGHT, reconstruct_from_change
 
 __all__ = [
@@ -40,22 +41,6 @@ __all__ = [
 
 #: Default HKS time as a fraction of ``t_max = 4 ln 10 / λ_1`` (Sun et al. 2009).
 HKS_TIME_FRACTION = 0.1
-
-
-def _check_surface(surface) -> Surface:
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
-    return surface
-
-
-def _finite(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise InputError(f"{name} must be finite, got {value!r}")
-    return x
 
 
 def imf_enhancement(surface: Surface, imfs, factor: float = 2.5, *, index: int = 0,
@@ -85,9 +70,9 @@ def imf_enhancement(surface: Surface, imfs, factor: float = 2.5, *, index: int =
     -------
     Surface
     """
-    surface = _check_surface(surface)
-    f = _as_imfs(surface, imfs)
-    factor = _finite("factor", factor)
+    surface = check_surface(surface)
+    f = as_imfs(surface, imfs)
+    factor = finite("factor", factor)
     if int(index) != index or not 0 <= index < len(f):
         raise InputError(f"IMF index must be an integer in [0, {len(f)}), got {index!r}")
     return reconstruct_from_change(surface, (factor - 1.0) * f[int(index)], interior_weight=interior_weight,
@@ -135,9 +120,9 @@ def manifold_harmonics_filter(surface: Surface, gain, *, eigenpairs: int = 300, 
     -------
     Surface
     """
-    surface = _check_surface(surface)
+    surface = check_surface(surface)
     values, vectors = smallest_eigenpairs(surface, _check_count(eigenpairs), backend=backend)
-    mu = _evaluate_gain(gain, np.sqrt(values))
+    mu = evaluate_gain(gain, np.sqrt(values))
     v = surface.vertices
     coefficients = vectors.T @ (surface.mass_diagonal[:, None] * v)  # (p, 3)
     if keep_remainder:
@@ -171,7 +156,7 @@ def heat_kernel_signature(surface: Surface, times, *, eigenpairs: int = 100,
     -------
     (T, n) ndarray (``(n,)`` for a scalar ``times``)
     """
-    surface = _check_surface(surface)
+    surface = check_surface(surface)
     t = np.asarray(times, dtype=np.float64)
     if t.ndim > 1 or t.size == 0 or not np.all(np.isfinite(t)) or np.any(t <= 0):
         raise InputError(f"HKS times must be positive finite numbers, got {times!r}")
@@ -211,13 +196,13 @@ def hks_features(surface: Surface, *, time: float | None = None, eigenpairs: int
         One scale: ``maxima[0]`` are the local maxima, ``minima[0]`` is
         empty, ``counts`` are 1.
     """
-    surface = _check_surface(surface)
-    _check_radius(merge_radius)
+    surface = check_surface(surface)
+    check_distance("merge_radius", merge_radius)
     count = _check_count(eigenpairs)
     if time is None:
         values, _ = smallest_eigenpairs(surface, count, backend=backend)
         time = HKS_TIME_FRACTION * 4.0 * math.log(10.0) / float(values[0])
-    hks = heat_kernel_signature(surface, _finite("time", time), eigenpairs=count, backend=backend)
+    hks = heat_kernel_signature(surface, finite("time", time), eigenpairs=count, backend=backend)
     maxima, _ = local_extrema(surface, hks, rule="strict", ring=ring)
     return features_from_counts(surface, [maxima], [np.empty(0, dtype=np.int64)], 1, merge_radius,
                                 scores=hks)

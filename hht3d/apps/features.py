@@ -43,6 +43,7 @@ from scipy.spatial import cKDTree
 from ..emd import local_extrema
 from ..errors import InputError
 from ..surface import Surface
+from ..validation import as_imfs, check_distance, check_surface
 
 __all__ = ["FEATURE_EMD_OPTIONS", "FeatureResult", "prominent_features", "features_from_counts", "merge_hits", "repeatability"]
 
@@ -129,35 +130,6 @@ def merge_hits(points: np.ndarray, scores: np.ndarray, radius: float) -> tuple[n
     return representatives, rank[labels]
 
 
-def _check_radius(merge_radius) -> float:
-    if merge_radius is None:
-        return 0.0
-    try:
-        r = float(merge_radius)
-    except (TypeError, ValueError):
-        raise InputError(f"merge_radius must be a number, got {merge_radius!r}") from None
-    if not (math.isfinite(r) and r >= 0):
-        raise InputError(f"merge_radius must be a finite distance >= 0, got {merge_radius!r}")
-    return r
-
-
-def _as_imfs(surface: Surface, imfs) -> np.ndarray:
-    a = getattr(imfs, "imfs", imfs)
-    try:
-        a = np.asarray(a, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InputError("imfs are not numeric") from None
-    if a.ndim == 1:
-        a = a[None]
-    if a.ndim != 2 or a.shape[1] != surface.n_vertices:
-        raise InputError(f"imfs must have shape (k, {surface.n_vertices}) for {surface.name}, got {a.shape}")
-    if len(a) == 0:
-        raise InputError(f"{surface.name}: the decomposition has no IMFs; there are no extrema to count")
-    if not np.all(np.isfinite(a)):
-        raise InputError("imfs have NaN or infinite values")
-    return a
-
-
 def features_from_counts(surface: Surface, maxima, minima, min_count: int,
                          merge_radius: float | None = None, scores=None) -> FeatureResult:
     """Count extrema over scales, keep vertices with ``count >= min_count``, merge.
@@ -173,7 +145,7 @@ def features_from_counts(surface: Surface, maxima, minima, min_count: int,
     scores : (n,) array_like, optional
         Ranks hits within a merged group (default: the counts).
     """
-    r = _check_radius(merge_radius)
+    r = check_distance("merge_radius", merge_radius)
     n = surface.n_vertices
     counts = np.zeros(n, dtype=np.int64)
     for mx, mn in zip(maxima, minima):
@@ -216,16 +188,15 @@ def prominent_features(surface: Surface, imfs, *, ratio: float = 0.8, ring: int 
     -------
     FeatureResult
     """
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
-    f = _as_imfs(surface, imfs)
+    check_surface(surface)
+    f = as_imfs(surface, imfs)
     try:
         fraction = float(fraction)
     except (TypeError, ValueError):
         raise InputError(f"fraction must be a number, got {fraction!r}") from None
     if not 0 < fraction <= 1:
         raise InputError(f"fraction must lie in (0, 1], got {fraction!r}")
-    _check_radius(merge_radius)
+    check_distance("merge_radius", merge_radius)
     extrema = [local_extrema(surface, fk, rule="ring", ring=ring, ratio=ratio) for fk in f]
     min_count = max(1, math.ceil(fraction * len(f) - 1e-9))
     return features_from_counts(surface, [e[0] for e in extrema], [e[1] for e in extrema], min_count,
@@ -241,7 +212,7 @@ def repeatability(points, reference, radius: float) -> float:
     """
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     q = np.asarray(reference, dtype=np.float64).reshape(-1, 3)
-    radius = _check_radius(radius)
+    radius = check_distance("merge_radius", radius)
     if len(p) == 0:
         return float("nan")
     if len(q) == 0:

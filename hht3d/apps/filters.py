@@ -42,12 +42,12 @@ parameters (as a pipeline description would give them).
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InputError
+from ..validation import finite
 
 __all__ = [
     "Gain",
@@ -61,17 +61,13 @@ __all__ = [
     "make_gain",
     "gains_of",
     "filter_signal",
+    "decomposition_parts",
+    "evaluate_gain",
 ]
 
 
 def _finite(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"gain parameter {name} must be a number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise InputError(f"gain parameter {name} must be finite, got {value!r}")
-    return x
+    return finite(f"gain parameter {name}", value)
 
 
 def _non_negative(name: str, value) -> float:
@@ -304,7 +300,7 @@ def make_gain(kind: str, **parameters) -> Gain:
     return GAINS[kind](**parameters)
 
 
-def _decomposition_parts(decomposition) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def decomposition_parts(decomposition) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(imfs (k, n), residue (n,), frequency (k, n))`` from an HHT result or a tuple."""
     if isinstance(decomposition, tuple):
         if len(decomposition) != 3:
@@ -328,11 +324,12 @@ def _decomposition_parts(decomposition) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 def gains_of(decomposition, gain) -> np.ndarray:
     """The gains ``μ(ω_k(v))`` (k, n) of a decomposition's instantaneous frequencies."""
-    _, _, frequency = _decomposition_parts(decomposition)
-    return _evaluate_gain(gain, frequency)
+    _, _, frequency = decomposition_parts(decomposition)
+    return evaluate_gain(gain, frequency)
 
 
-def _evaluate_gain(gain, frequency: np.ndarray) -> np.ndarray:
+def evaluate_gain(gain, frequency: np.ndarray) -> np.ndarray:
+    """``gain(frequency)`` checked: callable, finite, and of the frequencies' shape (a scalar spreads)."""
     if not callable(gain):
         raise InputError(f"gain must be callable on frequencies (e.g. hht3d.apps.LowPass), got {gain!r}")
     mu = np.asarray(gain(frequency), dtype=np.float64)
@@ -363,6 +360,6 @@ def filter_signal(decomposition, gain) -> np.ndarray:
     (n,) ndarray
         ``s' = Σ_k μ(ω_k) a_k cos φ_k + r_N = Σ_k μ(ω_k) f_k + r_N``.
     """
-    imfs, residue, frequency = _decomposition_parts(decomposition)
-    mu = _evaluate_gain(gain, frequency)
+    imfs, residue, frequency = decomposition_parts(decomposition)
+    mu = evaluate_gain(gain, frequency)
     return np.sum(mu * imfs, axis=0) + residue

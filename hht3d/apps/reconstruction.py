@@ -77,7 +77,6 @@ by −9.9% without it at ``μ = 0.0001``.
 """
 from __future__ import annotations
 
-import math
 import warnings
 
 import numpy as np
@@ -87,9 +86,10 @@ from .. import linalg
 from ..errors import InputError
 from ..quality import QualityWarning
 from ..riesz import remove_kernel
-from ..signals import check_signal, mean_curvature
+from ..signals import mean_curvature
 from ..surface import Surface
-from .filters import _decomposition_parts, _evaluate_gain
+from ..validation import check_signal, check_surface, positive
+from .filters import decomposition_parts, evaluate_gain
 
 __all__ = ["position_weights", "reconstruct", "reconstruct_from_change", "filter_geometry", "edit_frequency",
            "automatic_weight", "check_mean_curvature_signal", "INTERIOR_WEIGHT", "BOUNDARY_WEIGHT",
@@ -113,22 +113,6 @@ DISPLACEMENT_LIMIT = 0.05
 _SIGNAL_RTOL = 1e-8
 
 
-def _positive(name: str, value) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number, got {value!r}") from None
-    if not (math.isfinite(x) and x > 0):
-        raise InputError(f"{name} must be a finite number > 0, got {value!r}")
-    return x
-
-
-def _check_surface(surface) -> Surface:
-    if not isinstance(surface, Surface):
-        raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")
-    return surface
-
-
 def position_weights(surface: Surface, interior_weight: float = INTERIOR_WEIGHT,
                      boundary_weight: float = BOUNDARY_WEIGHT) -> np.ndarray:
     """Per-vertex ``μ_i`` of Eq. (27): ``boundary_weight`` on boundary vertices, else ``interior_weight``.
@@ -136,9 +120,9 @@ def position_weights(surface: Surface, interior_weight: float = INTERIOR_WEIGHT,
     Both must be positive (a zero weight leaves the translation of a closed
     component undetermined).
     """
-    surface = _check_surface(surface)
-    interior = _positive("interior_weight", interior_weight)
-    boundary = _positive("boundary_weight", boundary_weight)
+    surface = check_surface(surface)
+    interior = positive("interior_weight", interior_weight)
+    boundary = positive("boundary_weight", boundary_weight)
     return np.where(surface.boundary_vertices, boundary, interior)
 
 
@@ -186,7 +170,7 @@ def reconstruct_from_change(surface: Surface, change, *, interior_weight: float 
     -------
     Surface
     """
-    surface = _check_surface(surface)
+    surface = check_surface(surface)
     ds = check_signal(surface, change, "signal change")
     if preserve_scale:
         ds = remove_kernel(surface, ds)
@@ -232,7 +216,7 @@ def reconstruct(surface: Surface, signal, *, interior_weight: float = INTERIOR_W
     -------
     Surface
     """
-    surface = _check_surface(surface)
+    surface = check_surface(surface)
     target = check_signal(surface, signal, "filtered signal")
     return reconstruct_from_change(surface, target - mean_curvature(surface),
                                    interior_weight=interior_weight, boundary_weight=boundary_weight,
@@ -260,8 +244,8 @@ def edit_frequency(result, gain) -> float | None:
 
     Each vertex and IMF weighs ``|μ(ω_k) − 1| a_k² A``, its share of the change (Eqs. 21, 26).
     """
-    imfs, _, frequency = _decomposition_parts(result)
-    change = np.abs(_evaluate_gain(gain, frequency) - 1.0)
+    imfs, _, frequency = decomposition_parts(result)
+    change = np.abs(evaluate_gain(gain, frequency) - 1.0)
     weight = change * np.asarray(result.monogenic.amplitude) ** 2 * result.surface.mass_diagonal
     if not np.any(change > _UNCHANGED) or not weight.max() > 0:
         return None
@@ -317,10 +301,10 @@ def filter_geometry(result, gain, *, interior_weight: float | None = None, bound
     The change ``s' − s = Σ_k (μ(ω_k) − 1) f_k`` is formed directly, so a
     gain of 1 moves no vertex at all.
     """
-    surface = _check_surface(getattr(result, "surface", None))
-    imfs, _, frequency = _decomposition_parts(result)
+    surface = check_surface(getattr(result, "surface", None))
+    imfs, _, frequency = decomposition_parts(result)
     check_mean_curvature_signal(surface, result.signal)
-    mu = _evaluate_gain(gain, frequency)
+    mu = evaluate_gain(gain, frequency)
     edited = edit_frequency(result, gain)
     if edited is None:
         warnings.warn(f"{surface.name}: the gain changes no frequency (all {frequency.size} instantaneous "

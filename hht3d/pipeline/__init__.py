@@ -7,10 +7,15 @@ with parameters and references to earlier steps) and the files to write.
 :func:`run_pipeline` compiles that to the lazy graph of :mod:`hht3d.graph`
 and runs it on any scheduler of :mod:`hht3d.scheduling`.
 
->>> from hht3d.pipeline import load_pipeline, run_pipeline
->>> plan = load_pipeline("pipelines/demo.yaml", overrides=["inputs=model.ply"])
->>> print(plan.describe())
->>> rows = run_pipeline(plan, scheduler="processes")   # one ItemSummary per input file
+>>> from hht3d import data_path
+>>> from hht3d.pipeline import load_pipeline
+>>> plan = load_pipeline(data_path("demo.yaml"), overrides=["steps.hht.params.max_imfs=2"])
+>>> [step.id for step in plan.steps], plan.inputs[0].name
+(['load', 'curvature', 'hht'], 'spot.ply')
+>>> plan.step("hht").params["max_imfs"]
+2
+
+``run_pipeline(plan)`` then returns one ItemSummary per input file (see its example).
 
 This layer adds configuration only: nothing in the core knows YAML exists.
 """
@@ -19,7 +24,8 @@ from .params import Param
 from .plan import Execution, Output, Pipeline, Step
 from .registry import OPERATIONS, Operation, Slot
 from .runner import failures, pipeline_graph, run_pipeline
-from .schema import VERSION, apply_overrides, builtin_models, load_pipeline, parse_pipeline
+from .document import apply_overrides
+from .schema import VERSION, builtin_models, load_pipeline, parse_pipeline
 
 __all__ = [
     "VERSION", "load_pipeline", "parse_pipeline", "apply_overrides", "builtin_models",

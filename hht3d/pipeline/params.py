@@ -9,13 +9,13 @@ adds the closest known name to messages about unknown names.
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import inspect
 import math
 from dataclasses import dataclass
 
 from ..apps.filters import GAINS, make_gain
 from ..errors import InputError, PipelineError, one_line, shown
+from ..validation import did_you_mean
 
 __all__ = ["Param", "REQUIRED", "did_you_mean", "with_defaults", "yaml_text"]
 
@@ -31,17 +31,6 @@ REQUIRED = _Required()
 _SIGNATURE = object()
 
 KINDS = ("int", "float", "bool", "str", "choice", "gain")
-
-
-def did_you_mean(word, known, *, listing: bool = True) -> str:
-    """``"; did you mean 'x'?"`` for the closest of ``known``; else the list of ``known``
-    (with ``listing``) or nothing."""
-    known = [str(k) for k in known]
-    plausible = isinstance(word, str) and len(word) <= 100  # never format a huge or nested value
-    close = difflib.get_close_matches(word, known, n=1, cutoff=0.6) if plausible else []
-    if close:
-        return f"; did you mean {close[0]!r}?"
-    return f"; known: {', '.join(sorted(known))}" if known and listing else ""
 
 
 def yaml_text(value) -> str:

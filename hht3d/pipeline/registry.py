@@ -14,9 +14,27 @@ hht        :class:`~hht3d.hht.HHTResult`
 features   :class:`~hht3d.apps.FeatureResult`
 =========  ==============================================================
 
-``build(builder, inputs, params)`` makes the step's lazy tasks through
-:mod:`hht3d.graph` and returns them by name, the step's result under
-``"result"``.  ``hht3d ops`` prints this registry.
+An operation is data: the core function it runs, its slots (the
+function's leading positional arguments, in order), its output kind and its
+parameters (the function's keyword arguments, with types and ranges;
+defaults read from the function's signature by
+:func:`~hht3d.pipeline.params.with_defaults`).
+:meth:`Operation.tasks` makes the step's lazy task from that alone.  An
+operation whose work is several tasks (EEMD members, the HHT stages) names
+a ``build`` function of :mod:`hht3d.graph` instead.  ``hht3d ops`` prints
+this registry.
+
+Adding an operation
+-------------------
+Write the core function (e.g. in :mod:`hht3d.apps`), then add one entry to
+:data:`OPERATIONS`::
+
+    Operation("smooth", "heat-flow smoothing of a signal", (_SURFACE, _SIGNAL_IN), "signal",
+              with_defaults(smooth, Param("time", "float", "diffusion time", minimum=0)),
+              func=smooth),
+
+Its lazy twin, if wanted outside pipelines, is one line in
+:mod:`hht3d.graph`: ``smooth = mirror(smooth)``.
 """
 from __future__ import annotations
 
@@ -24,24 +42,20 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from .. import graph, linalg
-from ..apps import hks_features, imf_enhancement, manifold_harmonics_filter, prominent_features
-from ..apps import filter_geometry as _filter_geometry
-from ..apps import reconstruct as _reconstruct
-from ..emd import ENVELOPES, EXTREMA_RULES, STOPPING_RULES
-from ..emd import emd as _emd
+from ..apps import (filter_geometry, filter_signal, hks_features, imf_enhancement, manifold_harmonics_filter,
+                    prominent_features, reconstruct)
+from ..emd import ENVELOPES, EXTREMA_RULES, STOPPING_RULES, emd
 from ..errors import InputError, PipelineError, shown
-from ..frequency import FREQUENCY_METHODS
-from ..io import load as _load
-from ..riesz import GRADIENTS, METHODS, MIN_TOL
-from ..signals import SIGNALS, check_signal_path
-from ..signals import signal as _signal
+from ..io import load
+from ..options import FREQUENCY_METHODS, GRADIENTS, METHODS, MIN_TOL
+from ..signals import SIGNALS, check_signal_path, signal
 from ..surface import LAPLACIANS
 from .params import REQUIRED, Param, did_you_mean, with_defaults
 
 __all__ = ["Slot", "Operation", "OPERATIONS", "operation"]
 
-#: Sparse solver backends of :mod:`hht3d.linalg` (availability is checked when a step runs).
-SOLVERS = linalg.BACKENDS
+#: Sparse solver backends of :data:`hht3d.linalg.SOLVER_BACKENDS` (availability is checked when a step runs).
+SOLVERS = tuple(linalg.SOLVER_BACKENDS)
 
 
 @dataclass(frozen=True)
@@ -54,19 +68,58 @@ class Slot:
 
 @dataclass(frozen=True)
 class Operation:
-    """A registered operation: what it takes, makes and accepts as parameters."""
+    """A registered operation: what it runs, takes, makes and accepts as parameters.
+
+    Parameters
+    ----------
+    name, summary : str
+        The ``op:`` of a step, and one line for ``hht3d ops``.
+    slots : tuple of Slot
+        The named inputs, passed to ``func`` (or ``build``) positionally, in order.
+    output : str
+        The kind of the result (module notes).
+    params : tuple of Param
+        The parameters, passed as keyword arguments.
+    func : callable, optional
+        The core function: the step is one task ``func(*inputs, **params)``.
+    build : callable, optional
+        Instead of ``func``: ``build(builder, *inputs, **params)`` makes the
+        step's tasks (:mod:`hht3d.graph`) and returns the result's task, or
+        the tasks by stage name with the result under ``"result"``.
+    check : callable, optional
+        ``check(params, where)`` raises :class:`PipelineError` for
+        parameter combinations the types cannot express.
+    vertices : callable, optional
+        ``vertices(params)`` gives ``(parameter, count)``: the fewest vertices an input needs.
+    """
 
     name: str
     summary: str
     slots: tuple[Slot, ...]
     output: str
     params: tuple[Param, ...]
-    build: Callable = field(repr=False)
+    func: Callable | None = field(default=None, repr=False)
+    build: Callable | None = field(default=None, repr=False)
     check: Callable | None = field(default=None, repr=False)
     vertices: Callable | None = field(default=None, repr=False)
 
+    def __post_init__(self):
+        if (self.func is None) == (self.build is None):
+            raise ValueError(f"operation {self.name}: give exactly one of func and build")
+
     def param(self, name: str) -> Param | None:
         return next((p for p in self.params if p.name == name), None)
+
+    def tasks(self, builder, inputs: dict, params: dict) -> dict:
+        """The step's lazy tasks by name, its result under ``"result"``.
+
+        ``inputs`` are the slots' values by slot name, ``params`` the checked parameters.
+        """
+        args = [inputs[slot.name] for slot in self.slots]
+        if self.func is not None:
+            return {"result": builder.task(self.name, self.func)(*args, **params)}
+        made = self.build(builder, *args, **params)
+        return made if isinstance(made, dict) else {"result": made}
 
     def fewest_vertices(self, params: dict) -> tuple[str, int] | None:
         """``(parameter, count)``: the fewest vertices an input needs for these parameters, if any."""
@@ -108,7 +161,7 @@ _BACKEND = Param("backend", "choice", "sparse solver (default: the fastest insta
                  choices=SOLVERS)
 
 LOAD = with_defaults(
-    _load,
+    load,
     Param("clean", "bool", "weld duplicate vertices, drop degenerate faces and unused vertices"),
     Param("laplacian", "choice", "mesh Laplacian (point clouds always use the robust one)", choices=LAPLACIANS),
     Param("n_neighbors", "int", "neighbours of the point-cloud Laplacian and normals", minimum=3,
@@ -123,7 +176,7 @@ SIGNAL = (
 )
 
 EMD = with_defaults(
-    _emd,
+    emd,
     Param("max_imfs", "int", "at most this many IMFs", minimum=0, maximum=MAX_IMFS),
     Param("stopping", "choice", "sifting stop rule", choices=STOPPING_RULES),
     Param("sd_threshold", "float", "SD stopping threshold", minimum=0, maximum=10),
@@ -184,8 +237,8 @@ def _weights(func, when_null: str = "") -> tuple[Param, ...]:
     )
 
 
-_WEIGHTS = _weights(_reconstruct)
-_FILTER_WEIGHTS = _weights(_filter_geometry, "; null: from the gain, positions hold below a third of the "
+_WEIGHTS = _weights(reconstruct)
+_FILTER_WEIGHTS = _weights(filter_geometry, "; null: from the gain, positions hold below a third of the "
                                                  "lowest edited frequency")
 _GAIN = Param("gain", "gain", "μ(ω) of the instantaneous frequency, e.g. {kind: band_stop, low: 8, high: 20}",
               default=REQUIRED)
@@ -222,15 +275,7 @@ MHB = with_defaults(
 ) + (_BACKEND,)
 
 
-# -- builders ------------------------------------------------------------------------------------
-def _load_step(builder, inputs, params):
-    return {"result": builder.task("load", _load)(str(inputs["file"]), **params)}
-
-
-def _signal_step(builder, inputs, params):
-    return {"result": builder.task("signal", _signal)(inputs["surface"], **params)}
-
-
+# -- checks and builders -------------------------------------------------------------------------
 def _check_signal(params, where):
     kind = params["kind"]
     needs = {"stored": "attribute", "file": "path"}
@@ -254,50 +299,15 @@ def _eigenpair_vertices(params) -> tuple[str, int] | None:
     return "eigenpairs", params["eigenpairs"] + 1
 
 
-def _emd_step(builder, inputs, params):
-    return {"result": builder.task("emd", _emd)(inputs["surface"], inputs["signal"], **params)}
-
-
-def _eemd_step(builder, inputs, params):
-    return {"result": graph.eemd(inputs["surface"], inputs["signal"], builder=builder, **params)}
-
-
-def _hht_step(builder, inputs, params):
+def _hht_tasks(builder, surface, signal, **params):
+    """The HHT's stages (:func:`hht3d.graph.transform`) from the step's flat parameters."""
     emd_names = {p.name for p in EMD} - {"backend"}
     emd_options = {k: v for k, v in params.items() if k in emd_names}
     ensemble = {k: params[k] for k in ("ensemble_size", "noise_std", "seed")}
     spectra = {k: params[k] for k in (*(p.name for p in SPECTRA), "backend")}
-    stages = graph.transform(builder, inputs["surface"], inputs["signal"], emd_options=emd_options,
+    stages = graph.transform(builder, surface, signal, emd_options=emd_options,
                              ensemble=ensemble if ensemble["ensemble_size"] is not None else None, **spectra)
     return {**stages, "result": stages["hht"]}
-
-
-def _filter_signal_step(builder, inputs, params):
-    return {"result": graph.filter_signal(inputs["hht"], params["gain"], builder=builder)}
-
-
-def _filter_geometry_step(builder, inputs, params):
-    return {"result": graph.filter_geometry(inputs["hht"], builder=builder, **params)}
-
-
-def _reconstruct_step(builder, inputs, params):
-    return {"result": graph.reconstruct(inputs["surface"], inputs["signal"], builder=builder, **params)}
-
-
-def _features_step(builder, inputs, params):
-    return {"result": graph.prominent_features(inputs["surface"], inputs["imfs"], builder=builder, **params)}
-
-
-def _hks_step(builder, inputs, params):
-    return {"result": graph.hks_features(inputs["surface"], builder=builder, **params)}
-
-
-def _enhance_step(builder, inputs, params):
-    return {"result": graph.imf_enhancement(inputs["surface"], inputs["imfs"], builder=builder, **params)}
-
-
-def _mhb_step(builder, inputs, params):
-    return {"result": graph.manifold_harmonics_filter(inputs["surface"], builder=builder, **params)}
 
 
 _SURFACE = Slot("surface", ("surface",))
@@ -308,30 +318,30 @@ _HHT = Slot("hht", ("hht",))
 #: The operations by name.
 OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("load", "read a mesh or point cloud (PLY, OBJ, OFF, STL, GLB, PCD, XYZ, ...)",
-              (Slot("file", ("file",)),), "surface", LOAD, _load_step),
+              (Slot("file", ("file",)),), "surface", LOAD, func=load),
     Operation("signal", "a per-vertex signal: mean curvature (Eq. 24), coordinates, colour, stored values",
-              (_SURFACE,), "signal", SIGNAL, _signal_step, _check_signal),
+              (_SURFACE,), "signal", SIGNAL, func=signal, check=_check_signal),
     Operation("emd", "empirical mode decomposition with thin-plate envelopes (Sec. 4.1)",
-              (_SURFACE, _SIGNAL_IN), "emd", EMD, _emd_step),
+              (_SURFACE, _SIGNAL_IN), "emd", EMD, func=emd),
     Operation("eemd", "ensemble EMD: one task per noisy member, then the average",
-              (_SURFACE, _SIGNAL_IN), "emd", ENSEMBLE + EMD, _eemd_step),
+              (_SURFACE, _SIGNAL_IN), "emd", ENSEMBLE + EMD, build=graph.eemd_tasks),
     Operation("hht", "Hilbert–Huang transform: EMD, Riesz transform, Hilbert spectra (Alg. 2)",
-              (_SURFACE, _SIGNAL_IN), "hht", HHT, _hht_step, vertices=_eigenpair_vertices),
+              (_SURFACE, _SIGNAL_IN), "hht", HHT, build=_hht_tasks, vertices=_eigenpair_vertices),
     Operation("filter_signal", "the signal through a gain of the instantaneous frequency (Eq. 26)",
-              (_HHT,), "signal", (_GAIN,), _filter_signal_step),
+              (_HHT,), "signal", (_GAIN,), func=filter_signal),
     Operation("filter_geometry", "Hilbert-spectrum filtering of the mean curvature and new positions "
                                  "(Eqs. 26-27)",
-              (_HHT,), "surface", (_GAIN, *_FILTER_WEIGHTS, _BACKEND), _filter_geometry_step),
+              (_HHT,), "surface", (_GAIN, *_FILTER_WEIGHTS, _BACKEND), func=filter_geometry),
     Operation("reconstruct", "new positions whose mean curvature is the given signal (Eq. 27)",
-              (_SURFACE, _SIGNAL_IN), "surface", (*_WEIGHTS, _BACKEND), _reconstruct_step),
+              (_SURFACE, _SIGNAL_IN), "surface", (*_WEIGHTS, _BACKEND), func=reconstruct),
     Operation("features", "prominent feature points from IMF extrema counts (Sec. 5.2)",
-              (_SURFACE, _IMFS), "features", FEATURES, _features_step),
+              (_SURFACE, _IMFS), "features", FEATURES, func=prominent_features),
     Operation("hks_features", "baseline: maxima of the heat kernel signature (Sun et al. 2009)",
-              (_SURFACE,), "features", HKS, _hks_step, vertices=_eigenpair_vertices),
+              (_SURFACE,), "features", HKS, func=hks_features, vertices=_eigenpair_vertices),
     Operation("imf_enhancement", "baseline: scale one IMF of the mean curvature (Hu et al. 2014)",
-              (_SURFACE, _IMFS), "surface", ENHANCE, _enhance_step),
+              (_SURFACE, _IMFS), "surface", ENHANCE, func=imf_enhancement),
     Operation("manifold_harmonics_filter", "baseline: filter in the Laplacian eigenbasis (Vallet & Lévy 2008)",
-              (_SURFACE,), "surface", (_GAIN, *MHB), _mhb_step, vertices=_eigenpair_vertices),
+              (_SURFACE,), "surface", (_GAIN, *MHB), func=manifold_harmonics_filter, vertices=_eigenpair_vertices),
 )}
 
 

@@ -37,8 +37,8 @@ def _item(plan: Pipeline, source: Path, paths: list[Path]):
     results, parts = {}, {}
     for step in plan.steps:
         builder = _guarded(source, lambda task, s=step: s.id if task in (s.op.name, s.id) else f"{s.id} ({task})")
-        inputs = {slot: source if ref == FILE else results[ref] for slot, ref in step.refs.items()}
-        tasks = step.op.build(builder, inputs, dict(step.params))
+        inputs = {slot: str(source) if ref == FILE else results[ref] for slot, ref in step.refs.items()}
+        tasks = step.op.tasks(builder, inputs, dict(step.params))
         results[step.id] = tasks["result"]
         parts.update({t.key: t for t in tasks.values()})
     writes = []
@@ -98,6 +98,21 @@ def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int |
         An output or the summary cannot be written.
     PipelineError
         A bad ``scheduler`` or ``workers``.
+
+    Examples
+    --------
+    The shipped demo pipeline, with two IMFs and one output in a temporary folder:
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d import data_path
+    >>> from hht3d.pipeline import load_pipeline, run_pipeline
+    >>> out = Path(tempfile.mkdtemp())
+    >>> plan = load_pipeline(data_path("demo.yaml"), overrides=[
+    ...     "steps.hht.params.max_imfs=2", f"outputs.folder={out}", "outputs.files=[{path: '{stem}_hht.npz'}]"])
+    >>> rows = run_pipeline(plan, scheduler="synchronous", progress=False)
+    >>> [(row.status, row.imfs) for row in rows], sorted(path.name for path in out.iterdir())
+    ([('ok', 2)], ['spot_hht.npz'])
     """
     given = {"scheduler": scheduler, "workers": workers, "address": address, "progress": progress}
     checked = {p.name: p.check(given[p.name], f"{p.name}={given[p.name]}") for p in EXECUTION

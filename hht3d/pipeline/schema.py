@@ -43,36 +43,36 @@ builds no task graph: every numeric parameter against its documented range
 :mod:`hht3d.pipeline.registry`), input extensions, ``eigenpairs`` against the
 vertex count in PLY headers, output fields against ``max_imfs``, and that
 every output can be written.  Floats are read as in YAML 1.2 (``1e-8`` is a
-number), and a document that aliases expand past :data:`MAX_YAML_VALUES`
-values is refused.
+number), and a document that aliases expand past
+:data:`~hht3d.pipeline.document.MAX_YAML_VALUES` values is refused (reading
+the YAML with the place of every key, and ``--set``, are
+:mod:`hht3d.pipeline.document`; this module checks what it says).
 """
 from __future__ import annotations
 
-import re
 import string
-from importlib import resources
 from pathlib import Path
 
-import yaml
-
-from ..errors import MAX_SHOWN, InputError, OutputError, PipelineError, one_line, shown
-from ..io import check_output_paths, read_ply_header, resolve_inputs
+from ..errors import InputError, OutputError, PipelineError, shown
+from ..io import check_output_paths, data_path, read_ply_header, resolve_inputs
 from ..scheduling import MAX_WORKERS, SCHEDULERS
+from .document import YAMLMapping, add_implicit_load, apply_overrides, at, read_yaml
 from .outputs import FORMATS, SUFFIXES, check_options, field_imf
 from .params import Param, did_you_mean
 from .plan import FILE, PLACEHOLDERS, Execution, Output, Pipeline, Step
 from .registry import MAX_SEED, OPERATIONS, operation
 
-__all__ = ["VERSION", "EXECUTION", "MAX_YAML_VALUES", "load_pipeline", "parse_pipeline", "builtin_models",
-           "read_yaml", "apply_overrides"]
+__all__ = ["VERSION", "EXECUTION", "TOP_KEYS", "STEP_KEYS", "OUTPUTS_KEYS", "FILE_KEYS", "load_pipeline",
+           "parse_pipeline", "builtin_models", "Validator"]
 
 #: The schema version this package reads.
 VERSION = 1
 
-_TOP = ("version", "name", "execution", "inputs", "steps", "outputs")
-_STEP = ("id", "op", "from", "params")
-_OUTPUTS = ("folder", "summary", "files")
-_FILE = ("from", "path", "format")
+#: The keys of a pipeline, of a step, of the outputs block and of an output file.
+TOP_KEYS = ("version", "name", "execution", "inputs", "steps", "outputs")
+STEP_KEYS = ("id", "op", "from", "params")
+OUTPUTS_KEYS = ("folder", "summary", "files")
+FILE_KEYS = ("from", "path", "format")
 #: Parameters of the ``execution`` block (also the checks of the CLI's --scheduler and --workers).
 EXECUTION = (
     Param("scheduler", "choice", "Dask scheduler", default="threads", choices=SCHEDULERS),
@@ -85,158 +85,6 @@ EXECUTION = (
 _ID_CHARS = set(string.ascii_letters + string.digits + "_-")
 #: The longest step id.
 MAX_ID = 64
-
-
-# -- YAML with line numbers ------------------------------------------------------------------------
-class _Mapping(dict):
-    """A YAML mapping that remembers where it and each of its keys came from."""
-
-    def __init__(self, where: str):
-        super().__init__()
-        self.where = where
-        self.key_where: dict = {}
-
-    def at(self, key) -> str:
-        return self.key_where.get(key, self.where)
-
-
-#: Most values a pipeline may expand to through YAML aliases (``&a`` ... ``*a``); real pipelines
-#: have a few hundred, an alias bomb billions.
-MAX_YAML_VALUES = 100_000
-
-#: YAML 1.2 floats (``1e9``, ``1e-8``), which YAML 1.1 and so PyYAML read as text.
-_FLOAT = re.compile(r"^[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?$|^[-+]?\.(inf|Inf|INF)$|^\.(nan|NaN|NAN)$")
-
-
-class _YAMLSyntaxError(PipelineError):
-    """Text that is not YAML (``--set`` then takes it as a plain string)."""
-
-
-def _expanded_size(node, sizes: dict, source: str) -> int:
-    """How many values ``node`` stands for once every alias is expanded (memoised by node)."""
-    key = id(node)
-    if key in sizes:
-        if sizes[key] is None:
-            raise PipelineError(f"{source}:{node.start_mark.line + 1}: an alias refers to its own anchor; "
-                                "a pipeline cannot be recursive")
-        return sizes[key]
-    sizes[key] = None
-    children = node.value if isinstance(node, yaml.SequenceNode) else \
-        [n for pair in node.value for n in pair] if isinstance(node, yaml.MappingNode) else []
-    sizes[key] = 1 + sum(_expanded_size(child, sizes, source) for child in children)
-    if sizes[key] > MAX_YAML_VALUES:
-        raise PipelineError(f"{source}:{node.start_mark.line + 1}: this YAML expands to more than "
-                            f"{MAX_YAML_VALUES} values through aliases (&anchor, *alias); write the pipeline "
-                            "out without them")
-    return sizes[key]
-
-
-def read_yaml(text: str, source: str):
-    """Parse YAML, keeping ``source:line`` of every mapping key; duplicate keys are errors.
-
-    Floats are read as YAML 1.2 does (``1e-8`` is a number, not text).
-    Documents that aliases expand past :data:`MAX_YAML_VALUES` values are
-    refused before anything is built from them.  A one-line ``text`` (a
-    ``--set`` value) is located by ``source`` alone.
-
-    Raises
-    ------
-    PipelineError
-        ``"source:LINE:COLUMN: YAML syntax error: ..."``, an alias bomb, or
-        nesting too deep.
-    """
-    def place(node) -> str:
-        return f"{source}:{node.start_mark.line + 1}" if "\n" in text.strip() else source
-
-    class Loader(yaml.SafeLoader):
-        def get_single_node(self):
-            node = super().get_single_node()
-            if node is not None:
-                _expanded_size(node, {}, source)
-            return node
-
-    def mapping(loader, node):
-        loader.flatten_mapping(node)
-        result = _Mapping(place(node))
-        for key_node, value_node in node.value:
-            key = loader.construct_object(key_node, deep=True)
-            at = place(key_node)
-            if not isinstance(key, (str, int, float, bool)) or key is None:
-                raise PipelineError(f"{at}: a mapping key must be a plain name, got {shown(key)}")
-            if key in result:
-                raise PipelineError(f"{at}: duplicate key {shown(key)} (first at {result.at(key)})")
-            result[key] = loader.construct_object(value_node, deep=True)
-            result.key_where[key] = at
-        return result
-
-    Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
-    Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0123456789."))
-    try:
-        return yaml.load(text, Loader=Loader)  # a SafeLoader subclass
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        reason = ": ".join(filter(None, [exc.context, exc.problem]))
-        raise _YAMLSyntaxError(f"{source}:{mark.line + 1}:{mark.column + 1}: YAML syntax error: "
-                               f"{one_line(reason)}") from None
-    except yaml.YAMLError as exc:
-        raise _YAMLSyntaxError(f"{source}: YAML syntax error: {one_line(exc)}") from None
-    except RecursionError:
-        raise PipelineError(f"{source}: the YAML is nested too deeply") from None
-
-
-# -- --set overrides ---------------------------------------------------------------------------------
-def apply_overrides(document, overrides) -> None:
-    """Apply ``key.path=value`` overrides in place (values parsed as YAML).
-
-    A path component names a mapping key, a list index, or the ``id`` (or
-    ``op``) of a step in ``steps``: ``steps.hht.params.max_imfs=4``,
-    ``inputs=[a.ply, b.ply]``, ``outputs.folder=out/run1``.
-    """
-    for text in overrides:
-        where = f"--set {one_line(text, MAX_SHOWN)}"
-        path, sep, raw = text.partition("=")
-        keys = path.strip().split(".")
-        if not sep or not all(keys):
-            raise PipelineError(f"{where}: expected KEY.PATH=VALUE, e.g. steps.hht.params.max_imfs=4")
-        try:
-            value = read_yaml(raw, where) if raw.strip() else ""
-        except _YAMLSyntaxError:
-            value = raw
-        node = document
-        for depth, key in enumerate(keys[:-1]):
-            node = _child(node, key, ".".join(keys[:depth + 1]), where)
-        _assign(node, keys[-1], value, where)
-
-
-def _child(node, key: str, dotted: str, where: str):
-    if isinstance(node, list):
-        return node[_index(node, key, dotted, where)]
-    if not isinstance(node, dict):
-        raise PipelineError(f"{where}: {dotted.rpartition('.')[0] or 'the document'} is not a mapping")
-    if key not in node or node[key] is None:
-        _assign(node, key, _Mapping(where), where)
-    return node[key]
-
-
-def _index(items: list, key: str, dotted: str, where: str) -> int:
-    if key.isdigit() and int(key) < len(items):
-        return int(key)
-    names = [item.get("id", item.get("op")) if isinstance(item, dict) else None for item in items]
-    if key not in names:
-        raise PipelineError(f"{where}: {dotted} matches no list item (give an index < {len(items)} or a "
-                            f"step id){did_you_mean(key, [n for n in names if isinstance(n, str)])}")
-    return names.index(key)
-
-
-def _assign(node, key: str, value, where: str) -> None:
-    if isinstance(node, list):
-        node[_index(node, key, key, where)] = value
-    elif isinstance(node, dict):
-        node[key] = value
-        if isinstance(node, _Mapping):
-            node.key_where[key] = where
-    else:
-        raise PipelineError(f"{where}: cannot set {shown(key)} inside a {type(node).__name__}")
 
 
 # -- validation -----------------------------------------------------------------------------------
@@ -272,36 +120,21 @@ def parse_pipeline(text: str, *, source: str = "<pipeline>", overrides=()) -> Pi
     if not isinstance(document, dict):
         raise PipelineError(f"{source}: a pipeline is a YAML mapping with version, inputs, steps and "
                             f"outputs; got {type(document).__name__ if document is not None else 'an empty file'}")
-    _add_implicit_load(document)
+    add_implicit_load(document)
     apply_overrides(document, overrides)
-    return _Validator(source).pipeline(document)
-
-
-def _add_implicit_load(document) -> None:
-    """Steps without a ``load`` start with ``{id: load, op: load}`` (which ``--set`` can then reach)."""
-    steps = document.get("steps")
-    if isinstance(steps, list) and not any(isinstance(e, dict) and e.get("op") == "load" for e in steps):
-        implicit = _Mapping(_at(document, "steps"))
-        implicit.update(id="load", op="load")
-        steps.insert(0, implicit)
+    return Validator(source).pipeline(document)
 
 
 def builtin_models() -> dict[str, Path]:
     """The models shipped in the package, by name (``spot``, ...)."""
-    folder = resources.files("hht3d") / "data"
-    return {Path(p.name).stem: Path(str(p)) for p in folder.iterdir() if p.name.endswith(".ply")}
-
-
-def _at(mapping, key=None) -> str:
-    if isinstance(mapping, _Mapping):
-        return mapping.at(key) if key is not None else mapping.where
-    return "--set"
+    folder = data_path("")
+    return {p.stem: p for p in folder.iterdir() if p.suffix == ".ply"}
 
 
 def _known_keys(mapping, known, what: str) -> None:
     for key in mapping:
         if key not in known:
-            raise PipelineError(f"{_at(mapping, key)}: unknown key {shown(key)} in {what}{did_you_mean(key, known)}")
+            raise PipelineError(f"{at(mapping, key)}: unknown key {shown(key)} in {what}{did_you_mean(key, known)}")
 
 
 def _mapping(value, where: str, what: str) -> dict:
@@ -310,19 +143,53 @@ def _mapping(value, where: str, what: str) -> dict:
     return value
 
 
-class _Validator:
+class Validator:
+    """Checks a read pipeline document and builds the typed :class:`~hht3d.pipeline.plan.Pipeline`.
+
+    One validator reads one document (the mappings of
+    :func:`~hht3d.pipeline.document.read_yaml`, overrides applied), top
+    down: version, name, execution, inputs, steps, outputs.  Every method
+    raises :class:`~hht3d.errors.PipelineError` at the first problem, with
+    the ``file:line`` of the offending key (:func:`~hht3d.pipeline.document.at`),
+    what was expected, what was found and, for unknown names, the closest
+    known one ("did you mean").  Checks that need the inputs (vertex counts
+    from PLY headers, for ``eigenpairs``) read them once and keep them.
+
+    Parameters
+    ----------
+    source : str
+        The file (or ``<pipeline>``) named in messages about the document as a whole.
+
+    Examples
+    --------
+    >>> from hht3d.pipeline.document import add_implicit_load, read_yaml
+    >>> text = ("version: 1\\n"
+    ...         "inputs: {builtin: spot}\\n"
+    ...         "steps: [{op: signal, params: {kind: mean_curvatur}}]\\n"
+    ...         "outputs: {files: [{path: curvature.npz}]}\\n")
+    >>> document = read_yaml(text, "demo.yaml")
+    >>> add_implicit_load(document)
+    >>> Validator("demo.yaml").pipeline(document)
+    Traceback (most recent call last):
+    hht3d.errors.PipelineError: demo.yaml:3: step 'signal' (op signal): parameter kind must be one of
+    ...; got 'mean_curvatur' (a string); did you mean 'mean_curvature'?
+    >>> document["steps"][1]["params"]["kind"] = "mean_curvature"
+    >>> [step.id for step in Validator("demo.yaml").pipeline(document).steps]
+    ['load', 'signal']
+    """
+
     def __init__(self, source: str):
         self.source = source
         self.inputs: tuple[Path, ...] = ()
         self._vertex_counts: dict[Path, int] | None = None
 
     def pipeline(self, doc) -> Pipeline:
-        _known_keys(doc, _TOP, "the pipeline")
+        _known_keys(doc, TOP_KEYS, "the pipeline")
         self._version(doc)
         name = doc.get("name", Path(self.source).stem)
         if not isinstance(name, str) or not name:
-            raise PipelineError(f"{_at(doc, 'name')}: name must be a non-empty string, got {shown(name)}")
-        execution = self._execution(doc.get("execution") or _Mapping(_at(doc, "execution")))
+            raise PipelineError(f"{at(doc, 'name')}: name must be a non-empty string, got {shown(name)}")
+        execution = self._execution(doc.get("execution") or YAMLMapping(at(doc, "execution")))
         inputs = self.inputs = self._inputs(doc)
         steps = self._steps(doc, execution)
         folder, summary, outputs = self._outputs(doc, steps)
@@ -333,20 +200,20 @@ class _Validator:
             check_output_paths(plan.written_paths())
         except OutputError as exc:
             block = doc.get("outputs")
-            raise PipelineError(f"{_at(block, 'folder')}: outputs: {exc}") from None
+            raise PipelineError(f"{at(block, 'folder')}: outputs: {exc}") from None
         return plan
 
     def _version(self, doc) -> None:
         if "version" not in doc:
             raise PipelineError(f"{self.source}: missing 'version: {VERSION}' (the schema version) at the top")
         if doc["version"] != VERSION or isinstance(doc["version"], bool):
-            raise PipelineError(f"{_at(doc, 'version')}: unsupported pipeline version {shown(doc['version'])}; "
+            raise PipelineError(f"{at(doc, 'version')}: unsupported pipeline version {shown(doc['version'])}; "
                                 f"this hht3d reads version {VERSION}")
 
     def _execution(self, block) -> Execution:
-        block = _mapping(block, _at(block), "execution")
+        block = _mapping(block, at(block), "execution")
         _known_keys(block, [p.name for p in EXECUTION], "execution")
-        values = {p.name: p.check(block[p.name], f"{_at(block, p.name)}: execution") if p.name in block
+        values = {p.name: p.check(block[p.name], f"{at(block, p.name)}: execution") if p.name in block
                   else p.default for p in EXECUTION}
         return Execution(**values)
 
@@ -354,13 +221,13 @@ class _Validator:
         if "inputs" not in doc or doc["inputs"] in (None, [], ""):
             raise PipelineError(f"{self.source}: missing inputs: give a file, a folder, a glob, a list of "
                                 "them, or {builtin: spot}")
-        spec, where = doc["inputs"], _at(doc, "inputs")
+        spec, where = doc["inputs"], at(doc, "inputs")
         if isinstance(spec, dict):
             _known_keys(spec, ["builtin"], "inputs")
             models = builtin_models()
             name = spec.get("builtin")
             if name not in models:
-                raise PipelineError(f"{_at(spec, 'builtin')}: unknown builtin model {shown(name)}"
+                raise PipelineError(f"{at(spec, 'builtin')}: unknown builtin model {shown(name)}"
                                     f"{did_you_mean(name, models)}")
             return (models[name],)
         items = spec if isinstance(spec, list) else [spec]
@@ -376,52 +243,52 @@ class _Validator:
     def _steps(self, doc, execution: Execution) -> tuple[Step, ...]:
         raw = doc.get("steps")
         if not isinstance(raw, list) or not raw:
-            raise PipelineError(f"{_at(doc, 'steps') if 'steps' in doc else self.source}: steps must be a "
+            raise PipelineError(f"{at(doc, 'steps') if 'steps' in doc else self.source}: steps must be a "
                                 "non-empty list of {id, op, params} entries")
-        entries = [_mapping(e, _at(doc, "steps"), f"step {i + 1}") for i, e in enumerate(raw)]
+        entries = [_mapping(e, at(doc, "steps"), f"step {i + 1}") for i, e in enumerate(raw)]
         parsed = [self._step(entry, execution) for entry in entries]
         ids = [p[0] for p in parsed]
         for i, step_id in enumerate(ids):
             if step_id in ids[:i]:
-                raise PipelineError(f"{_at(entries[i], 'id')}: two steps have the id {shown(step_id)}; give each "
+                raise PipelineError(f"{at(entries[i], 'id')}: two steps have the id {shown(step_id)}; give each "
                                     "step a distinct id")
         steps = [Step(step_id, op, params, self._refs(entries, parsed, i), given)
                  for i, (step_id, op, params, given) in enumerate(parsed)]
         return _ordered(steps, entries)
 
     def _step(self, entry, execution: Execution):
-        _known_keys(entry, _STEP, "a step")
-        where = _at(entry, "op")
+        _known_keys(entry, STEP_KEYS, "a step")
+        where = at(entry, "op")
         if "op" not in entry:
-            raise PipelineError(f"{_at(entry)}: a step needs an op (`hht3d ops` lists them)")
+            raise PipelineError(f"{at(entry)}: a step needs an op (`hht3d ops` lists them)")
         op = operation(entry["op"], where)
         step_id = entry.get("id", op.name)
         if not isinstance(step_id, str) or not 0 < len(step_id) <= MAX_ID or not set(step_id) <= _ID_CHARS:
-            raise PipelineError(f"{_at(entry, 'id')}: step id must be 1 to {MAX_ID} letters, digits, '_' or '-', "
+            raise PipelineError(f"{at(entry, 'id')}: step id must be 1 to {MAX_ID} letters, digits, '_' or '-', "
                                 f"got {shown(step_id)}")
         context = f"step {shown(step_id)} (op {op.name})"
-        raw = _mapping(entry.get("params") or _Mapping(_at(entry)), _at(entry, "params"), f"{context} params")
+        raw = _mapping(entry.get("params") or YAMLMapping(at(entry)), at(entry, "params"), f"{context} params")
         for key in raw:
             if op.param(key) is None:
                 known = [p.name for p in op.params]
-                raise PipelineError(f"{_at(raw, key)}: {context}: unknown parameter {shown(key)}"
+                raise PipelineError(f"{at(raw, key)}: {context}: unknown parameter {shown(key)}"
                                     f"{did_you_mean(key, known)} (`hht3d ops {op.name}` lists them)")
         params = {}
         for p in op.params:
             if p.name in raw:
-                params[p.name] = p.check(raw[p.name], f"{_at(raw, p.name)}: {context}")
+                params[p.name] = p.check(raw[p.name], f"{at(raw, p.name)}: {context}")
             elif p.required:
-                raise PipelineError(f"{_at(entry)}: {context}: missing required parameter {p.name} "
+                raise PipelineError(f"{at(entry)}: {context}: missing required parameter {p.name} "
                                     f"({p.describe()})")
             else:
                 params[p.name] = p.default
         if "seed" in params and params["seed"] is None:
             params["seed"] = execution.seed
         if op.check is not None:
-            op.check(params, f"{_at(entry)}: {context}")
+            op.check(params, f"{at(entry)}: {context}")
         need = op.fewest_vertices(params)
         if need is not None:
-            self._enough_vertices(*need, params, f"{_at(raw, need[0]) if need[0] in raw else _at(entry)}: {context}")
+            self._enough_vertices(*need, params, f"{at(raw, need[0]) if need[0] in raw else at(entry)}: {context}")
         return step_id, op, params, tuple(raw)
 
     def _enough_vertices(self, name: str, fewest: int, params: dict, where: str) -> None:
@@ -447,7 +314,7 @@ class _Validator:
     def _refs(self, entries, parsed, i: int) -> dict:
         entry, (step_id, op, _, _) = entries[i], parsed[i]
         kinds = {p[0]: p[1].output for p in parsed}
-        context = f"{_at(entry, 'from')}: step {shown(step_id)} (op {op.name})"
+        context = f"{at(entry, 'from')}: step {shown(step_id)} (op {op.name})"
         explicit = self._explicit_refs(entry, op, kinds, context)
         refs = {}
         for slot in op.slots:
@@ -460,7 +327,7 @@ class _Validator:
                 if not earlier:
                     makers = sorted(o.name for o in OPERATIONS.values() if o.output in slot.kinds)
                     raise PipelineError(
-                        f"{_at(entry)}: step {shown(step_id)} (op {op.name}) needs {' or '.join(slot.kinds)} input "
+                        f"{at(entry)}: step {shown(step_id)} (op {op.name}) needs {' or '.join(slot.kinds)} input "
                         f"{shown(slot.name)}, and no earlier step makes one; add a step with op "
                         f"{' or '.join(makers)} before it, or name one with from: {{{slot.name}: STEP_ID}}")
                 refs[slot.name] = earlier[-1]
@@ -505,34 +372,34 @@ class _Validator:
     def _outputs(self, doc, steps: tuple[Step, ...]):
         block = doc.get("outputs")
         if not isinstance(block, dict) or not block.get("files"):
-            raise PipelineError(f"{_at(doc, 'outputs') if 'outputs' in doc else self.source}: outputs must be a "
+            raise PipelineError(f"{at(doc, 'outputs') if 'outputs' in doc else self.source}: outputs must be a "
                                 "mapping with files: a list of {from: STEP, path: PATTERN} entries")
-        _known_keys(block, _OUTPUTS, "outputs")
+        _known_keys(block, OUTPUTS_KEYS, "outputs")
         folder = block.get("folder", "out")
         if not isinstance(folder, str) or not folder:
-            raise PipelineError(f"{_at(block, 'folder')}: outputs.folder must be a path, got {shown(folder)}")
-        summary = Param("summary", "bool", "").check(block.get("summary", True), f"{_at(block, 'summary')}: outputs")
+            raise PipelineError(f"{at(block, 'folder')}: outputs.folder must be a path, got {shown(folder)}")
+        summary = Param("summary", "bool", "").check(block.get("summary", True), f"{at(block, 'summary')}: outputs")
         if not isinstance(block["files"], list):
-            raise PipelineError(f"{_at(block, 'files')}: outputs.files must be a list of {{from, path}} entries")
+            raise PipelineError(f"{at(block, 'files')}: outputs.files must be a list of {{from, path}} entries")
         by_id = {s.id: s for s in steps}
         last = next(s.id for s in reversed(steps))
-        files = tuple(self._output(_mapping(e, _at(block, "files"), "an output"), by_id, last)
+        files = tuple(self._output(_mapping(e, at(block, "files"), "an output"), by_id, last)
                       for e in block["files"])
         return Path(folder), summary, files
 
     def _output(self, entry, steps: dict, last: str) -> Output:
         step_id = entry.get("from", last)
         if not isinstance(step_id, str) or step_id not in steps:
-            raise PipelineError(f"{_at(entry, 'from')}: output from unknown step {shown(step_id)}"
+            raise PipelineError(f"{at(entry, 'from')}: output from unknown step {shown(step_id)}"
                                 f"{did_you_mean(step_id, steps)}")
         kind = steps[step_id].kind
         formats = FORMATS.get(kind, {})
         path = entry.get("path")
         if not isinstance(path, str) or not path:
-            raise PipelineError(f"{_at(entry)}: an output needs a path pattern, e.g. path: \"{{stem}}_hht.ply\"")
-        self._placeholders(path, _at(entry, "path"))
+            raise PipelineError(f"{at(entry)}: an output needs a path pattern, e.g. path: \"{{stem}}_hht.ply\"")
+        self._placeholders(path, at(entry, "path"))
         name = entry.get("format") or self._format_from(path, entry, formats)
-        context = (f"{_at(entry, 'format' if 'format' in entry else 'path')}: output {shown(path)} "
+        context = (f"{at(entry, 'format' if 'format' in entry else 'path')}: output {shown(path)} "
                    f"of step {shown(step_id)}")
         if name not in formats:
             raise PipelineError(f"{context}: step {shown(step_id)} makes {kind}, which can be written as "
@@ -542,10 +409,10 @@ class _Validator:
             raise PipelineError(f"{context}: format {name} writes {fmt.suffix} files; end the path with {fmt.suffix}")
         known = [p.name for p in fmt.params]
         for key in entry:
-            if key not in _FILE and key not in known:
-                raise PipelineError(f"{_at(entry, key)}: output {shown(path)}: unknown option {shown(key)} for format "
-                                    f"{name}{did_you_mean(key, [*_FILE, *known])}")
-        options = {p.name: p.check(entry[p.name], f"{_at(entry, p.name)}: output {shown(path)}") if p.name in entry
+            if key not in FILE_KEYS and key not in known:
+                raise PipelineError(f"{at(entry, key)}: output {shown(path)}: unknown option {shown(key)} for format "
+                                    f"{name}{did_you_mean(key, [*FILE_KEYS, *known])}")
+        options = {p.name: p.check(entry[p.name], f"{at(entry, p.name)}: output {shown(path)}") if p.name in entry
                    else p.default for p in fmt.params}
         check_options(options, context)
         self._imf_exists(options, steps[step_id], context)
@@ -566,7 +433,7 @@ class _Validator:
             return "colored_ply"
         names = [n for n, s in SUFFIXES.items() if s == suffix]
         if not names:
-            raise PipelineError(f"{_at(entry, 'path')}: cannot tell the format of {shown(path)}; end it with "
+            raise PipelineError(f"{at(entry, 'path')}: cannot tell the format of {shown(path)}; end it with "
                                 f"{', '.join(sorted(set(SUFFIXES.values())))} or give format:")
         return names[0]
 
@@ -589,7 +456,7 @@ class _Validator:
                 if path in seen:
                     other = seen[path]
                     clash = ("two outputs" if other == source else f"inputs {other} and {source}")
-                    raise PipelineError(f"{_at(doc, 'outputs')}: {clash} would both write {path}; make the path "
+                    raise PipelineError(f"{at(doc, 'outputs')}: {clash} would both write {path}; make the path "
                                         "patterns distinct (use {stem} or {parent})")
                 seen[path] = source
 
@@ -604,7 +471,7 @@ def _ordered(steps: list[Step], entries) -> tuple[Step, ...]:
         if done.get(step.id) is False:
             cycle = path[path.index(step.id):] + [step.id]
             entry = entries[steps.index(step)]
-            raise PipelineError(f"{_at(entry, 'from')}: steps {' -> '.join(map(repr, cycle))} form a cycle (each uses the "
+            raise PipelineError(f"{at(entry, 'from')}: steps {' -> '.join(map(repr, cycle))} form a cycle (each uses the "
                                 "next); a step can only use results of steps that do not use its own")
         if step.id in done:
             return
