@@ -348,7 +348,8 @@ def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", li
         axes.set_ylabel("share of the IMF energy per bin (%)", fontsize=font)
         axes.tick_params(labelsize=font * 0.9)
         axes.grid(alpha=0.3, linewidth=0.5)
-    right.legend(fontsize=font * 0.85, frameon=False)
+    right.set_ylim(top=2.4 * right.get_ylim()[1])  # the legend sits above the curves, not on them
+    right.legend(fontsize=font * 0.85, loc="upper right", framealpha=0.9, edgecolor="none")
     shown = 100 * marginal.sum() / total
     fig.suptitle(f"{result.surface.name}: Hilbert spectrum ({bins} {scale} bins; "
                  f"{shown:.1f}% of the energy within the plotted range)\nresolution limit π/√A ≈ "
