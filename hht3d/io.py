@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import MAX_SHOWN, InputError, OutputError, one_line
-from .surface import Surface
+from .surface import FLAT, Surface, principal_axes
 
 __all__ = [
     "data_path",
@@ -49,8 +49,6 @@ MESH_EXTENSIONS = (".ply", ".obj", ".off", ".stl", ".glb", ".gltf")
 POINT_CLOUD_EXTENSIONS = (".ply", ".pcd", ".xyz", ".xyzn", ".pts")
 _PLY_RESERVED = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha"}
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.\-]*$")
-#: A point cloud thinner than this fraction of its extent is treated as planar.
-FLAT = 1e-9
 
 
 # -- reading -------------------------------------------------------------------------------
@@ -125,20 +123,7 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
         surface = Surface.cleaned(**data, **options) if clean else Surface(**data, **options)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
-    if not surface.is_mesh:
-        _check_cloud(surface, n_neighbors, path)
     return surface
-
-
-def _check_cloud(surface: Surface, n_neighbors: int, path: Path) -> None:
-    """What the point-cloud Laplacian needs: more points than neighbours, not all on a line."""
-    if surface.n_vertices <= n_neighbors:
-        raise InputError(f"{path}: a point cloud of {surface.n_vertices} points cannot give each point "
-                         f"n_neighbors={n_neighbors} neighbours; lower n_neighbors below {surface.n_vertices}")
-    try:
-        _principal_axes(surface.vertices - surface.vertices.mean(axis=0))
-    except InputError as exc:
-        raise InputError(f"{path}: {exc}") from None
 
 
 def _check_extension(path: Path) -> None:
@@ -388,15 +373,6 @@ def surface_to_open3d(surface: Surface, attributes: dict):
     return geometry
 
 
-def _principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Singular values (descending) and principal axes of centred points; collinear points are an error."""
-    _, spread, axes = np.linalg.svd(centered, full_matrices=False)
-    if spread[1] <= FLAT * spread[0]:
-        raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two "
-                         "directions")
-    return spread, axes
-
-
 def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
     """Unit normals of a point cloud: PCA over ``k`` neighbours, consistently oriented.
 
@@ -413,7 +389,7 @@ def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
     """
     points = np.asarray(points, dtype=np.float64)
     centered = points - points.mean(axis=0)
-    spread, axes = _principal_axes(centered)
+    spread, axes = principal_axes(centered)
     if spread[2] <= FLAT * spread[0]:
         normal = axes[2] * np.sign(axes[2][np.argmax(np.abs(axes[2]))])
         return np.tile(normal, (len(points), 1))

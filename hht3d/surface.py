@@ -21,6 +21,8 @@ __all__ = ["Surface", "MIN_VERTICES", "LAPLACIANS"]
 
 #: The fewest vertices a surface may have (a tetrahedron).
 MIN_VERTICES = 4
+#: A point cloud thinner than this fraction of its extent is treated as planar.
+FLAT = 1e-9
 #: Mesh Laplacians; point clouds always use ``robust_laplacian.point_cloud_laplacian``.
 LAPLACIANS = ("cotan", "robust")
 
@@ -69,6 +71,8 @@ class Surface:
             raise InputError(f"{self.name}: unknown laplacian {laplacian!r}; choose one of {LAPLACIANS}")
         if n_neighbors < 3:
             raise InputError(f"{self.name}: n_neighbors must be >= 3, got {n_neighbors}")
+        if self.faces is None:
+            _check_cloud(self.vertices, int(n_neighbors), self.name)
         self.laplacian = laplacian
         self.n_neighbors = int(n_neighbors)
         self.colors = None if colors is None else _as_per_vertex(colors, n, 3, "colors", self.name)
@@ -262,6 +266,26 @@ class Surface:
         from .io import surface_to_open3d
 
         return surface_to_open3d(self, attributes or {})
+
+
+def principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Singular values (descending) and principal axes of centred points; collinear points are an error."""
+    _, spread, axes = np.linalg.svd(centered, full_matrices=False)
+    if spread[1] <= FLAT * spread[0]:
+        raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two "
+                         "directions")
+    return spread, axes
+
+
+def _check_cloud(points: np.ndarray, n_neighbors: int, name: str) -> None:
+    """What the point-cloud Laplacian needs: more points than neighbours, not all on a line."""
+    if len(points) <= n_neighbors:
+        raise InputError(f"{name}: a point cloud of {len(points)} points cannot give each point "
+                         f"n_neighbors={n_neighbors} neighbours; lower n_neighbors below {len(points)}")
+    try:
+        principal_axes(points - points.mean(axis=0))
+    except InputError as exc:
+        raise InputError(f"{name}: {exc}") from None
 
 
 def _as_vertices(vertices, name: str) -> np.ndarray:

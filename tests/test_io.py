@@ -224,5 +224,17 @@ def test_planar_point_clouds_get_the_plane_normal_and_no_qhull_output(capfd):
     nearly = np.c_[rng.uniform(size=(300, 2)), 1e-12 * rng.normal(size=300)]
     assert np.abs(Surface(nearly, name="nearly").normals[:, 2]).min() > 0.999  # Qhull warns here
     assert capfd.readouterr() == ("", "")
-    with pytest.raises(InputError, match="lie on a line"):
-        _ = Surface(np.c_[np.arange(20.0), np.zeros(20), np.zeros(20)], name="line").normals
+    with pytest.raises(InputError, match="line: the 50 points lie on a line"):
+        Surface(np.c_[np.arange(50.0), np.zeros(50), np.zeros(50)], name="line")
+
+
+@pytest.mark.parametrize("build", [Surface, Surface.cleaned])
+def test_point_clouds_built_from_arrays_are_checked_as_files_are(build):
+    # before any operator: robust_laplacian would abort on these with a C++ assertion
+    line = np.c_[np.linspace(0, 1, 50), np.zeros(50), np.zeros(50)]
+    with pytest.raises(InputError, match="the 50 points lie on a line"):
+        build(line, name="line")
+    few = np.random.default_rng(2).normal(size=(10, 3))
+    with pytest.raises(InputError, match="10 points cannot give each point n_neighbors=30 neighbours"):
+        build(few, name="few")
+    assert build(few, name="few", n_neighbors=5).n_vertices == 10
