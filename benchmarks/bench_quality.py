@@ -253,10 +253,11 @@ def markdown(records: dict) -> str:
                         ("eigen", "Two eigenfunctions: IMF 1 against the higher one"),
                         ("strip", "Strip against PyEMD (paper options)")):
         if records.get(part):
-            keys = list(records[part][0])
+            keys = list(dict.fromkeys(k for r in records[part] for k in r))  # rows of a part may differ
             rows = [[(f"{v:.3g}" if isinstance(v, float) else
                       "[" + ", ".join(f"{x:.2f}" if isinstance(x, float) else str(x) for x in v) + "]"
-                      if isinstance(v, list) else v) for v in (r.get(k) for k in keys)] for r in records[part]]
+                      if isinstance(v, list) else "" if v is None else v) for v in (r.get(k) for k in keys)]
+                    for r in records[part]]
             out += [f"## {title}", "", table(keys, rows), ""]
     return "\n".join(out)
 
