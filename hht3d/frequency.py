@@ -67,6 +67,8 @@ Frequencies above it are reported (:func:`resolution_report`), never clipped.
 """
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -114,6 +116,10 @@ def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = R
         Vertex gradient operator (:meth:`hht3d.surface.Surface.gradient`)
         the estimator uses, as for the Riesz transform.
 
+    The ``"phase"`` route reads the signals in parallel threads, one per
+    core this process may use (``OMP_NUM_THREADS`` where set); the result
+    does not depend on their number.
+
     Returns
     -------
     (k, n) ndarray
@@ -129,10 +135,20 @@ def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = R
     if method == "gradient":
         return _gradient_frequency(surface, f, r, gradient)
     stencil = _stencil(surface, gradient)
-    out = np.zeros(f.shape)
-    for i in range(len(f)):
-        out[i] = _phase_frequency(stencil, f[i], r[i])
-    return out
+    with ThreadPoolExecutor(_threads(len(f))) as pool:  # NumPy and SciPy's sparse products release the GIL
+        rows = list(pool.map(lambda fi, ri: _phase_frequency(stencil, fi, ri), f, r))
+    return np.array(rows).reshape(f.shape)
+
+
+def _threads(count: int) -> int:
+    """Threads for ``count`` signals, one signal each: the cores this process may use, or
+    ``OMP_NUM_THREADS`` where set (Dask's worker processes set it to 1)."""
+    budget = os.environ.get("OMP_NUM_THREADS", "")
+    if budget.isdigit() and int(budget) > 0:
+        cores = int(budget)
+    else:
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return max(1, min(count, cores))
 
 
 # -- the paper's route: vertex gradients of the sampled fields --------------------------------
@@ -216,9 +232,9 @@ def _build_stencil(surface: Surface, kind: str) -> _Stencil:
     coef = np.zeros((len(edges), 3))
     np.add.at(coef, (index, component[off]), coo.data[off])
     rows, cols = np.divmod(edges, n)
-    e = np.arange(len(edges))
-    fit = sp.csr_matrix((coef.ravel(), ((3 * rows[:, None] + np.arange(3)).ravel(), np.repeat(e, 3))),
-                        shape=(3 * n, len(edges)))
+    # column e holds edge e's three coefficients: built as CSC (no sort), then converted
+    fit = sp.csc_matrix((coef.ravel(), (3 * rows[:, None] + np.arange(3)).ravel(),
+                         np.arange(0, 3 * len(edges) + 1, 3)), shape=(3 * n, len(edges))).tocsr()
     lap = surface.stiffness.tocoo()
     keep = (lap.row != lap.col) & (lap.data != 0)
     lap_rows, lap_cols = lap.row[keep], lap.col[keep]
