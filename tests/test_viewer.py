@@ -199,19 +199,21 @@ def test_page_limits_are_those_of_every_vertex(result, result_page):
 
 
 # -- big surfaces --------------------------------------------------------------------------------
-def test_decimation_transfers_fields_to_the_nearest_vertex(tmp_path):
+@pytest.mark.parametrize("budget", [2000, 3000])  # 10,242 > 4 x 2000: clustered first; < 4 x 3000: not
+def test_decimation_transfers_fields_to_the_nearest_vertex(tmp_path, budget):
     v, f = icosphere(5)            # 10,242 vertices
     surface = Surface(v, f, name="sphere")
     field = np.sin(3 * v[:, 0]) + v[:, 1] * v[:, 2]
-    shown = shown_copy(surface, 2000)
-    assert shown.decimated and 1500 <= len(shown.source) <= 2000 and len(shown.faces) > 2500
+    shown = shown_copy(surface, budget)
+    assert shown.decimated and 0.75 * budget <= len(shown.source) <= budget and len(shown.faces) > 1.25 * budget
     distance = np.linalg.norm(shown.vertices[:, None, :] - v[None, :, :], axis=2)
-    np.testing.assert_array_equal(shown.source, np.argmin(distance, axis=1))
+    # a nearest vertex (a clustered vertex can sit exactly midway between two)
+    np.testing.assert_array_equal(distance[np.arange(len(distance)), shown.source], distance.min(axis=1))
     # the carried value is the analytic field near each drawn vertex (|grad| <= 4, moves < 2 edge lengths)
     drawn = shown.vertices
     exact = np.sin(3 * drawn[:, 0]) + drawn[:, 1] * drawn[:, 2]
     assert np.max(np.abs(shown.carry(field) - exact)) < 4 * 2 * 0.025
-    page = write_page(tmp_path / "sphere.html", [surface], {"wave": field}, title="sphere", max_vertices=2000)
+    page = write_page(tmp_path / "sphere.html", [surface], {"wave": field}, title="sphere", max_vertices=budget)
     data = page_data(page)
     np.testing.assert_array_equal(field_values(data, "wave"), field[shown.source].astype(np.float32))
     assert len(data["notices"]) == 1 and "decimated copy with" in data["notices"][0]
