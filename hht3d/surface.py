@@ -17,7 +17,7 @@ from . import operators as ops
 from .cleaning import CleanReport, clean_mesh, clean_points
 from .errors import InputError
 
-__all__ = ["Surface", "MIN_VERTICES", "LAPLACIANS"]
+__all__ = ["Surface", "MIN_VERTICES", "LAPLACIANS", "FLAT", "principal_axes"]
 
 #: The fewest vertices a surface may have (a tetrahedron).
 MIN_VERTICES = 4
