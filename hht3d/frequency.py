@@ -95,6 +95,9 @@ _SYMMETRIC = np.array([[0, 1, 2], [1, 3, 4], [2, 4, 5]])
 _MAX_UNWRAP = 8
 #: Floor of the discrete Riesz response (it tends to 0 at the Nyquist limit).
 _MIN_RESPONSE = 0.05
+#: Edges of all threads' signals at once: igea (0.8M edges) gets 2 threads, 1M vertices
+#: (6M edges) one, which keeps the whole HHT of 1M vertices under 4 GiB.
+_THREAD_EDGES = 4_000_000
 
 
 def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = RIESZ_DEFAULTS.frequency,
@@ -135,20 +138,22 @@ def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = R
     if method == "gradient":
         return _gradient_frequency(surface, f, r, gradient)
     stencil = _stencil(surface, gradient)
-    with ThreadPoolExecutor(_threads(len(f))) as pool:  # NumPy and SciPy's sparse products release the GIL
+    with ThreadPoolExecutor(_threads(len(f), len(stencil.rows))) as pool:  # NumPy and SciPy's sparse products release the GIL
         rows = list(pool.map(lambda fi, ri: _phase_frequency(stencil, fi, ri), f, r))
     return np.array(rows).reshape(f.shape)
 
 
-def _threads(count: int) -> int:
+def _threads(count: int, edges: int) -> int:
     """Threads for ``count`` signals, one signal each: the cores this process may use, or
-    ``OMP_NUM_THREADS`` where set (Dask's worker processes set it to 1)."""
+    ``OMP_NUM_THREADS`` where set (Dask's worker processes set it to 1), and no more than
+    keep :data:`_THREAD_EDGES` per-edge values alive at once (each thread holds about ten
+    arrays of ``edges`` floats)."""
     budget = os.environ.get("OMP_NUM_THREADS", "")
     if budget.isdigit() and int(budget) > 0:
         cores = int(budget)
     else:
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    return max(1, min(count, cores))
+    return max(1, min(count, cores, _THREAD_EDGES // max(edges, 1)))
 
 
 # -- the paper's route: vertex gradients of the sampled fields --------------------------------
