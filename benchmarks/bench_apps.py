@@ -6,7 +6,7 @@ stage's own (plus the interpreter, the libraries and the loaded model,
 reported apart as "baseline"):
 
 ``hht``
-    load and clean, mean-curvature signal (Eq. 24), :func:`hht3d.hht.hht`
+    load and clean, mean-curvature signal (Eq. 24), :func:`hht3d.transform.hht`
     with default options; the result is saved to a temporary ``.npz``.
 ``filter``
     Eq. (26) + Eq. (27) with :func:`hht3d.apps.filter_geometry` for two
@@ -77,9 +77,9 @@ def _mean_edge(surface) -> float:
 
 
 def _load_result(name: str, scratch: Path):
-    """The model and its saved HHT as an :class:`~hht3d.hht.HHTResult`."""
-    from hht3d.hht import HHTResult
-    from hht3d.monogenic import MonogenicSignal
+    """The model and its saved HHT as an :class:`~hht3d.transform.HHTResult`."""
+    from hht3d.transform import HHTResult
+    from hht3d.spectral.monogenic_signal import MonogenicSignal
 
     surface = _load(name)
     with np.load(scratch / f"{name}.npz") as data:
@@ -90,8 +90,8 @@ def _load_result(name: str, scratch: Path):
 
 
 def stage_hht(name: str, scratch: Path) -> dict:
-    from hht3d.hht import hht
-    from hht3d.signals import mean_curvature
+    from hht3d.transform import hht
+    from hht3d.geometry.signals import mean_curvature
 
     surface = _load(name)
     signal = mean_curvature(surface)
@@ -154,8 +154,8 @@ def stage_noise(name: str, scratch: Path) -> dict:
 
     from hht3d import Surface
     from hht3d.apps import hks_features, prominent_features, repeatability
-    from hht3d.emd import emd
-    from hht3d.signals import mean_curvature
+    from hht3d.decomposition.decompose import emd
+    from hht3d.geometry.signals import mean_curvature
 
     result = _load_result(name, scratch)
     surface = result.surface

@@ -2,7 +2,7 @@
 
 For each model (one subprocess per model, so peak memory is the model's own):
 load and clean, take the mean-curvature signal (Eq. 24), run
-:func:`hht3d.emd.emd` with its defaults and record #vertices, #IMFs, sifts,
+:func:`hht3d.decomposition.decompose.emd` with its defaults and record #vertices, #IMFs, sifts,
 factorizations, seconds and peak resident memory.  Then replay the first
 IMF's sifts and solve each of their envelopes three ways:
 
@@ -60,7 +60,7 @@ def _replay_first_imf(surface, signal, backend: str) -> dict:
     import scipy.sparse.linalg as spla
 
     from hht3d import linalg
-    from hht3d.emd import EMDOptions, EnvelopeSolver, Sifter, extrema_spacing
+    from hht3d.decomposition.decompose import EMDOptions, EnvelopeSolver, Sifter, extrema_spacing
 
     options = EMDOptions(envelope="biharmonic")
     sifter = Sifter(surface, options, backend)
@@ -116,8 +116,8 @@ def run_model(name: str) -> dict:
     """Benchmark one model in this process (called in a fresh subprocess)."""
     import hht3d
     from hht3d import linalg
-    from hht3d.emd import emd
-    from hht3d.signals import mean_curvature
+    from hht3d.decomposition.decompose import emd
+    from hht3d.geometry.signals import mean_curvature
 
     t0 = time.perf_counter()
     surface = hht3d.load(DATA / f"{name}.ply")

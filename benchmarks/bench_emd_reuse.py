@@ -9,9 +9,9 @@ gradients converge in a few iterations.
 
 This script replays the first ``--imfs`` IMFs of the mean-curvature signal
 with EMD's default rules (strict 1-ring extrema, biharmonic envelopes, SD 0.2)
-and the formulation of :mod:`hht3d.emd` (one pattern, constrained rows
-replaced by their diagonal), using only public API (:func:`hht3d.emd.envelope_operator`,
-:func:`hht3d.emd.local_extrema`, :class:`hht3d.linalg.SymbolicFactorization`).
+and the formulation of :mod:`hht3d.decomposition.decompose` (one pattern, constrained rows
+replaced by their diagonal), using only public API (:func:`hht3d.decomposition.decompose.envelope_operator`,
+:func:`hht3d.decomposition.decompose.local_extrema`, :class:`hht3d.linalg.backends.backends.SymbolicFactorization`).
 Every envelope is solved two ways and timed:
 
 ``refactor``  what EMD does today: one numeric factorization and one solve;
@@ -46,7 +46,7 @@ from common import machine, mkl_environment, model_path, table, write_results  #
 
 
 def envelope_system(q, rows, diagonal, f, constrained):
-    """The envelope matrix on Q's pattern and its right-hand side (the hht3d.emd notes)."""
+    """The envelope matrix on Q's pattern and its right-hand side (the hht3d.decomposition.decompose notes)."""
     import scipy.sparse as sp
 
     free = ~constrained
@@ -63,8 +63,8 @@ def replay(name: str, imfs: int, backend: str | None, rtol: float, max_cg: int, 
 
     import hht3d
     from hht3d import linalg
-    from hht3d.emd import envelope_operator, local_extrema
-    from hht3d.signals import mean_curvature
+    from hht3d.decomposition.decompose import envelope_operator, local_extrema
+    from hht3d.geometry.signals import mean_curvature
 
     surface = hht3d.load(model_path(name))
     mass = surface.mass_diagonal

@@ -23,7 +23,7 @@ phases, Gaussian amplitudes); the energy-weighted mean and median of
 the energy-weighted mean of the phase route's ``ω`` over ``√λ``.
 
 Part 3 — white noise.  Gaussian white noise (seed 0) on an icosphere
-(2,562 vertices) and a 64×64 grid, decomposed by today's ``hht3d.emd``
+(2,562 vertices) and a 64×64 grid, decomposed by today's ``hht3d.decomposition.decompose``
 (default options, at most 6 IMFs).  Per IMF the energy-weighted mean
 frequency of both routes and an independent spectral centroid:
 ``Σ √λ_i c_i² / Σ c_i²`` from SciPy's dense eigendecomposition of
@@ -35,7 +35,7 @@ of the centroid ratio.
 Part 4 — cost on igea (134k vertices).  The Riesz step ``riesz()`` (spectral
 bounds, elliptic quadrature at tol 1e-8, vertex gradients) of 7 and 15
 band-passes of the mean curvature (:func:`bench_riesz.band_signals`; igea
-decomposes into 7 IMFs), then :func:`hht3d.frequency.instantaneous_frequency`
+decomposes into 7 IMFs), then :func:`hht3d.spectral.frequency.instantaneous_frequency`
 of the same signals: the phase route on a fresh surface (building its edge
 stencil) and again (cached), and the gradient route.  Plain wall-clock
 timers in one process; the ratio to the Riesz step is the figure of merit
@@ -74,8 +74,8 @@ SEED = 0
 # -- part 1: response to plane waves ---------------------------------------------------------------
 
 def _response(surface, signals, wavenumbers, mask) -> dict:
-    from hht3d.monogenic import monogenic_from_potential
-    from hht3d.riesz import fractional_laplacian
+    from hht3d.spectral.monogenic_signal import monogenic_from_potential
+    from hht3d.spectral.riesz_transform import fractional_laplacian
 
     potential = fractional_laplacian(surface, signals)
     out = {}
@@ -92,7 +92,7 @@ def _response(surface, signals, wavenumbers, mask) -> dict:
 
 
 def run_response() -> dict:
-    from hht3d.surface import Surface
+    from hht3d.geometry.surface import Surface
     from meshes import grid
 
     h = 1.0 / (GRID - 1)
@@ -141,7 +141,7 @@ def _continuum_eq23(points, wavevectors, phases, amplitudes) -> tuple[np.ndarray
 
 def run_calibration() -> dict:
     from hht3d import load
-    from hht3d.monogenic import monogenic
+    from hht3d.spectral.monogenic_signal import monogenic
 
     rng = np.random.default_rng(SEED)
     points = rng.uniform(0, 200, (200_000, 2))
@@ -199,11 +199,11 @@ def _centroids_dct(imfs, n) -> tuple[np.ndarray, np.ndarray]:
 
 
 def run_noise() -> dict:
-    from hht3d.emd import emd
-    from hht3d.monogenic import monogenic_from_potential
-    from hht3d.riesz import fractional_laplacian
-    from hht3d.spectrum import HilbertSpectrum
-    from hht3d.surface import Surface
+    from hht3d.decomposition.decompose import emd
+    from hht3d.spectral.monogenic_signal import monogenic_from_potential
+    from hht3d.spectral.riesz_transform import fractional_laplacian
+    from hht3d.spectral.spectrum import HilbertSpectrum
+    from hht3d.geometry.surface import Surface
     from meshes import grid, icosphere
 
     rng = np.random.default_rng(SEED)
@@ -253,8 +253,8 @@ def single_thread():
 def run_cost() -> dict:
     from benchmarks.bench_riesz import band_signals
     from hht3d import load
-    from hht3d.frequency import instantaneous_frequency
-    from hht3d.riesz import riesz
+    from hht3d.spectral.frequency import instantaneous_frequency
+    from hht3d.spectral.riesz_transform import riesz
 
     path = model_path("igea")
     if path is None:

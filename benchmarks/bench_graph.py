@@ -55,7 +55,7 @@ def _run(args: list[str], threads: int) -> dict:
 # -- workers (run in subprocesses) ---------------------------------------------------------------
 
 def worker_dataset(workers: int, riesz_tasks: str) -> dict:
-    from hht3d.dataset import run_dataset
+    from hht3d.graph.stages.dataset import run_dataset
 
     inputs = [p for p in map(model_path, DATASET) if p is not None]
     options = {} if riesz_tasks == "default" else {"riesz_tasks": int(riesz_tasks)}
@@ -71,7 +71,8 @@ def _riesz_imfs():
     """IMFs of igea's mean and Gaussian curvature, cached in the scratch folder."""
     import numpy as np
 
-    from hht3d import emd, load, signals
+    from hht3d import emd, load
+    from hht3d.geometry import signals
 
     SCRATCH.mkdir(parents=True, exist_ok=True)
     cache = SCRATCH / f"{RIESZ_MODEL}_imfs.npy"
@@ -87,9 +88,9 @@ def worker_riesz(mode: str, tasks: int) -> dict:
     import numpy as np
 
     from hht3d import graph
-    from hht3d.monogenic import monogenic
+    from hht3d.spectral.monogenic_signal import monogenic
 
-    from hht3d.scheduling import open_client
+    from hht3d.graph.stages.scheduling import open_client
 
     surface, imfs = _riesz_imfs()
     _ = surface.stiffness, surface.normals, surface.gradient("lsq")  # operators outside the timing
@@ -99,7 +100,7 @@ def worker_riesz(mode: str, tasks: int) -> dict:
         seconds = time.perf_counter() - start
     else:
         with open_client(2, log=None) as client:  # started, and hht3d imported, before the timing
-            client.run(importlib.import_module, "hht3d.monogenic")
+            client.run(importlib.import_module, "hht3d.spectral.monogenic_signal")
             start = time.perf_counter()
             s = graph.from_surface(surface)
             lazy = graph.monogenic(s, imfs, riesz_tasks=tasks)
@@ -117,11 +118,11 @@ def _noop(x):
 def worker_overhead(scheduler: str, count: int) -> dict:
     from dask import delayed
 
-    from hht3d.scheduling import compute
+    from hht3d.graph.stages.scheduling import compute
 
     tasks = [delayed(_noop, pure=True)(i) for i in range(count)]
     if scheduler == "distributed":
-        from hht3d.scheduling import open_client
+        from hht3d.graph.stages.scheduling import open_client
 
         with open_client(2, log=None) as client:
             compute(tasks[:2], client=client, progress=False)

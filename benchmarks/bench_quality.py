@@ -1,7 +1,7 @@
 """Decomposition quality before and after the defaults of issue "Trustworthy decompositions".
 
 *Before* is the paper's method as hht3d ran it until then: thin-plate envelopes
-without guard or local-mean correction (``hht3d.emd.PAPER_OPTIONS``), the
+without guard or local-mean correction (``hht3d.decomposition.decompose.PAPER_OPTIONS``), the
 pointwise mean curvature of Eq. 24 (``min_area=0``) and the fixed Eq. 27
 weights 0.01 / 1.0.  *After* is today's defaults.  Both run in the same
 process, so time ratios compare like with like.
@@ -54,8 +54,8 @@ from meshes import grid, icosphere, open_cylinder, random_bump_sphere, sliver_sp
 import hht3d  # noqa: E402
 from hht3d import Surface, emd, hht  # noqa: E402
 from hht3d.apps import LowPass, filter_geometry  # noqa: E402
-from hht3d.emd import PAPER_OPTIONS, local_extrema  # noqa: E402
-from hht3d.signals import gaussian_curvature, mean_curvature  # noqa: E402
+from hht3d.decomposition.decompose import PAPER_OPTIONS, local_extrema  # noqa: E402
+from hht3d.geometry.signals import gaussian_curvature, mean_curvature  # noqa: E402
 
 MODELS = ["spot", "sphere_oct4098", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti",
           "office_kinect_colored", "igea", "dragon_vrip", "bunny_scan_bun000", "bunny_scans_merged"]

@@ -1,6 +1,6 @@
 """Rendering benchmark over the public models in ../shared/data (not a test).
 
-Per model and per available backend (:func:`hht3d.render.available_backends`):
+Per model and per available backend (:func:`hht3d.viz.render.available_backends`):
 
 - ``first field``: build a renderer and draw one field (x coordinate) at
   800×800 pixels — for the software renderer this includes rasterising the
@@ -14,7 +14,7 @@ Open3D runs in a child process per model (Filament on Mesa's CPU Vulkan
 driver busy-waits for minutes now and then; a run past the time limit is
 reported, not waited for, and the best-of-N numbers hide slow repeats).
 
-Then the composite figure (:func:`hht3d.figures.hht_figure`, paper Fig. 4:
+Then the composite figure (:func:`hht3d.viz.figures.hht_figure`, paper Fig. 4:
 model, signal, 5 IMFs, residue, 5 frequency and 5 amplitude maps = 18
 panels, default size) and the spectrum figure, drawn and saved as PNG.  The
 HHT itself is not run: the figure's cost does not depend on the values, so
@@ -55,11 +55,11 @@ OPEN3D_TIMEOUT = 300
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from hht3d import figures, render  # noqa: E402
-from hht3d.hht import HHTResult  # noqa: E402
-from hht3d.io import load  # noqa: E402
-from hht3d.monogenic import MonogenicSignal  # noqa: E402
-from hht3d.surface import Surface  # noqa: E402
+from hht3d.viz import figures, render  # noqa: E402
+from hht3d.transform import HHTResult  # noqa: E402
+from hht3d.io.read.read import load  # noqa: E402
+from hht3d.spectral.monogenic_signal import MonogenicSignal  # noqa: E402
+from hht3d.geometry.surface import Surface  # noqa: E402
 
 
 def best_of(repeat: int, run) -> float:

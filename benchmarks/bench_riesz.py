@@ -17,9 +17,9 @@ transform + monogenic quantities of all 15 at once with ``quadrature``
 subprocess for its own peak memory; errors against ``quadrature`` at
 tol 1e-12.
 
-Timed: :func:`hht3d.riesz.spectral_bounds` (quadrature) or
-:func:`hht3d.riesz.smallest_eigenpairs` (spectral), then
-:func:`hht3d.monogenic.monogenic`.  Not timed: loading, ``L``, ``M`` and the
+Timed: :func:`hht3d.spectral.riesz_transform.spectral_bounds` (quadrature) or
+:func:`hht3d.spectral.riesz_transform.smallest_eigenpairs` (spectral), then
+:func:`hht3d.spectral.monogenic_signal.monogenic`.  Not timed: loading, ``L``, ``M`` and the
 gradient operator (shared by both methods; reported apart), and
 pypardiso's search for the MKL library (looked up once, passed to the
 workers as ``PYPARDISO_MKL_RT``).  OpenBLAS (dense eigensolver, ARPACK's
@@ -94,8 +94,8 @@ def _clear_riesz_cache(surface) -> None:
 
 def run_fig2() -> dict:
     import hht3d
-    from hht3d.riesz import fractional_laplacian, vertex_gradient
-    from hht3d.signals import centroid_distance
+    from hht3d.spectral.riesz_transform import fractional_laplacian, vertex_gradient
+    from hht3d.geometry.signals import centroid_distance
 
     sphere = hht3d.load(DATA / "sphere_oct4098.ply")
     v = sphere.vertices / np.abs(sphere.vertices).sum(axis=1, keepdims=True)
@@ -137,7 +137,7 @@ def run_fig2() -> dict:
 def band_signals(surface) -> np.ndarray:
     """15 band-passes of the mean curvature between heat-smoothing scales."""
     from hht3d import linalg
-    from hht3d.signals import mean_curvature
+    from hht3d.geometry.signals import mean_curvature
 
     h = mean_curvature(surface)
     coo = surface.adjacency.tocoo()
@@ -159,8 +159,8 @@ def _load(name: str):
 
 
 def run_worker(name: str, method: str) -> dict:
-    from hht3d.riesz import fractional_laplacian, quadrature_nodes, smallest_eigenpairs, spectral_bounds
-    from hht3d.monogenic import monogenic
+    from hht3d.spectral.riesz_transform import fractional_laplacian, quadrature_nodes, smallest_eigenpairs, spectral_bounds
+    from hht3d.spectral.monogenic_signal import monogenic
 
     surface, operators = _load(name)
     signals = band_signals(surface)
@@ -196,7 +196,7 @@ def run_worker(name: str, method: str) -> dict:
 
 def shifts_against_tolerance(surface, signals, reference) -> list[dict]:
     """Shifts and the true error of ``L^{-1/2}`` per tolerance, with today's and Gershgorin's upper bound."""
-    from hht3d.riesz import fractional_laplacian, quadrature_nodes, spectral_bounds
+    from hht3d.spectral.riesz_transform import fractional_laplacian, quadrature_nodes, spectral_bounds
 
     m, mbar = spectral_bounds(surface)
     gershgorin = float(np.max(abs(surface.stiffness).sum(axis=1).A1 / surface.mass_diagonal))

@@ -1,4 +1,4 @@
-"""Viewer benchmark: size and load time of the HTML page of hht3d.viewer (not a test).
+"""Viewer benchmark: size and load time of the HTML page of hht3d.viz.viewer (not a test).
 
 Cases: spot (2,930 vertices, shipped in the package), igea decimated to 100k
 vertices (the size of the first budget), igea (134,345 vertices, the paper's
@@ -11,7 +11,7 @@ Per case:
 
 - ``write s``: :meth:`HHTResult.to_html` from a result in memory (colour
   limits, spectrum, quality figures, and above
-  :data:`hht3d.viewer.VERTEX_BUDGET` vertices the quadric decimation, timed
+  :data:`hht3d.viz.viewer.VERTEX_BUDGET` vertices the quadric decimation, timed
   on its own as ``decimate s``);
 - ``MB``: the file, of which plotly.js is a fixed 4.8 MB;
 - ``load s``: from navigation until the page marks itself drawn
@@ -21,7 +21,7 @@ Per case:
 - ``switch s``: choosing another field with the page's selector until it is
   drawn.
 
-Budgets (:data:`hht3d.viewer.PAGE_BUDGETS`) are checked at 100k and 1M
+Budgets (:data:`hht3d.viz.viewer.PAGE_BUDGETS`) are checked at 100k and 1M
 vertices.  A screenshot of every page goes to ``results/scratch/``.
 
 Usage::
@@ -43,7 +43,7 @@ from bench_render import synthetic_result
 from common import RESULTS, machine, model_path, write_results
 
 import hht3d
-from hht3d.viewer import PAGE_BUDGETS, VERTEX_BUDGET, shown_copy
+from hht3d.viz.viewer import PAGE_BUDGETS, VERTEX_BUDGET, shown_copy
 
 SCRATCH = RESULTS / "scratch"
 CASES = ("3k", "100k", "134k", "1m")
@@ -139,7 +139,7 @@ def markdown(records: list[dict], info: dict) -> str:
         out.append(f"| {r['case']} | {r['vertices']:,} | {r['shown_vertices']:,} | {r['page_mb']:.1f} "
                    f"({r['plotly_js_mb']:.1f}) | {r['write_s']:.1f} | {r['decimate_s']:.1f} | "
                    f"{r['load_s_best']:.1f} / {r['load_s_median']:.1f} | {r['switch_s']:.2f} |")
-    out += ["", "## Budgets (hht3d.viewer.PAGE_BUDGETS)", "", "| vertices | budget | measured | |", "|---|---|---|---|",
+    out += ["", "## Budgets (hht3d.viz.viewer.PAGE_BUDGETS)", "", "| vertices | budget | measured | |", "|---|---|---|---|",
             *budget_rows(records), ""]
     errors = [f"{r['case']}: {e}" for r in records for e in r["js_errors"]]
     out.append("JavaScript errors: " + ("; ".join(errors) if errors else "none") + ".")

@@ -1,40 +1,30 @@
 """hht3d: the Hilbert–Huang transform on 3D surfaces (meshes and point clouds).
 
-The main functions are exported here.  Four of them share their name with
-the module that holds them and its building blocks: ``hht3d.emd``,
-``hht3d.riesz``, ``hht3d.monogenic`` and ``hht3d.hht`` are those modules,
-and calling one calls its function of the same name.  So both
-``hht3d.emd(surface, signal)`` and ``import hht3d.emd as E;
-E.envelope_operator(surface)`` work, as do ``from hht3d import emd`` and
-``from hht3d.emd import emd`` (the plain function, for ``isinstance`` checks
-and the like).
+The main functions are exported here as plain functions; their building
+blocks live in the subpackages, which follow the data flow:
+:mod:`~hht3d.geometry` → :mod:`~hht3d.decomposition` → :mod:`~hht3d.spectral`
+→ :mod:`~hht3d.transform` → :mod:`~hht3d.apps`, with :mod:`~hht3d.io.read`,
+:mod:`~hht3d.linalg.backends` beneath and :mod:`~hht3d.graph.stages`, :mod:`~hht3d.pipeline`,
+:mod:`~hht3d.viz` and the CLI above.
 
 Examples
 --------
 >>> import hht3d
->>> from hht3d.signals import mean_curvature
+>>> from hht3d.geometry import mean_curvature
 >>> surface = hht3d.load(hht3d.data_path("spot.ply"))
->>> decomposition = hht3d.emd(surface, mean_curvature(surface), max_imfs=2)
+>>> decomposition = hht3d.decomposition.decompose(surface, mean_curvature(surface), max_imfs=2)
 >>> decomposition.n_imfs
 2
->>> import hht3d.emd as E
->>> E.envelope_operator(surface).shape
+>>> from hht3d.decomposition import envelope_operator
+>>> envelope_operator(surface).shape
 (2930, 2930)
 """
-import importlib
-import inspect
-import sys
-import types
-
-from . import emd, hht, monogenic, riesz
-from .emd import EMDResult, eemd
+from .decomposition import EMDResult, eemd, emd
 from .errors import HHT3DError, InputError, NumericalError, PipelineError
-from .hht import HHTResult
-from .io import data_path, load
-from .monogenic import MonogenicSignal
-from .riesz import fractional_laplacian
-from .spectrum import HilbertSpectrum
-from .surface import Surface
+from .geometry import Surface
+from .io.read import data_path, load
+from .spectral import HilbertSpectrum, MonogenicSignal, fractional_laplacian, monogenic, riesz
+from .transform import HHTResult, hht
 
 __version__ = "0.1.0"
 
@@ -43,26 +33,3 @@ __all__ = [
     "HHT3DError", "InputError", "NumericalError", "PipelineError",
     "data_path", "eemd", "emd", "fractional_laplacian", "hht", "load", "monogenic", "riesz",
 ]
-
-
-class _CallableModule(types.ModuleType):
-    """A module that calls its function of the same name (``hht3d.emd(...)`` is ``hht3d.emd.emd(...)``)."""
-
-    @property
-    def function(self):
-        return getattr(self, self.__name__.rpartition(".")[2])
-
-    @property
-    def __signature__(self) -> inspect.Signature:
-        return inspect.signature(self.function)
-
-    def __call__(self, *args, **kwargs):
-        return self.function(*args, **kwargs)
-
-    def __reduce__(self):
-        return importlib.import_module, (self.__name__,)
-
-
-for _module in (emd, hht, monogenic, riesz):
-    sys.modules[_module.__name__].__class__ = _CallableModule
-del _module

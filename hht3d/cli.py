@@ -19,10 +19,10 @@ import sys
 from pathlib import Path
 
 from .errors import HHT3DError, PipelineError, one_line, shown
-from .io import data_path
-from .scheduling import SCHEDULERS
-from .render import UP_AXES, VIEWS
-from .viewer import VERTEX_BUDGET
+from .io.read import data_path
+from .graph.scheduling import SCHEDULERS
+from .viz.render import UP_AXES, VIEWS
+from .viz.viewer import VERTEX_BUDGET
 
 #: The demo model shipped in the package: Keenan Crane's "spot" (CC0).
 DEMO_MODEL = "spot.ply"
@@ -65,7 +65,7 @@ def _row_lines(row) -> list[str]:
 
 
 def _execute(plan, args) -> int:
-    from .dataset import summary_paths, write_summary
+    from .graph.dataset import summary_paths, write_summary
     from .pipeline import failures, run_pipeline
 
     rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
@@ -121,7 +121,7 @@ def _ops(args) -> int:
 
 
 def _backends() -> None:
-    from .linalg import backend_report
+    from .linalg.backends import backend_report
 
     statuses, reason = backend_report()
     chosen = next(s.name for s in statuses if s.default)
@@ -131,8 +131,8 @@ def _backends() -> None:
 
 
 def _info(args) -> int:
-    from .io import load
-    from .topology import describe
+    from .io.read import load
+    from .geometry.topology import describe
 
     if args.backends:
         _backends()
@@ -149,7 +149,7 @@ def _info(args) -> int:
 
 
 def _view(args) -> int:
-    from .viewer import file_html
+    from .viz.viewer import file_html
 
     print(file_html(args.file, args.out, field=args.field, max_vertices=args.max_vertices, view=args.view,
                     up=args.up))
@@ -157,7 +157,7 @@ def _view(args) -> int:
 
 
 def _schema(args) -> int:
-    from .io import atomic_path
+    from .io.read import atomic_path
     from .pipeline.json_schema import schema_text
 
     if args.output is None:

@@ -146,7 +146,7 @@ def reference_operators(vertices, faces):
     """Dense cotan stiffness ``L``, mixed-Voronoi areas ``A`` and unit vertex normals ``N``.
 
     Written face by face from the textbook formulas (angles by ``arccos``; Meyer et al. 2002
-    for the areas; area-weighted face normals), independently of :mod:`hht3d.operators`, as
+    for the areas; area-weighted face normals), independently of :mod:`hht3d.geometry.operators`, as
     the reference for tests of code that uses the operators.  For small meshes only.
     Returns ``(L (n, n), A (n,), N (n, 3))``.
     """

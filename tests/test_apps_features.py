@@ -13,8 +13,8 @@ from hht3d import InputError, Surface
 from hht3d.apps import (FEATURE_EMD_OPTIONS, FeatureResult, heat_kernel_signature, hks_features, merge_hits, prominent_features,
                         repeatability)
 from hht3d.cli import demo_model_path
-from hht3d.emd import emd, local_extrema
-from hht3d.signals import mean_curvature
+from hht3d.decomposition.decompose import emd, local_extrema
+from hht3d.geometry.signals import mean_curvature
 
 
 def mean_edge_length(surface: Surface) -> float:

@@ -16,9 +16,9 @@ from hht3d.apps import (BandBoost, BandStop, Constant, HighBoost, LowPass, Piece
                         edit_frequency, filter_geometry, filter_signal, gains_of, imf_enhancement, make_gain,
                         manifold_harmonics_filter, reconstruct, reconstruct_from_change)
 from hht3d.apps.reconstruction import DISPLACEMENT_LIMIT
-from hht3d.hht import hht
-from hht3d.quality import QualityWarning
-from hht3d.signals import mean_curvature
+from hht3d.transform import hht
+from hht3d.decomposition.quality import QualityWarning
+from hht3d.geometry.signals import mean_curvature
 
 #: Identity: the filtered positions may differ from the input by this fraction of the bounding-box
 #: diagonal (RMS).  With gain 1 the change s' − s is zero or a few ulps, so the solve moves nothing.

@@ -1,4 +1,4 @@
-"""EMD on surfaces (hht3d.emd): oracles from 1-D EMD, splines and spherical harmonics."""
+"""EMD on surfaces (hht3d.decomposition.decompose): oracles from 1-D EMD, splines and spherical harmonics."""
 from __future__ import annotations
 
 import numpy as np
@@ -10,7 +10,7 @@ from scipy.interpolate import CubicSpline
 from scipy.special import sph_harm_y
 
 from hht3d import InputError, Surface, linalg
-from hht3d.emd import (PAPER_OPTIONS, combine_eemd, eemd, eemd_member, emd, envelope_interpolation,
+from hht3d.decomposition.decompose import (PAPER_OPTIONS, combine_eemd, eemd, eemd_member, emd, envelope_interpolation,
                        envelope_operator, local_extrema)
 
 # Σ imfs + residue reproduces the signal up to a few ulps of its magnitude.
@@ -226,7 +226,7 @@ def test_point_cloud_sums_to_signal():
 def test_open_scan_mean_curvature(shared_model):
     # a real open scan with boundary loops, decomposed like the benchmark does
     import hht3d
-    from hht3d.signals import mean_curvature
+    from hht3d.geometry.signals import mean_curvature
 
     surface = hht3d.load(shared_model("spacetime_face_neutral.ply"))
     signal = mean_curvature(surface)

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from conftest import assert_red_blue_swapped
-from hht3d import figures
+from hht3d.viz import figures
 from hht3d.errors import InputError
-from hht3d.hht import HHTResult, hht
-from hht3d.surface import Surface
+from hht3d.transform import HHTResult, hht
+from hht3d.geometry.surface import Surface
 from meshes import fibonacci_sphere, icosphere
 
 
@@ -118,7 +118,7 @@ def test_composite_default_height_fits_the_model(result):
 
 
 def test_point_cloud_result(cloud_result, tmp_path):
-    from hht3d.figures import render_png
+    from hht3d.viz.figures import render_png
 
     paths = figures.write_figures(cloud_result, tmp_path, stem="pc", hht_size=(700, 420), field_size=(400, 360))
     assert pixels(paths["hht"]).shape[:2] == (420, 700)

@@ -14,11 +14,11 @@ import pytest
 from scipy.special import lpmv
 
 from hht3d.errors import InputError
-from hht3d.frequency import (FREQUENCY_METHODS, instantaneous_frequency, resolution_report,
+from hht3d.spectral.frequency import (FREQUENCY_METHODS, instantaneous_frequency, resolution_report,
                              resolvable_frequency)
-from hht3d.monogenic import monogenic, monogenic_from_potential
-from hht3d.riesz import fractional_laplacian
-from hht3d.surface import Surface
+from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
+from hht3d.spectral.riesz_transform import fractional_laplacian
+from hht3d.geometry.surface import Surface
 from meshes import grid, icosphere
 
 # A strip [0, 1] x [0, 16h], h = 1/128.  cos(mπx) is a Neumann eigenfunction of the
@@ -259,7 +259,7 @@ def test_resolution_report_counts_pairs_above_the_limit():
 
 def test_option_reaches_hht_the_graph_and_the_pipeline():
     from hht3d import graph
-    from hht3d.hht import hht
+    from hht3d.transform import hht
     from hht3d.pipeline.registry import OPERATIONS
 
     s = Surface(*icosphere(3))

@@ -4,8 +4,8 @@ import pytest
 from dask.core import get_dependencies
 
 from hht3d import Surface, graph
-from hht3d.hht import hht as eager_hht
-from hht3d.signals import mean_curvature
+from hht3d.transform import hht as eager_hht
+from hht3d.geometry.signals import mean_curvature
 from meshes import fibonacci_sphere, icosphere
 
 OPTIONS = dict(emd_options={"max_imfs": 3}, riesz_tasks=3)
@@ -129,10 +129,10 @@ def test_lazy_twins_have_the_eager_signatures_and_docstrings():
     import inspect
 
     from hht3d import apps
-    from hht3d.emd import eemd, emd
-    from hht3d.io import load
-    from hht3d.monogenic import monogenic, monogenic_from_potential
-    from hht3d.signals import signal
+    from hht3d.decomposition.decompose import eemd, emd
+    from hht3d.io.read.read import load
+    from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
+    from hht3d.geometry.signals import signal
 
     extras = {"monogenic": ["riesz_tasks"], "hht": ["ensemble", "riesz_tasks"]}
     eager = [load, signal, emd, eemd, monogenic, monogenic_from_potential, eager_hht, apps.filter_signal,
@@ -148,7 +148,7 @@ def test_lazy_twins_have_the_eager_signatures_and_docstrings():
 
 
 def test_lazy_monogenic_takes_the_eager_arguments():
-    from hht3d.monogenic import monogenic
+    from hht3d.spectral.monogenic_signal import monogenic
 
     surface = _surfaces()[0]
     imfs = np.stack([mean_curvature(surface), surface.vertices[:, 0]])

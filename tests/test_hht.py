@@ -6,8 +6,8 @@ import pytest
 
 import hht3d
 from hht3d.errors import InputError
-from hht3d.hht import HHTResult, hht
-from hht3d.surface import Surface
+from hht3d.transform import HHTResult, hht
+from hht3d.geometry.surface import Surface
 from meshes import fibonacci_sphere, icosphere
 
 

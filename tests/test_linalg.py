@@ -1,4 +1,4 @@
-"""Sparse SPD solver backends (hht3d.linalg) against SciPy's dense and sparse solvers.
+"""Sparse SPD solver backends (hht3d.linalg.backends.backends) against SciPy's dense and sparse solvers.
 
 The systems are the two kinds hht3d factorizes, built on the shipped model
 spot (2,930 vertices): the constrained biharmonic envelope system of EMD and
@@ -24,11 +24,11 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import hht3d
-from hht3d import linalg
+from hht3d.linalg.backends import backends as linalg
 from hht3d.errors import InputError, NumericalError
 
-emd_module = importlib.import_module("hht3d.emd")
-riesz_module = importlib.import_module("hht3d.riesz")
+emd_module = importlib.import_module("hht3d.decomposition.decompose")
+riesz_module = importlib.import_module("hht3d.spectral.riesz_transform")
 
 SPOT = Path(hht3d.__file__).parent / "data" / "spot.ply"
 BACKENDS = linalg.available_backends()
@@ -42,7 +42,7 @@ def spot():
 
 
 def envelope_system(surface, constrained: np.ndarray) -> sp.csr_matrix:
-    """``[Q_FF 0; 0 diag(Q)_CC]`` on Q's full pattern, as EMD builds it (hht3d.emd notes)."""
+    """``[Q_FF 0; 0 diag(Q)_CC]`` on Q's full pattern, as EMD builds it (hht3d.decomposition.decompose notes)."""
     q = emd_module.envelope_operator(surface)
     rows = np.repeat(np.arange(surface.n_vertices), np.diff(q.indptr))
     free = ~constrained

@@ -12,11 +12,11 @@ from hht3d import Surface, graph
 from hht3d.apps import (HighBoost, LowPass, PiecewiseLinear, filter_geometry, filter_signal, hks_features,
                         imf_enhancement, manifold_harmonics_filter, prominent_features, reconstruct)
 from hht3d.cli import main
-from hht3d.emd import eemd, emd
-from hht3d.hht import HHTResult, hht
-from hht3d.io import load, write_ply
-from hht3d.monogenic import monogenic
-from hht3d.signals import mean_curvature
+from hht3d.decomposition.decompose import eemd, emd
+from hht3d.transform import HHTResult, hht
+from hht3d.io.read.read import load, write_ply
+from hht3d.spectral.monogenic_signal import monogenic
+from hht3d.geometry.signals import mean_curvature
 from hht3d.pipeline import OPERATIONS, load_pipeline, parse_pipeline, run_pipeline
 
 EXAMPLES = sorted((Path(__file__).resolve().parents[1] / "pipelines").glob("*.yaml"))

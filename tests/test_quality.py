@@ -1,4 +1,4 @@
-"""Decomposition quality (hht3d.quality) and the EMD defaults held to it on realistic input."""
+"""Decomposition quality (hht3d.decomposition.quality) and the EMD defaults held to it on realistic input."""
 from __future__ import annotations
 
 import warnings
@@ -11,9 +11,9 @@ from meshes import grid, icosphere, random_bump_sphere
 
 import hht3d
 from hht3d import InputError, Surface, emd, hht
-from hht3d.emd import GUARD_TENSIONS, PAPER_OPTIONS, local_extrema
-from hht3d.quality import ENERGY_RATIO_LIMIT, ORTHOGONALITY_LIMIT, QualityWarning, decomposition_quality, fluctuation
-from hht3d.signals import mean_curvature
+from hht3d.decomposition.decompose import GUARD_TENSIONS, PAPER_OPTIONS, local_extrema
+from hht3d.decomposition.quality import ENERGY_RATIO_LIMIT, ORTHOGONALITY_LIMIT, QualityWarning, decomposition_quality, fluctuation
+from hht3d.geometry.signals import mean_curvature
 
 
 @pytest.fixture(scope="module")

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from conftest import assert_red_blue_swapped
-from hht3d import figures
-from hht3d import render as R
+from hht3d.viz import figures
+from hht3d.viz import render as R
 from hht3d.errors import InputError
-from hht3d.surface import Surface
+from hht3d.geometry.surface import Surface
 from meshes import fibonacci_sphere, icosphere
 
 
@@ -163,10 +163,10 @@ import sys
 import numpy as np
 sys.path.insert(0, {tests!r})
 from conftest import assert_red_blue_swapped
-from hht3d import figures
-from hht3d import render as R
+from hht3d.viz import figures
+from hht3d.viz import render as R
 from hht3d.errors import InputError
-from hht3d.surface import Surface
+from hht3d.geometry.surface import Surface
 from meshes import icosphere
 sphere = Surface(*icosphere(3))
 try:

@@ -15,7 +15,7 @@ from scipy.special import sph_harm_y
 
 import hht3d
 from hht3d import linalg
-from hht3d.riesz import (
+from hht3d.spectral.riesz_transform import (
     combine_quadrature_parts,
     fractional_laplacian,
     quadrature_nodes,
@@ -28,7 +28,7 @@ from hht3d.riesz import (
     spectral_bounds,
 )
 from hht3d.errors import InputError
-from hht3d.surface import Surface
+from hht3d.geometry.surface import Surface
 from conftest import shipped_model_path
 from meshes import fibonacci_sphere, grid, icosphere
 
@@ -70,7 +70,7 @@ def jittered_grid():
 def generalized_eigh(surface):
     """Non-zero eigenpairs of ``L φ = λ M φ`` by ``scipy.linalg.eigh(L, M)``, written here.
 
-    Independent of ``hht3d.riesz._dense_eigenpairs`` (which symmetrises with
+    Independent of ``hht3d.spectral.riesz_transform._dense_eigenpairs`` (which symmetrises with
     ``M^{-1/2}`` and calls the standard problem): LAPACK's generalized
     solver returns M-orthonormal eigenvectors directly.
     """
@@ -367,7 +367,7 @@ def test_bad_inputs(jittered_grid, monkeypatch):
         riesz(s, np.ones(n), gradient="green")
     with pytest.raises(InputError, match="Surface"):
         riesz(s.vertices, np.ones(n))
-    monkeypatch.setattr(sys.modules["hht3d.riesz"], "DENSE_MAX_VERTICES", 100)
+    monkeypatch.setattr(sys.modules["hht3d.spectral.riesz_transform"], "DENSE_MAX_VERTICES", 100)
     big = Surface(s.vertices, s.faces)
     with pytest.raises(InputError, match="dense eigendecomposition is limited"):
         fractional_laplacian(big, np.ones(n), method="dense")

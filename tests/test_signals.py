@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from hht3d import InputError, Surface, emd, load, signals
+from hht3d import InputError, Surface, emd, load
+from hht3d.geometry import signals
 from meshes import fibonacci_sphere, grid, icosphere, sliver_sphere
 
 

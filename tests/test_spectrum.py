@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from hht3d.errors import InputError
-from hht3d.frequency import resolvable_frequency
-from hht3d.monogenic import MonogenicSignal, monogenic
-from hht3d.spectrum import HilbertSpectrum
-from hht3d.surface import Surface
+from hht3d.spectral.frequency import resolvable_frequency
+from hht3d.spectral.monogenic_signal import MonogenicSignal, monogenic
+from hht3d.spectral.spectrum import HilbertSpectrum
+from hht3d.geometry.surface import Surface
 from meshes import grid
 
 

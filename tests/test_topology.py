@@ -2,7 +2,7 @@
 import pytest
 
 from hht3d import load
-from hht3d.topology import describe
+from hht3d.geometry.topology import describe
 
 
 @pytest.mark.parametrize("model, expected", [

@@ -1,4 +1,4 @@
-"""The interactive HTML viewer (hht3d.viewer): what the page holds, and how it renders in a real browser.
+"""The interactive HTML viewer (hht3d.viz.viewer): what the page holds, and how it renders in a real browser.
 
 The browser tests drive Debian's chromium (installed by ``bash .ci/setup``) through Playwright; they
 skip only where chromium is not installed and this is not CI.
@@ -19,12 +19,13 @@ from conftest import decoded, field_values, page_data
 from meshes import fibonacci_sphere, icosphere
 
 import hht3d
-from hht3d import HilbertSpectrum, Surface, signals
+from hht3d import HilbertSpectrum, Surface
+from hht3d.geometry import signals
 from hht3d.apps import filter_geometry
 from hht3d.apps.filters import LowPass
 from hht3d.cli import demo_model_path, main
 from hht3d.errors import InputError
-from hht3d.viewer import (PERCENTILES, SHAPE, color_limits, file_html, read_fields, shown_copy, surfaces_html,
+from hht3d.viz.viewer import (PERCENTILES, SHAPE, color_limits, file_html, read_fields, shown_copy, surfaces_html,
                           write_page)
 
 CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -59,7 +60,7 @@ class _References(HTMLParser):
 def result():
     """The HHT of the shipped demo model's mean curvature, two IMFs."""
     surface = hht3d.load(demo_model_path())
-    return hht3d.hht(surface, signals.mean_curvature(surface), emd_options={"max_imfs": 2})
+    return hht3d.transform(surface, signals.mean_curvature(surface), emd_options={"max_imfs": 2})
 
 
 @pytest.fixture(scope="module")
@@ -283,7 +284,7 @@ def test_filtered_surface_beside_the_original(result, tmp_path):
 def test_file_html_of_a_plain_surface_shows_its_properties(tmp_path):
     v, f = icosphere(2)
     path = tmp_path / "ball.ply"
-    hht3d.io.write_ply(path, Surface(v, f, name="ball"), {"height": v[:, 2]})
+    hht3d.io.read.read.write_ply(path, Surface(v, f, name="ball"), {"height": v[:, 2]})
     data = page_data(file_html(path))
     assert [e["name"] for e in data["fields"]] == ["height"]
     assert data["spectrum"] is None and data["quality"] is None

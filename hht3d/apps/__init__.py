@@ -15,7 +15,7 @@ A band-stop of the Hilbert spectrum moves vertices and keeps the faces
 
 >>> import numpy as np
 >>> from hht3d import data_path, hht, load
->>> from hht3d.signals import mean_curvature
+>>> from hht3d.geometry.signals import mean_curvature
 >>> from hht3d.apps import BandStop, filter_geometry, prominent_features
 >>> surface = load(data_path("spot.ply"))
 >>> result = hht(surface, mean_curvature(surface), emd_options={"max_imfs": 3})

@@ -10,10 +10,10 @@
   (Fig. 8).
 
 Eigenpairs are the smallest non-zero ones of ``L φ = λ M φ`` from
-:func:`hht3d.riesz.smallest_eigenpairs` (shift-invert Lanczos, cached on the
+:func:`hht3d.spectral.riesz_transform.smallest_eigenpairs` (shift-invert Lanczos, cached on the
 surface).  An eigenfunction with eigenvalue ``λ`` oscillates like
 ``cos(ω x)`` with ``ω = √λ`` radians per unit length, the unit of the
-instantaneous frequency of :mod:`hht3d.monogenic`, so the gains of
+instantaneous frequency of :mod:`hht3d.spectral.monogenic_signal`, so the gains of
 :mod:`hht3d.apps.filters` apply to both filters unchanged.
 """
 from __future__ import annotations
@@ -22,11 +22,11 @@ import math
 
 import numpy as np
 
-from ..emd import local_extrema
+from ..decomposition.decompose import local_extrema
 from ..errors import InputError
-from ..riesz import remove_kernel, smallest_eigenpairs
-from ..surface import Surface
-from ..validation import as_imfs, check_distance, check_surface, finite
+from ..spectral.riesz_transform import remove_kernel, smallest_eigenpairs
+from ..geometry.surface import Surface
+from ..geometry.validation import as_imfs, check_distance, check_surface, finite
 from .features import FeatureResult, features_from_counts
 from .filters import evaluate_gain
 from .reconstruction import BOUNDARY_WEIGHT, INTERIOR_WEIGHT, reconstruct_from_change
@@ -173,7 +173,7 @@ def hks_features(surface: Surface, *, time: float | None = None, eigenpairs: int
 
     A vertex is a feature when its ``k_t(x, x)`` is at least that of every
     vertex in its ``ring``-ring and larger than one of them
-    (:func:`hht3d.emd.local_extrema`, ``rule="strict"``).
+    (:func:`hht3d.decomposition.decompose.local_extrema`, ``rule="strict"``).
 
     Parameters
     ----------

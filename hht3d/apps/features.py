@@ -7,7 +7,7 @@ local maximum of ``f_k`` when
     |N⁺_{f_k}(v_i)| ≥ t |N_2(i)|,   N⁺_{f_k}(v_i) = {j ∈ N_2(i) : f_k(v_i) ≥ f_k(v_j)},
 
 with ``N_2(i)`` its two-ring and ``t = 0.8`` by default (minima likewise
-with ``≤``); :func:`hht3d.emd.local_extrema` with ``rule="ring"``.  Counting
+with ``≤``); :func:`hht3d.decomposition.decompose.local_extrema` with ``rule="ring"``.  Counting
 over the ``K`` IMFs how often each vertex is an extremum, the *prominent*
 features are the vertices counted at least ``⌈K/2⌉`` times (the paper's
 "half of the decomposition IMF number"; ``fraction`` changes it).
@@ -20,7 +20,7 @@ Which EMD
 -------------
 Features count extrema across scales, so they need IMFs whose scales are the
 same for a shape and a noisy copy of it.  The cancellation guard of
-:func:`hht3d.emd.emd` picks the tension per IMF from the signal, which moves
+:func:`hht3d.decomposition.decompose.emd` picks the tension per IMF from the signal, which moves
 the scales between copies; with one fixed tension the features repeat far
 better (spot under 15% noise, three seeds, z-scores against chance: 13.7
 noisy→clean and 10.2 clean→noisy, against 4.1 and 2.2 with the guard).
@@ -40,10 +40,10 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ..emd import local_extrema
+from ..decomposition.decompose import local_extrema
 from ..errors import InputError
-from ..surface import Surface
-from ..validation import as_imfs, check_distance, check_surface
+from ..geometry.surface import Surface
+from ..geometry.validation import as_imfs, check_distance, check_surface
 
 __all__ = ["FEATURE_EMD_OPTIONS", "FeatureResult", "prominent_features", "features_from_counts", "merge_hits", "repeatability"]
 

@@ -5,7 +5,7 @@ The Hilbert–Huang transform writes a signal as (Eq. 25)
     s = Re Σ_k a_k e^{i ∫ω_k} + r_N = Σ_k a_k cos φ_k + r_N,
 
 with local amplitude ``a_k``, phase ``φ_k`` and instantaneous frequency
-``ω_k`` of IMF ``k`` at every vertex (:mod:`hht3d.monogenic`).  A filter is
+``ω_k`` of IMF ``k`` at every vertex (:mod:`hht3d.spectral.monogenic_signal`).  A filter is
 a gain ``μ(ω)`` applied per vertex and IMF (Eq. 26):
 
     s' = Σ_k μ(ω_k) a_k cos φ_k + r_N.
@@ -17,7 +17,7 @@ everywhere returns the signal to round-off.  The residue is never filtered.
 Gains
 -----
 Each gain is a small frozen dataclass, picklable and callable on an array of
-frequencies (radians per model unit of length, as :mod:`hht3d.monogenic`
+frequencies (radians per model unit of length, as :mod:`hht3d.spectral.monogenic_signal`
 reports them; a wavelength ``ℓ`` is the frequency ``2π/ℓ``):
 
 =================  ==========================================================
@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..validation import finite
+from ..geometry.validation import finite
 
 __all__ = [
     "Gain",
@@ -349,7 +349,7 @@ def filter_signal(decomposition, gain) -> np.ndarray:
     ----------
     decomposition : HHTResult or tuple (imfs, residue, monogenic)
         IMFs ``(k, n)``, residue ``(n,)`` and their
-        :class:`~hht3d.monogenic.MonogenicSignal` (its ``frequency`` is used).
+        :class:`~hht3d.spectral.monogenic_signal.MonogenicSignal` (its ``frequency`` is used).
     gain : callable
         ``μ(ω)`` evaluated elementwise on the ``(k, n)`` instantaneous
         frequencies: a :class:`Gain` or any function returning an array of

@@ -12,9 +12,9 @@ positions ``V'`` near the old ones ``V``.
 Formulation used here
 ---------------------
 With the weak (stiffness) Laplacian ``L`` and lumped mass ``M`` of
-:class:`~hht3d.surface.Surface`, the strong Laplacian of the coordinates is
+:class:`~hht3d.geometry.surface.Surface`, the strong Laplacian of the coordinates is
 ``δ = M⁻¹ L V`` and the signal of Eq. (24) is ``s = n · δ``
-(:func:`hht3d.signals.mean_curvature`).  Discretely ``δ`` is not exactly
+(:func:`hht3d.geometry.signals.mean_curvature`).  Discretely ``δ`` is not exactly
 parallel to ``n``, so the target ``diag(s') N`` of Eq. (27) would move the
 vertices even when ``s' = s``.  We therefore keep the tangential part of
 the original ``δ`` and change only its normal part,
@@ -31,7 +31,7 @@ Its normal equations, with ``D = V' − V``, are
     (L M⁻¹ L + W) D = L diag(s' − s) N,
 
 symmetric positive definite (``L M⁻¹ L`` is PSD and ``W > 0``), solved
-for the three coordinates at once with :func:`hht3d.linalg.factorize`.
+for the three coordinates at once with :func:`hht3d.linalg.backends.backends.factorize`.
 ``s' = s`` gives ``D = 0`` exactly, so the identity filter returns the
 input positions.
 
@@ -84,11 +84,11 @@ import scipy.sparse as sp
 
 from .. import linalg
 from ..errors import InputError
-from ..quality import QualityWarning
-from ..riesz import remove_kernel
-from ..signals import mean_curvature
-from ..surface import Surface
-from ..validation import check_signal, check_surface, positive
+from ..decomposition.quality import QualityWarning
+from ..spectral.riesz_transform import remove_kernel
+from ..geometry.signals import mean_curvature
+from ..geometry.surface import Surface
+from ..geometry.validation import check_signal, check_surface, positive
 from .filters import decomposition_parts, evaluate_gain
 
 __all__ = ["position_weights", "reconstruct", "reconstruct_from_change", "filter_geometry", "edit_frequency",
@@ -159,7 +159,7 @@ def reconstruct_from_change(surface: Surface, change, *, interior_weight: float 
     weights : (n,) array_like, optional
         Per-vertex ``μ_i`` (all > 0), overriding the two above.
     backend : str, optional
-        Sparse solver of :mod:`hht3d.linalg`.
+        Sparse solver of :mod:`hht3d.linalg.backends.backends`.
     name : str, optional
         Name of the new surface; default ``"<name>_filtered"``.
     preserve_scale : bool
@@ -234,7 +234,7 @@ def check_mean_curvature_signal(surface: Surface, signal) -> None:
     error = min(errors)
     if not error <= _SIGNAL_RTOL * scale:
         raise InputError(f"{surface.name}: geometry filtering needs the HHT of the mean-curvature signal "
-                         "(Eq. 24, hht3d.signals.mean_curvature); this result's signal differs from it "
+                         "(Eq. 24, hht3d.geometry.signals.mean_curvature); this result's signal differs from it "
                          f"by up to {error:.3g} (scale {scale:.3g})")
 
 
@@ -272,7 +272,7 @@ def filter_geometry(result, gain, *, interior_weight: float | None = None, bound
     Parameters
     ----------
     result : HHTResult
-        :func:`hht3d.hht.hht` of ``mean_curvature(surface)``.
+        :func:`hht3d.transform.hht` of ``mean_curvature(surface)``.
     gain : callable
         ``μ(ω)``, e.g. :class:`~hht3d.apps.filters.BandStop`.
     interior_weight, boundary_weight : float, optional
@@ -294,7 +294,7 @@ def filter_geometry(result, gain, *, interior_weight: float | None = None, bound
     Surface
         The filtered geometry, same faces.  A gain that changes no
         frequency returns the surface unchanged with a
-        :class:`~hht3d.quality.QualityWarning`.
+        :class:`~hht3d.decomposition.quality.QualityWarning`.
 
     Notes
     -----

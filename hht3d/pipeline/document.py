@@ -14,7 +14,7 @@ import re
 import yaml
 
 from ..errors import MAX_SHOWN, PipelineError, one_line, shown
-from ..validation import did_you_mean
+from ..geometry.validation import did_you_mean
 
 __all__ = ["YAMLMapping", "MAX_YAML_VALUES", "read_yaml", "at", "apply_overrides", "add_implicit_load"]
 

@@ -30,9 +30,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError, PipelineError, shown
-from ..io import write_colored_ply, write_npz, write_ply
-from ..render import UP_AXES, VIEWS
-from ..viewer import VERTEX_BUDGET
+from ..io.read import write_colored_ply, write_npz, write_ply
+from ..viz.render import UP_AXES, VIEWS
+from ..viz.viewer import VERTEX_BUDGET
 from .params import Param, did_you_mean
 
 __all__ = ["Format", "FORMATS", "SUFFIXES", "check_options", "field_imf"]
@@ -108,8 +108,8 @@ def _hht_colored(result, surface, path, *, field, cmap):
 
 
 def _hht_png(result, surface, path, *, figure, field, signal_name, view, up):
-    from ..figures import hht_figure, spectrum_figure
-    from ..figures import field_figure, save_figure
+    from ..viz.figures import hht_figure, spectrum_figure
+    from ..viz.figures import field_figure, save_figure
 
     if figure == "hht":
         fig = hht_figure(result, view=view, up=up, signal_name=signal_name)
@@ -143,7 +143,7 @@ def _signal_colored(values, surface, path, *, cmap):
 
 
 def _signal_png(values, surface, path, *, view, up, cmap, title):
-    from ..figures import render_png
+    from ..viz.figures import render_png
 
     return render_png(path, surface, values, view=view, up=up, cmap=cmap, title=title or f"{surface.name}: signal")
 
@@ -153,13 +153,13 @@ def _surface_ply(surface, _, path):
 
 
 def _surface_png(surface, _, path, *, view, up, title):
-    from ..figures import render_png
+    from ..viz.figures import render_png
 
     return render_png(path, surface, None, view=view, up=up, title=title)
 
 
 def _surface_html(surface, origin, path, *, view, up, max_vertices):
-    from ..viewer import SHAPE, surfaces_html, write_page
+    from ..viz.viewer import SHAPE, surfaces_html, write_page
 
     if origin is surface:
         return write_page(path, [surface], surface.attributes, title=surface.name, field=SHAPE, view=view, up=up,

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from ..apps.filters import GAINS, make_gain
 from ..errors import InputError, PipelineError, one_line, shown
-from ..validation import did_you_mean
+from ..geometry.validation import did_you_mean
 
 __all__ = ["Param", "REQUIRED", "did_you_mean", "with_defaults", "yaml_text"]
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..dataset import summary_paths
+from ..graph.dataset import summary_paths
 from .outputs import Format
 from .params import yaml_text
 from .registry import Operation
@@ -25,7 +25,7 @@ PLACEHOLDERS = ("stem", "parent", "name")
 
 @dataclass(frozen=True)
 class Execution:
-    """Where and how the graph runs (:func:`hht3d.scheduling.compute`)."""
+    """Where and how the graph runs (:func:`hht3d.graph.stages.scheduling.compute`)."""
 
     scheduler: str = "threads"
     workers: int | None = None

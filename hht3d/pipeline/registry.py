@@ -7,10 +7,10 @@ kinds) and produces one result of one kind:
 kind       value
 =========  ==============================================================
 file       the input file of the current item (only ``load`` takes it)
-surface    :class:`~hht3d.surface.Surface`
+surface    :class:`~hht3d.geometry.surface.Surface`
 signal     ``(n,)`` array
-emd        :class:`~hht3d.emd.EMDResult`
-hht        :class:`~hht3d.hht.HHTResult`
+emd        :class:`~hht3d.decomposition.decompose.EMDResult`
+hht        :class:`~hht3d.transform.HHTResult`
 features   :class:`~hht3d.apps.FeatureResult`
 =========  ==============================================================
 
@@ -21,7 +21,7 @@ defaults read from the function's signature by
 :func:`~hht3d.pipeline.params.with_defaults`).
 :meth:`Operation.tasks` makes the step's lazy task from that alone.  An
 operation whose work is several tasks (EEMD members, the HHT stages) names
-a ``build`` function of :mod:`hht3d.graph` instead.  ``hht3d ops`` prints
+a ``build`` function of :mod:`hht3d.graph.stages.stages` instead.  ``hht3d ops`` prints
 this registry.
 
 Adding an operation
@@ -34,7 +34,7 @@ Write the core function (e.g. in :mod:`hht3d.apps`), then add one entry to
               func=smooth),
 
 Its lazy twin, if wanted outside pipelines, is one line in
-:mod:`hht3d.graph`: ``smooth = mirror(smooth)``.
+:mod:`hht3d.graph.stages.stages`: ``smooth = mirror(smooth)``.
 """
 from __future__ import annotations
 
@@ -44,17 +44,17 @@ from dataclasses import dataclass, field
 from .. import graph, linalg
 from ..apps import (filter_geometry, filter_signal, hks_features, imf_enhancement, manifold_harmonics_filter,
                     prominent_features, reconstruct)
-from ..emd import ENVELOPES, EXTREMA_RULES, STOPPING_RULES, emd
+from ..decomposition.decompose import ENVELOPES, EXTREMA_RULES, STOPPING_RULES, emd
 from ..errors import InputError, PipelineError, shown
-from ..io import load
-from ..options import FREQUENCY_METHODS, GRADIENTS, METHODS, MIN_TOL
-from ..signals import SIGNALS, check_signal_path, signal
-from ..surface import LAPLACIANS
+from ..io.read import load
+from ..spectral.options import FREQUENCY_METHODS, GRADIENTS, METHODS, MIN_TOL
+from ..geometry.signals import SIGNALS, check_signal_path, signal
+from ..geometry.surface import LAPLACIANS
 from .params import REQUIRED, Param, did_you_mean, with_defaults
 
 __all__ = ["Slot", "Operation", "OPERATIONS", "operation"]
 
-#: Sparse solver backends of :data:`hht3d.linalg.SOLVER_BACKENDS` (availability is checked when a step runs).
+#: Sparse solver backends of :data:`hht3d.linalg.backends.backends.SOLVER_BACKENDS` (availability is checked when a step runs).
 SOLVERS = tuple(linalg.SOLVER_BACKENDS)
 
 
@@ -84,7 +84,7 @@ class Operation:
         The core function: the step is one task ``func(*inputs, **params)``.
     build : callable, optional
         Instead of ``func``: ``build(builder, *inputs, **params)`` makes the
-        step's tasks (:mod:`hht3d.graph`) and returns the result's task, or
+        step's tasks (:mod:`hht3d.graph.stages.stages`) and returns the result's task, or
         the tasks by stage name with the result under ``"result"``.
     check : callable, optional
         ``check(params, where)`` raises :class:`PipelineError` for
@@ -300,7 +300,7 @@ def _eigenpair_vertices(params) -> tuple[str, int] | None:
 
 
 def _hht_tasks(builder, surface, signal, **params):
-    """The HHT's stages (:func:`hht3d.graph.transform`) from the step's flat parameters."""
+    """The HHT's stages (:func:`hht3d.graph.stages.stages.transform`) from the step's flat parameters."""
     emd_names = {p.name for p in EMD} - {"backend"}
     emd_options = {k: v for k, v in params.items() if k in emd_names}
     ensemble = {k: params[k] for k in ("ensemble_size", "noise_std", "seed")}

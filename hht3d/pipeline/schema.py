@@ -54,8 +54,8 @@ import string
 from pathlib import Path
 
 from ..errors import InputError, OutputError, PipelineError, shown
-from ..io import check_output_paths, data_path, read_ply_header, resolve_inputs
-from ..scheduling import MAX_WORKERS, SCHEDULERS
+from ..io.read import check_output_paths, data_path, read_ply_header, resolve_inputs
+from ..graph.scheduling import MAX_WORKERS, SCHEDULERS
 from .document import YAMLMapping, add_implicit_load, apply_overrides, at, read_yaml
 from .outputs import FORMATS, SUFFIXES, check_options, field_imf
 from .params import Param, did_you_mean

@@ -1,0 +1,166 @@
+"""How trustworthy a decomposition is: IMFs that add up without cancelling.
+
+EMD writes a signal as IMFs plus a residue (Eq. 1).  That sum holds for any
+IMFs, so it says nothing about their quality.  What does is how the energy
+splits: with ``M`` the lumped mass, ``x̄`` the area-weighted mean of ``x`` on
+each connected component, ``f_k`` the IMFs and ``r`` the residue,
+
+* **energy ratio** ``(Σ_k f_kᵀ M f_k + r̃ᵀ M r̃) / s̃ᵀ M s̃`` with ``r̃ = r − r̄``
+  and ``s̃ = s − s̄``: 1 when the IMFs and the residue are mutually
+  M-orthogonal, large when they overshoot and cancel each other;
+* **index of orthogonality** (Huang et al. 1998) ``IO = Σ_{j≠k} x_jᵀ M x_k /
+  s̃ᵀ M s̃`` over the IMFs and ``r̃``: 0 when orthogonal, negative when they
+  cancel;
+* **energy share** of each IMF and of the residue, ``x_kᵀ M x_k`` over their
+  sum;
+* **signal spike** ``max|s̃| / p99|s̃|``: large where the signal itself is
+  broken, typically curvature at vertices with tiny areas or needle
+  triangles.
+
+:func:`decomposition_quality` computes them and turns the ones past a
+documented limit into warnings that name the likely cause and the option to
+try.  :class:`QualityWarning` is the warning category the core emits.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..geometry.surface import Surface
+from ..geometry.validation import check_surface
+
+__all__ = [
+    "Quality",
+    "QualityWarning",
+    "decomposition_quality",
+    "fluctuation",
+    "ENERGY_RATIO_LIMIT",
+    "ORTHOGONALITY_LIMIT",
+    "SPIKE_LIMIT",
+]
+
+#: Energy ratio above which a decomposition is reported as cancelling.
+ENERGY_RATIO_LIMIT = 1.5
+#: Index of orthogonality below which a decomposition is reported as cancelling.
+ORTHOGONALITY_LIMIT = -0.25
+#: ``max|s̃| / p99|s̃|`` above which the signal is reported as spiking.
+SPIKE_LIMIT = 20.0
+
+
+class QualityWarning(UserWarning):
+    """A result was computed but should not be trusted as it is (see its message)."""
+
+
+@dataclass(frozen=True)
+class Quality:
+    """Quality figures of one decomposition (module notes).
+
+    Attributes
+    ----------
+    energy_ratio : float
+    orthogonality_index : float
+    energy_share : (k + 1,) ndarray
+        Share of each IMF, then of the residue; sums to 1.
+    signal_spike : float
+        ``max|s̃| / p99|s̃|`` of the decomposed signal.
+    warnings : tuple of str
+        One sentence per figure past its limit; empty when all are fine.
+    """
+
+    energy_ratio: float
+    orthogonality_index: float
+    energy_share: np.ndarray
+    signal_spike: float
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        """True when no figure is past its limit."""
+        return not self.warnings
+
+    def summary(self) -> str:
+        """One line: ``energy ratio 1.12, IO -0.06, spike 3.1`` plus ``; WARNING: ...``."""
+        text = (f"energy ratio {self.energy_ratio:.3g}, IO {self.orthogonality_index:.3g}, "
+                f"spike {self.signal_spike:.3g}")
+        return text + "".join(f"; WARNING: {w}" for w in self.warnings)
+
+    def as_dict(self) -> dict:
+        """Plain numbers and strings, for JSON summaries."""
+        return {"energy_ratio": self.energy_ratio, "orthogonality_index": self.orthogonality_index,
+                "energy_share": [float(x) for x in self.energy_share], "signal_spike": self.signal_spike,
+                "warnings": list(self.warnings)}
+
+
+def fluctuation(surface: Surface, f: np.ndarray) -> np.ndarray:
+    """``f`` (n,) or (k, n) minus its area-weighted mean on each connected component."""
+    labels, mass = surface.component_labels, surface.mass_diagonal
+    a = np.atleast_2d(f)
+    area = np.bincount(labels, weights=mass)
+    means = np.stack([np.bincount(labels, weights=mass * row) for row in a]) / area
+    out = a - means[:, labels]
+    return out[0] if np.ndim(f) == 1 else out
+
+
+def _spike(s: np.ndarray) -> float:
+    magnitude = np.abs(s)
+    p99 = float(np.percentile(magnitude, 99))
+    top = float(magnitude.max())
+    return top / p99 if p99 > 0 else (1.0 if top == 0 else float("inf"))
+
+
+def decomposition_quality(surface: Surface, signal, imfs, residue) -> Quality:
+    """Energy ratio, IO, energy shares and signal spike of ``signal = Σ imfs + residue``.
+
+    Parameters
+    ----------
+    surface : Surface
+        Supplies the lumped mass ``M`` and the connected components.
+    signal : (n,) array_like
+    imfs : (k, n) array_like
+        ``k`` may be 0.
+    residue : (n,) array_like
+
+    Returns
+    -------
+    Quality
+        A constant signal has ratio 1 and IO 0 (nothing to split).
+    """
+    check_surface(surface)
+    s = np.asarray(signal, dtype=np.float64)
+    f = np.asarray(imfs, dtype=np.float64).reshape(-1, surface.n_vertices)
+    r = np.asarray(residue, dtype=np.float64)
+    if s.shape != (surface.n_vertices,) or r.shape != s.shape:
+        raise InputError(f"signal and residue must have shape ({surface.n_vertices},), got {s.shape} and {r.shape}")
+    scale = max(float(np.abs(s).max(initial=0.0)), float(np.abs(f).max(initial=0.0)), float(np.abs(r).max()))
+    if scale > 0:  # every figure is scale-free; this keeps signals near 1e±200 from overflowing
+        s, f, r = s / scale, f / scale, r / scale
+    s_tilde = fluctuation(surface, s)
+    parts = np.vstack([f, fluctuation(surface, r)[None]])
+    mass = surface.mass_diagonal
+    gram = (parts * mass) @ parts.T
+    reference = float(s_tilde @ (mass * s_tilde))
+    energies = np.diag(gram)
+    total = float(energies.sum())
+    if reference <= 0:
+        return Quality(1.0, 0.0, np.r_[np.zeros(len(f)), 1.0], 1.0)
+    ratio = total / reference
+    io = float((gram.sum() - total) / reference)
+    share = energies / total if total > 0 else np.r_[np.zeros(len(f)), 1.0]
+    spike = _spike(s_tilde)
+    return Quality(ratio, io, share, spike, _warnings(ratio, io, spike))
+
+
+def _warnings(ratio: float, io: float, spike: float) -> tuple[str, ...]:
+    found = []
+    if ratio > ENERGY_RATIO_LIMIT or io < ORTHOGONALITY_LIMIT:
+        found.append(f"the IMFs cancel each other (energy ratio {ratio:.3g} > {ENERGY_RATIO_LIMIT}, "
+                     f"or IO {io:.3g} < {ORTHOGONALITY_LIMIT}): envelopes overshoot between sparse "
+                     "extrema; keep the default envelope and cancellation guard, or try EEMD "
+                     "(ensemble_size) or a higher emd option tension")
+    if spike > SPIKE_LIMIT:
+        found.append(f"the signal spikes to {spike:.3g}x its 99th percentile: likely tiny-area, needle "
+                     "or cap triangles; use the curvature signals with their default min_area, or "
+                     "clean or remesh the surface")
+    return tuple(found)

@@ -1,0 +1,329 @@
+"""The :class:`Surface` value: a triangle mesh or a point cloud with operators.
+
+A ``Surface`` holds vertex positions, faces (``None`` for a point cloud),
+per-vertex colours and stored scalars, and computes its discrete operators
+lazily (:mod:`hht3d.geometry.operators`), caching them in :attr:`Surface.cache`.  The
+cache is dropped on pickling, so a surface is cheap to send to another
+process, which rebuilds what it needs.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import operators as ops
+from .cleaning import CleanReport, clean_mesh, clean_points
+from ..errors import InputError
+
+__all__ = ["Surface", "MIN_VERTICES", "LAPLACIANS", "FLAT", "principal_axes"]
+
+#: The fewest vertices a surface may have (a tetrahedron).
+MIN_VERTICES = 4
+#: A point cloud thinner than this fraction of its extent is treated as planar.
+FLAT = 1e-9
+#: Mesh Laplacians; point clouds always use ``robust_laplacian.point_cloud_laplacian``.
+LAPLACIANS = ("cotan", "robust")
+
+
+@dataclass(frozen=True)
+class _Operators:
+    stiffness: sp.csr_matrix
+    mass_diagonal: np.ndarray
+
+
+class Surface:
+    """A triangle mesh or point cloud carrying the operators HHT needs.
+
+    Parameters
+    ----------
+    vertices : (n, 3) array_like
+        Positions; must be finite, ``n >= 4``.
+    faces : (f, 3) array_like of int, optional
+        Triangles; ``None`` or empty for a point cloud.
+    normals : (n, 3) array_like, optional
+        Unit vertex normals.  Default: area-weighted face normals (meshes) or
+        normals estimated and consistently oriented by Open3D (point clouds).
+    colors : (n, 3) array_like, optional
+        RGB in [0, 1].
+    attributes : dict of str to (n,) arrays, optional
+        Per-vertex scalars (e.g. read from a PLY file).
+    laplacian : {"cotan", "robust"}
+        Mesh Laplacian: cotangent weights with mixed Voronoi areas (Eq. 10,
+        Meyer et al. 2002) or ``robust_laplacian.mesh_laplacian``.
+    n_neighbors : int
+        Neighbours of the point-cloud Laplacian.
+    name : str, optional
+        Shown in messages and used for output names.
+    clean_report : CleanReport, optional
+        Set by the loaders when cleaning changed the input.
+    """
+
+    def __init__(self, vertices, faces=None, *, normals=None, colors=None, attributes=None,
+                 laplacian: str = "cotan", n_neighbors: int = 30, name: str | None = None,
+                 clean_report: CleanReport | None = None):
+        self.name = name or "surface"
+        self.vertices = _as_vertices(vertices, self.name)
+        n = len(self.vertices)
+        self.faces = _as_faces(faces, n, self.name)
+        if laplacian not in LAPLACIANS:
+            raise InputError(f"{self.name}: unknown laplacian {laplacian!r}; choose one of {LAPLACIANS}")
+        if n_neighbors < 3:
+            raise InputError(f"{self.name}: n_neighbors must be >= 3, got {n_neighbors}")
+        if self.faces is None:
+            _check_cloud(self.vertices, int(n_neighbors), self.name)
+        self.laplacian = laplacian
+        self.n_neighbors = int(n_neighbors)
+        self.colors = None if colors is None else _as_per_vertex(colors, n, 3, "colors", self.name)
+        self.attributes = {str(k): _as_per_vertex(v, n, None, f"attribute {k!r}", self.name)
+                           for k, v in (attributes or {}).items()}
+        self.clean_report = clean_report
+        self.cache: dict = {}
+        if normals is not None:
+            normals = _as_per_vertex(normals, n, 3, "normals", self.name)
+            length = np.linalg.norm(normals, axis=1, keepdims=True)
+            self.cache["normals"] = np.divide(normals, length, out=np.zeros_like(normals),
+                                              where=length > 0)
+
+    # -- construction -----------------------------------------------------------------
+    @classmethod
+    def from_file(cls, path, **options) -> "Surface":
+        """Load a mesh or point cloud; see :func:`hht3d.io.read.read.load`."""
+        from ..io.read import load
+
+        return load(path, **options)
+
+    @classmethod
+    def from_open3d(cls, geometry, *, clean: bool = True, name: str | None = None, **options) -> "Surface":
+        """Build from an Open3D legacy or tensor ``TriangleMesh`` / ``PointCloud``."""
+        from ..io.read import surface_from_open3d
+
+        return surface_from_open3d(geometry, clean=clean, name=name, **options)
+
+    @classmethod
+    def cleaned(cls, vertices, faces=None, *, colors=None, attributes=None, **options) -> "Surface":
+        """Clean the arrays (see :mod:`hht3d.geometry.cleaning`) and build a surface.
+
+        Per-vertex colours and attributes follow the kept vertices; the
+        :class:`~hht3d.geometry.cleaning.CleanReport` is in ``surface.clean_report``.
+        """
+        name = options.get("name") or "surface"
+        vertices = _as_vertices(vertices, name)
+        faces = _as_faces(faces, len(vertices), name)
+        if faces is None:
+            vertices, report = clean_points(vertices)
+        else:
+            vertices, faces, report = clean_mesh(vertices, faces)
+        kept = report.kept_vertices
+        if colors is not None:
+            colors = np.asarray(colors, dtype=np.float64)[kept]
+        if attributes:
+            attributes = {k: np.asarray(v, dtype=np.float64)[kept] for k, v in attributes.items()}
+        normals = options.pop("normals", None)
+        if normals is not None:
+            normals = np.asarray(normals, dtype=np.float64)[kept]
+        return cls(vertices, faces, colors=colors, attributes=attributes, normals=normals,
+                   clean_report=report, **options)
+
+    # -- pickling: operators and factorizations are rebuilt where needed ----------------
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        normals = self.cache.get("normals")
+        state["cache"] = {} if normals is None else {"normals": normals}
+        return state
+
+    def __repr__(self) -> str:
+        kind = f"mesh, {len(self.faces)} faces" if self.is_mesh else "point cloud"
+        return f"Surface({self.name!r}: {self.n_vertices} vertices, {kind})"
+
+    # -- basic properties -------------------------------------------------------------
+    @property
+    def is_mesh(self) -> bool:
+        return self.faces is not None
+
+    @property
+    def n_vertices(self) -> int:
+        return len(self.vertices)
+
+    def _cached(self, key, build):
+        if key not in self.cache:
+            self.cache[key] = build()
+        return self.cache[key]
+
+    @property
+    def bounding_box_diagonal(self) -> float:
+        return float(np.linalg.norm(self.vertices.max(axis=0) - self.vertices.min(axis=0)))
+
+    @property
+    def normals(self) -> np.ndarray:
+        """Unit vertex normals (n, 3)."""
+        return self._cached("normals", self._build_normals)
+
+    def _build_normals(self) -> np.ndarray:
+        if self.is_mesh:
+            return ops.vertex_normals(self.vertices, self.faces)
+        from ..io.read import estimate_point_normals
+
+        return estimate_point_normals(self.vertices)
+
+    @property
+    def face_areas(self) -> np.ndarray:
+        self._require_mesh("face areas")
+        return self._cached("face_areas", lambda: ops.face_areas(self.vertices, self.faces))
+
+    # -- operators --------------------------------------------------------------------
+    def _operators(self) -> _Operators:
+        def build():
+            if not self.is_mesh:
+                lap, mass = ops.point_cloud_operators(self.vertices, self.n_neighbors)
+            elif self.laplacian == "robust":
+                lap, mass = ops.robust_mesh_operators(self.vertices, self.faces)
+            else:
+                lap = ops.cotan_laplacian(self.vertices, self.faces)
+                mass = ops.mixed_voronoi_mass(self.vertices, self.faces)
+            if not np.all(mass > 0):
+                raise InputError(f"{self.name}: {int(np.sum(mass <= 0))} vertices have zero area; "
+                                 "load with clean=True to remove unreferenced vertices")
+            return _Operators(sp.csr_matrix(lap, dtype=np.float64), mass)
+
+        return self._cached("operators", build)
+
+    @property
+    def stiffness(self) -> sp.csr_matrix:
+        """Stiffness Laplacian ``L`` (n, n): symmetric PSD, ``L @ 1 = 0``."""
+        return self._operators().stiffness
+
+    @property
+    def mass_diagonal(self) -> np.ndarray:
+        """Lumped vertex areas (n,), all positive; they sum to the surface area."""
+        return self._operators().mass_diagonal
+
+    @property
+    def mass(self) -> sp.csr_matrix:
+        """Diagonal lumped mass matrix ``M`` (n, n)."""
+        return self._cached("mass", lambda: sp.diags(self.mass_diagonal, format="csr"))
+
+    @property
+    def adjacency(self) -> sp.csr_matrix:
+        """Boolean 1-ring adjacency (mesh edges; for point clouds, the Laplacian's graph)."""
+        return self._cached("adjacency", lambda: ops.adjacency(
+            self.n_vertices, self.faces, None if self.is_mesh else self.stiffness))
+
+    def ring(self, k: int = 1) -> sp.csr_matrix:
+        """Boolean ``(n, n)`` matrix of the vertices within ``k`` edges, self excluded."""
+        if int(k) != k or k < 1:
+            raise InputError(f"ring size must be a positive integer, got {k!r}")
+        k = int(k)
+        return self.adjacency if k == 1 else self._cached(f"ring:{k}", lambda: ops.k_ring(self.adjacency, k))
+
+    def _components(self):
+        return self._cached("components", lambda: ops.connected_components(self.adjacency))
+
+    @property
+    def n_components(self) -> int:
+        return self._components()[0]
+
+    @property
+    def component_labels(self) -> np.ndarray:
+        """Connected component of each vertex, ``0 .. n_components - 1``."""
+        return self._components()[1]
+
+    @property
+    def boundary_vertices(self) -> np.ndarray:
+        """Mask of boundary vertices (always all-False for point clouds)."""
+        if not self.is_mesh:
+            return np.zeros(self.n_vertices, dtype=bool)
+        return self._cached("boundary", lambda: ops.boundary_vertices(self.n_vertices, self.faces))
+
+    def gradient(self, kind: str = "lsq") -> sp.csr_matrix:
+        """Per-vertex tangent gradient operator ``(3n, n)``.
+
+        ``kind="lsq"``: tangent-plane least squares of Eq. (17) over the
+        1-ring (meshes and point clouds).  ``kind="fem"``: per-face gradients
+        averaged to vertices with area weights (meshes only).
+        """
+        if kind == "lsq":
+            return self._cached("gradient:lsq", lambda: ops.tangent_gradient(
+                self.vertices, self.normals, self.adjacency))
+        if kind == "fem":
+            self._require_mesh("the FEM gradient")
+            return self._cached("gradient:fem", lambda: ops.vertex_fem_gradient(self.vertices, self.faces))
+        raise InputError(f"unknown gradient kind {kind!r}; choose 'lsq' or 'fem'")
+
+    def face_gradient(self) -> sp.csr_matrix:
+        """Per-face P1 gradient operator ``(3f, n)`` (meshes only)."""
+        self._require_mesh("the per-face gradient")
+        return self._cached("gradient:face", lambda: ops.face_gradient(self.vertices, self.faces))
+
+    def _require_mesh(self, what: str) -> None:
+        if not self.is_mesh:
+            raise InputError(f"{self.name}: {what} needs a triangle mesh, this is a point cloud")
+
+    # -- export -----------------------------------------------------------------------
+    def to_open3d(self, attributes: dict | None = None):
+        """An Open3D tensor ``TriangleMesh``/``PointCloud`` with named float vertex attributes."""
+        from ..io.read import surface_to_open3d
+
+        return surface_to_open3d(self, attributes or {})
+
+
+def principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Singular values (descending) and principal axes of centred points; collinear points are an error."""
+    _, spread, axes = np.linalg.svd(centered, full_matrices=False)
+    if spread[1] <= FLAT * spread[0]:
+        raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two "
+                         "directions")
+    return spread, axes
+
+
+def _check_cloud(points: np.ndarray, n_neighbors: int, name: str) -> None:
+    """What the point-cloud Laplacian needs: more points than neighbours, not all on a line."""
+    if len(points) <= n_neighbors:
+        raise InputError(f"{name}: a point cloud of {len(points)} points cannot give each point "
+                         f"n_neighbors={n_neighbors} neighbours; lower n_neighbors below {len(points)}")
+    try:
+        principal_axes(points - points.mean(axis=0))
+    except InputError as exc:
+        raise InputError(f"{name}: {exc}") from None
+
+
+def _as_vertices(vertices, name: str) -> np.ndarray:
+    try:
+        v = np.array(vertices, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name}: vertices are not numeric: {exc}") from None
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise InputError(f"{name}: vertices must have shape (n, 3), got {v.shape}")
+    if len(v) < MIN_VERTICES:
+        raise InputError(f"{name}: {len(v)} vertices; a surface needs at least {MIN_VERTICES}")
+    bad = ~np.isfinite(v).all(axis=1)
+    if bad.any():
+        raise InputError(f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates "
+                         f"(first: vertex {int(np.flatnonzero(bad)[0])}); remove or repair them")
+    return v
+
+
+def _as_faces(faces, n: int, name: str):
+    if faces is None:
+        return None
+    f = np.asarray(faces)
+    if f.size == 0:
+        return None
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise InputError(f"{name}: faces must be triangles of shape (f, 3), got {f.shape}")
+    if not np.issubdtype(f.dtype, np.integer):
+        if not np.all(np.mod(f, 1) == 0):
+            raise InputError(f"{name}: face indices must be integers")
+    f = f.astype(np.int64)
+    if f.min() < 0 or f.max() >= n:
+        raise InputError(f"{name}: face indices must lie in [0, {n}), got [{f.min()}, {f.max()}]")
+    return f
+
+
+def _as_per_vertex(values, n: int, width, what: str, name: str) -> np.ndarray:
+    a = np.asarray(values, dtype=np.float64)
+    expected = (n,) if width is None else (n, width)
+    if a.shape != expected:
+        raise InputError(f"{name}: {what} must have shape {expected}, got {a.shape}")
+    return a
