@@ -1,4 +1,4 @@
-"""Sparse SPD solver backends (hht3d.linalg.backends.backends) against SciPy's dense and sparse solvers.
+"""Sparse SPD solver backends (hht3d.linalg.backends) against SciPy's dense and sparse solvers.
 
 The systems are the two kinds hht3d factorizes, built on the shipped model
 spot (2,930 vertices): the constrained biharmonic envelope system of EMD and
@@ -24,7 +24,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import hht3d
-from hht3d.linalg.backends import backends as linalg
+from hht3d.linalg import backends as linalg
 from hht3d.errors import InputError, NumericalError
 
 emd_module = importlib.import_module("hht3d.decomposition.decompose")

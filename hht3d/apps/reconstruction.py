@@ -31,7 +31,7 @@ Its normal equations, with ``D = V' − V``, are
     (L M⁻¹ L + W) D = L diag(s' − s) N,
 
 symmetric positive definite (``L M⁻¹ L`` is PSD and ``W > 0``), solved
-for the three coordinates at once with :func:`hht3d.linalg.backends.backends.factorize`.
+for the three coordinates at once with :func:`hht3d.linalg.backends.factorize`.
 ``s' = s`` gives ``D = 0`` exactly, so the identity filter returns the
 input positions.
 
@@ -159,7 +159,7 @@ def reconstruct_from_change(surface: Surface, change, *, interior_weight: float 
     weights : (n,) array_like, optional
         Per-vertex ``μ_i`` (all > 0), overriding the two above.
     backend : str, optional
-        Sparse solver of :mod:`hht3d.linalg.backends.backends`.
+        Sparse solver of :mod:`hht3d.linalg.backends`.
     name : str, optional
         Name of the new surface; default ``"<name>_filtered"``.
     preserve_scale : bool

@@ -80,7 +80,7 @@ which is exactly the eliminated system ``Q_FF g_F = −Q_FC f_C`` plus
 ``g_C = f_C``, symmetric positive definite whenever every connected component
 holds a constraint.  The sparsity pattern never changes, whatever the
 tension, so the fill-reducing ordering and symbolic factorization are done
-once per EMD run (:class:`hht3d.linalg.backends.backends.SymbolicFactorization`) and each
+once per EMD run (:class:`hht3d.linalg.backends.SymbolicFactorization`) and each
 envelope costs one numeric factorization and one solve.
 
 Boundaries
@@ -493,7 +493,7 @@ def envelope_interpolation(surface: Surface, values, constrained, *, envelope: s
     tension : float
         ``τ`` of ``"tension"``; the spacing ``d`` is :func:`extrema_spacing` of ``|C|``.
     backend : str, optional
-        Sparse solver of :mod:`hht3d.linalg.backends.backends`.
+        Sparse solver of :mod:`hht3d.linalg.backends`.
 
     Returns
     -------
@@ -795,7 +795,7 @@ def emd(surface: Surface, signal, *, max_imfs: int = EMD_DEFAULTS.max_imfs, stop
         ``∫(r − r̄)² dA`` (``r̄`` its mean per component) falls below this
         fraction of the signal's; default 1e-8.
     backend : str, optional
-        Sparse solver of :mod:`hht3d.linalg.backends.backends`; default the fastest installed.
+        Sparse solver of :mod:`hht3d.linalg.backends`; default the fastest installed.
 
     Returns
     -------

@@ -34,7 +34,7 @@ Methods
     :func:`quadrature_nodes`, over spectral bounds ``m ≤ λ_1`` and
     ``M̄ ≥ λ_max`` from :func:`spectral_bounds`.  Every ``L + σ_j M`` is SPD
     and has one sparsity pattern, analysed once
-    (:class:`hht3d.linalg.backends.backends.SymbolicFactorization`); each shift is factorized
+    (:class:`hht3d.linalg.backends.SymbolicFactorization`); each shift is factorized
     once and solves all signals as one multi-column right-hand side.
 ``"spectral"``
     The paper's Algorithm 1 (Eq. 18): the ``p`` smallest non-zero eigenpairs
@@ -224,7 +224,7 @@ def shifted_solve(surface: Surface, sigma: float, rhs, *, backend: str | None = 
     rhs : (n,) or (n, k) array_like
         Right-hand sides (for the quadrature: ``M f̃``, one column per signal).
     backend : str, optional
-        Sparse solver (:func:`hht3d.linalg.backends.backends.available_backends`).
+        Sparse solver (:func:`hht3d.linalg.backends.available_backends`).
     symbolic : SymbolicFactorization, optional
         From :func:`shift_analysis`, to analyse the pattern only once.
 
@@ -314,7 +314,7 @@ def spectral_bounds(surface: Surface, *, backend: str | None = None,
     ``λ_1`` (the smallest non-zero eigenvalue) comes from shift-invert
     Lanczos (``scipy.sparse.linalg.eigsh``, relative accuracy 1e-6) on the
     complement of the kernel, with the sparse factorization of
-    :mod:`hht3d.linalg.backends.backends`; ``m = 0.9·λ_1``.  If ARPACK does not converge,
+    :mod:`hht3d.linalg.backends`; ``m = 0.9·λ_1``.  If ARPACK does not converge,
     LOBPCG preconditioned with the same factorization is used, and ``m`` is
     then half its estimate.  ``M̄`` is a Collatz–Wielandt bound, Gershgorin's
     ``max_i Σ_j |L_ij| / M_ii`` tightened by a few power iterations.  Cached
@@ -324,7 +324,7 @@ def spectral_bounds(surface: Surface, *, backend: str | None = None,
     ----------
     surface : Surface
     backend : str, optional
-        Sparse solver of :mod:`hht3d.linalg.backends.backends`.
+        Sparse solver of :mod:`hht3d.linalg.backends`.
     symbolic : SymbolicFactorization, optional
         From :func:`shift_analysis`, to share the ordering with the solves.
 
@@ -560,7 +560,7 @@ def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str =
     eigenpairs : int
         Non-zero eigenpairs used by ``"spectral"`` (the paper uses 300).
     backend : str, optional
-        Sparse solver of :mod:`hht3d.linalg.backends.backends`.
+        Sparse solver of :mod:`hht3d.linalg.backends`.
 
     Returns
     -------
