@@ -84,7 +84,7 @@ def _load_result(name: str, scratch: Path):
     surface = _load(name)
     with np.load(scratch / f"{name}.npz") as data:
         arrays = {k: data[k] for k in data.files}
-    mono = MonogenicSignal(signal=arrays["imfs"], riesz=arrays["riesz"], amplitude=arrays["amplitude"],
+    mono = MonogenicSignal(imfs=arrays["imfs"], riesz=arrays["riesz"], amplitude=arrays["amplitude"],
                            phase=arrays["phase"], frequency=arrays["frequency"])
     return HHTResult(surface, arrays["signal"], arrays["imfs"], arrays["residue"], mono)
 
@@ -154,7 +154,7 @@ def stage_noise(name: str, scratch: Path) -> dict:
 
     from hht3d import Surface
     from hht3d.apps import hks_features, prominent_features, repeatability
-    from hht3d.decomposition.decompose import emd
+    from hht3d.decomposition import emd
     from hht3d.geometry.signals import mean_curvature
 
     result = _load_result(name, scratch)

@@ -60,7 +60,8 @@ def _replay_first_imf(surface, signal, backend: str) -> dict:
     import scipy.sparse.linalg as spla
 
     from hht3d import linalg
-    from hht3d.decomposition.decompose import EMDOptions, EnvelopeSolver, Sifter, extrema_spacing
+    from hht3d.decomposition import EMDOptions, EnvelopeSolver, extrema_spacing
+    from hht3d.decomposition.sifting import Sifter
 
     options = EMDOptions(envelope="biharmonic")
     sifter = Sifter(surface, options, backend)
@@ -116,7 +117,7 @@ def run_model(name: str) -> dict:
     """Benchmark one model in this process (called in a fresh subprocess)."""
     import hht3d
     from hht3d import linalg
-    from hht3d.decomposition.decompose import emd
+    from hht3d.decomposition import emd
     from hht3d.geometry.signals import mean_curvature
 
     t0 = time.perf_counter()

@@ -63,7 +63,7 @@ def replay(name: str, imfs: int, backend: str | None, rtol: float, max_cg: int, 
 
     import hht3d
     from hht3d import linalg
-    from hht3d.decomposition.decompose import envelope_operator, local_extrema
+    from hht3d.decomposition import envelope_operator, local_extrema
     from hht3d.geometry.signals import mean_curvature
 
     surface = hht3d.load(model_path(name))

@@ -75,7 +75,7 @@ SEED = 0
 
 def _response(surface, signals, wavenumbers, mask) -> dict:
     from hht3d.spectral.monogenic_signal import monogenic_from_potential
-    from hht3d.spectral.riesz_transform import fractional_laplacian
+    from hht3d.spectral import fractional_laplacian
 
     potential = fractional_laplacian(surface, signals)
     out = {}
@@ -199,9 +199,9 @@ def _centroids_dct(imfs, n) -> tuple[np.ndarray, np.ndarray]:
 
 
 def run_noise() -> dict:
-    from hht3d.decomposition.decompose import emd
+    from hht3d.decomposition import emd
     from hht3d.spectral.monogenic_signal import monogenic_from_potential
-    from hht3d.spectral.riesz_transform import fractional_laplacian
+    from hht3d.spectral import fractional_laplacian
     from hht3d.spectral.spectrum import HilbertSpectrum
     from hht3d.geometry.surface import Surface
     from meshes import grid, icosphere
@@ -254,7 +254,7 @@ def run_cost() -> dict:
     from benchmarks.bench_riesz import band_signals
     from hht3d import load
     from hht3d.spectral.frequency import instantaneous_frequency
-    from hht3d.spectral.riesz_transform import riesz
+    from hht3d.spectral import riesz
 
     path = model_path("igea")
     if path is None:

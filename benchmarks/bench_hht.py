@@ -241,9 +241,9 @@ def run_case(name: str, path: Path, max_imfs: int | None) -> dict:
     """The whole HHT of one mesh, stage by stage (runs in a fresh subprocess)."""
     import hht3d
     from hht3d import linalg
-    from hht3d.decomposition.decompose import PAPER_OPTIONS, emd
+    from hht3d.decomposition import PAPER_OPTIONS, emd
     from hht3d.spectral.monogenic_signal import monogenic
-    from hht3d.spectral.riesz_transform import quadrature_nodes
+    from hht3d.spectral import quadrature_nodes
     from hht3d.geometry.signals import mean_curvature
 
     rec = Recorder()
@@ -265,7 +265,7 @@ def run_case(name: str, path: Path, max_imfs: int | None) -> dict:
             rec.peaks[f"operators:{key}"] = rec.checkpoint()
     with rec.stage("signal"):
         signal = mean_curvature(surface)
-    options = dict(PAPER_OPTIONS) | ({} if max_imfs is None else {"max_imfs": max_imfs})
+    options = PAPER_OPTIONS.as_dict() | ({} if max_imfs is None else {"max_imfs": max_imfs})
     with rec.stage("emd"):
         decomposition = emd(surface, signal, **options)
     with rec.stage("rt"):
@@ -294,7 +294,7 @@ def run_case(name: str, path: Path, max_imfs: int | None) -> dict:
         "baseline_rss_mb": baseline_mb, "peak_resets": rec.peak_resets,
         "memory_mb": {"L": _sparse_mb(surface.stiffness), "G_lsq": _sparse_mb(surface.gradient("lsq")),
                       "Q": _sparse_mb(q) if q is not None else 0.0, "imfs": _nbytes(decomposition.imfs),
-                      "monogenic_outputs": _nbytes(mono.signal, mono.riesz, mono.amplitude, mono.phase,
+                      "monogenic_outputs": _nbytes(mono.imfs, mono.riesz, mono.amplitude, mono.phase,
                                                    mono.frequency),
                       "jacobian_transient": 72 * info["n_imfs"] * surface.n_vertices / 2 ** 20},
         "sum_error": float(np.max(np.abs(decomposition.imfs.sum(0) + decomposition.residue - signal))

@@ -38,6 +38,7 @@ Writes ``benchmarks/results/quality.json`` and ``quality.md``.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 import warnings
@@ -54,14 +55,14 @@ from meshes import grid, icosphere, open_cylinder, random_bump_sphere, sliver_sp
 import hht3d  # noqa: E402
 from hht3d import Surface, emd, hht  # noqa: E402
 from hht3d.apps import LowPass, filter_geometry  # noqa: E402
-from hht3d.decomposition.decompose import PAPER_OPTIONS, local_extrema  # noqa: E402
+from hht3d.decomposition import EMD_DEFAULTS, PAPER_OPTIONS, local_extrema  # noqa: E402
 from hht3d.geometry.signals import gaussian_curvature, mean_curvature  # noqa: E402
 
 MODELS = ["spot", "sphere_oct4098", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti",
           "office_kinect_colored", "igea", "dragon_vrip", "bunny_scan_bun000", "bunny_scans_merged"]
 #: name -> (EMD options, curvature min_area, Eq. 27 weights or None for the default)
 CONFIGS = {"before": (PAPER_OPTIONS, 0.0, {"interior_weight": 0.01, "boundary_weight": 1.0}),
-           "after": ({}, None, {})}
+           "after": (EMD_DEFAULTS, None, {})}
 
 
 def curvature(surface: Surface, config: str) -> np.ndarray:
@@ -72,7 +73,7 @@ def curvature(surface: Surface, config: str) -> np.ndarray:
 def decompose(surface: Surface, signal, config: str, **options):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the quality figures are the measurement here
-        return emd(surface, signal, **CONFIGS[config][0], **options)
+        return emd(surface, signal, CONFIGS[config][0], **options)
 
 
 def part_models(names) -> list[dict]:
@@ -152,7 +153,7 @@ def part_bumps() -> list[dict]:
         options, _, weights = CONFIGS[config]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            result = hht(surface, curvature(surface, config), emd_options=dict(options))
+            result = hht(surface, curvature(surface, config), emd=options)
             for cutoff in (3.0, 4.0, 6.0):
                 out = filter_geometry(result, LowPass(cutoff, width=cutoff / 3), **weights)
                 radial, fitted = _sphere_distances(surface, out.vertices)
@@ -172,7 +173,7 @@ def part_bumps() -> list[dict]:
         options, _, weights = CONFIGS[config]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            result = hht(mixed, curvature(mixed, config), emd_options=dict(options, max_imfs=6))
+            result = hht(mixed, curvature(mixed, config), emd=dataclasses.replace(options, max_imfs=6))
             out = filter_geometry(result, LowPass(6.0, width=2.0), **weights)
         deviation = np.linalg.norm(out.vertices, axis=1) - 1
         kept = np.linalg.solve(basis.T @ (area[:, None] * basis), basis.T @ (area * deviation))
@@ -225,7 +226,7 @@ def part_strip() -> list[dict]:
     def axial(x):
         return np.sin(2 * np.pi * 2.1 * x) + 0.8 * np.sin(2 * np.pi * 0.47 * x + 0.3) + 0.5 * np.sin(2 * np.pi * 0.09 * x)
 
-    result = emd(surface, axial(surface.vertices[:, 2]), stopping="fixed", fixed_sifts=10, **PAPER_OPTIONS)
+    result = emd(surface, axial(surface.vertices[:, 2]), PAPER_OPTIONS, stopping="fixed", fixed_sifts=10)
     reference = EMD(FIXE=10).emd(axial(z), z)
     rings = result.imfs.reshape(result.n_imfs, n_axial, 8)[:, :, 0]
     inner = slice(n_axial // 10, n_axial - n_axial // 10)

@@ -94,7 +94,7 @@ def _clear_riesz_cache(surface) -> None:
 
 def run_fig2() -> dict:
     import hht3d
-    from hht3d.spectral.riesz_transform import fractional_laplacian, vertex_gradient
+    from hht3d.spectral import fractional_laplacian, vertex_gradient
     from hht3d.geometry.signals import centroid_distance
 
     sphere = hht3d.load(DATA / "sphere_oct4098.ply")
@@ -159,7 +159,7 @@ def _load(name: str):
 
 
 def run_worker(name: str, method: str) -> dict:
-    from hht3d.spectral.riesz_transform import fractional_laplacian, quadrature_nodes, smallest_eigenpairs, spectral_bounds
+    from hht3d.spectral import fractional_laplacian, quadrature_nodes, smallest_eigenpairs, spectral_bounds
     from hht3d.spectral.monogenic_signal import monogenic
 
     surface, operators = _load(name)
@@ -196,7 +196,7 @@ def run_worker(name: str, method: str) -> dict:
 
 def shifts_against_tolerance(surface, signals, reference) -> list[dict]:
     """Shifts and the true error of ``L^{-1/2}`` per tolerance, with today's and Gershgorin's upper bound."""
-    from hht3d.spectral.riesz_transform import fractional_laplacian, quadrature_nodes, spectral_bounds
+    from hht3d.spectral import fractional_laplacian, quadrature_nodes, spectral_bounds
 
     m, mbar = spectral_bounds(surface)
     gershgorin = float(np.max(abs(surface.stiffness).sum(axis=1).A1 / surface.mass_diagonal))

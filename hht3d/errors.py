@@ -7,10 +7,11 @@ Messages echo user values through :func:`shown` and exception texts through
 :func:`one_line`, so a huge value (a YAML alias bomb, a megabyte string)
 never floods the terminal and every message stays on one line.
 """
+import difflib
 import reprlib
 
 __all__ = ["HHT3DError", "InputError", "NumericalError", "PipelineError", "OutputError", "shown", "one_line",
-           "MAX_SHOWN"]
+           "MAX_SHOWN", "did_you_mean"]
 
 #: Characters of a user value a message echoes before cutting it short.
 MAX_SHOWN = 80
@@ -67,3 +68,24 @@ def shown(value, limit: int = MAX_SHOWN) -> str:
 def one_line(text, limit: int = 4 * MAX_SHOWN) -> str:
     """``text`` with its whitespace runs (newlines included) made single spaces, cut to ``limit``."""
     return _cut(" ".join(str(text).split()), limit)
+
+
+def did_you_mean(word, known, *, listing: bool = True) -> str:
+    """``"; did you mean 'x'?"`` for the closest of ``known``; else the list of ``known``
+    (with ``listing``) or nothing.
+
+    Examples
+    --------
+    >>> did_you_mean("quadratur", ("quadrature", "spectral", "dense"))
+    "; did you mean 'quadrature'?"
+    >>> did_you_mean("x", ("quadrature", "dense"))
+    '; known: dense, quadrature'
+    >>> did_you_mean("x", ("quadrature", "dense"), listing=False)
+    ''
+    """
+    known = [str(k) for k in known]
+    plausible = isinstance(word, str) and len(word) <= 100  # never format a huge or nested value
+    close = difflib.get_close_matches(word, known, n=1, cutoff=0.6) if plausible else []
+    if close:
+        return f"; did you mean {close[0]!r}?"
+    return f"; known: {', '.join(sorted(known))}" if known and listing else ""

@@ -1,10 +1,12 @@
 """The Hilbert–Huang transform on a surface in one call: EMD + Hilbert spectra (Alg. 2).
 
-:func:`hht` decomposes a signal into IMFs (Sec. 4.1, :func:`hht3d.decomposition.decompose.emd`),
+:func:`hht` decomposes a signal into IMFs (Sec. 4.1, :func:`hht3d.decomposition.emd`),
 takes the monogenic signal of every IMF at once (Sec. 4.2–4.3,
-:func:`hht3d.spectral.monogenic_signal.monogenic`) and returns an :class:`HHTResult` that
+:func:`hht3d.spectral.monogenic`) and returns an :class:`HHTResult` that
 can be saved (PLY with named vertex attributes, or ``.npz``) and handed to
-Open3D as a tensor mesh or point cloud.
+Open3D as a tensor mesh or point cloud.  :func:`hht_stages` lists the
+stages once, for :func:`hht`, the lazy graph (:mod:`hht3d.graph`) and the
+pipeline's ``hht`` step.
 """
 from __future__ import annotations
 
@@ -12,20 +14,24 @@ import time
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
+from typing import Callable, Protocol
 
 import numpy as np
 
 from . import io
-from .decomposition.decompose import check_emd_options, emd
-from .errors import InputError
-from .spectral.monogenic_signal import MonogenicSignal, monogenic
-from .spectral.options import RIESZ_DEFAULTS, RieszOptions
+from .decomposition.decompose import emd as decompose
+from .decomposition.ensemble import combine_eemd, eemd_member, ensemble_settings
+from .decomposition.options import EMDOptions, EnsembleOptions
 from .decomposition.quality import Quality, decomposition_quality
-from .spectral.spectrum import HilbertSpectrum
+from .errors import InputError
 from .geometry.surface import Surface
 from .geometry.validation import check_signal
+from .spectral.monogenic_signal import MonogenicSignal, monogenic_from_potential
+from .spectral.options import RieszOptions
+from .spectral.riesz_transform import fractional_laplacian
+from .spectral.spectrum import HilbertSpectrum
 
-__all__ = ["HHTResult", "hht"]
+__all__ = ["HHTResult", "hht", "hht_stages", "decomposition_stage", "Stages"]
 
 
 @dataclass
@@ -43,8 +49,8 @@ class HHTResult:
     monogenic : MonogenicSignal
         Riesz vectors, amplitude, phase and frequency of every IMF.
     info : dict
-        ``"emd"``: the EMD diagnostics; ``"riesz"``: the options used;
-        ``"seconds"``: wall time of ``"emd"`` and ``"spectra"`` (by :func:`hht`).
+        ``"emd"``: the EMD diagnostics; ``"riesz"``: the Riesz settings used;
+        ``"seconds"``: wall time of ``"emd"`` and ``"spectra"`` (eager :func:`hht` only).
     """
 
     surface: Surface
@@ -56,12 +62,10 @@ class HHTResult:
 
     @classmethod
     def from_parts(cls, surface: Surface, signal, decomposition, mono: MonogenicSignal,
-                   riesz_options: dict, seconds: dict | None = None) -> "HHTResult":
-        """Assemble a result from an :class:`~hht3d.decomposition.decompose.EMDResult` and the monogenic signal
-        of its IMFs (as the lazy graph of :mod:`hht3d.graph.stages` does)."""
+                   riesz_options: dict) -> "HHTResult":
+        """Assemble a result from an :class:`~hht3d.decomposition.EMDResult` and the monogenic
+        signal of its IMFs (the last of :func:`hht_stages`)."""
         info = {"emd": decomposition.info, "riesz": dict(riesz_options)}
-        if seconds is not None:
-            info["seconds"] = seconds
         return cls(surface=surface, signal=check_signal(surface, signal), imfs=decomposition.imfs,
                    residue=decomposition.residue, monogenic=mono, info=info)
 
@@ -126,34 +130,97 @@ class HHTResult:
         return self.surface.to_open3d(self.vertex_attributes())
 
 
-def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: str = RIESZ_DEFAULTS.gradient,
-        frequency: str = RIESZ_DEFAULTS.frequency, method: str = RIESZ_DEFAULTS.method,
-        tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
-        backend: str | None = RIESZ_DEFAULTS.backend) -> HHTResult:
+class Stages(Protocol):
+    """How :func:`hht_stages` runs a stage: at once (:func:`hht`) or as graph tasks (:mod:`hht3d.graph`)."""
+
+    def task(self, step: str, func: Callable) -> Callable:
+        """``func`` as the stage ``step``: called at once, or made a lazy task."""
+
+    def potential(self, surface, imfs, riesz: RieszOptions, backend: str | None):
+        """``L^{-1/2}`` of the IMFs (Eq. 16): one call, or the quadrature's shift-group tasks."""
+
+
+class _Eager:
+    """Runs every stage at once and adds up its wall time by step."""
+
+    def __init__(self):
+        self.seconds: dict[str, float] = {}
+
+    def task(self, step: str, func: Callable) -> Callable:
+        def run(*args, **kwargs):
+            start = time.perf_counter()
+            try:
+                return func(*args, **kwargs)
+            finally:
+                self.seconds[step] = self.seconds.get(step, 0.0) + time.perf_counter() - start
+
+        return run
+
+    def potential(self, surface, imfs, riesz: RieszOptions, backend: str | None):
+        return self.task("riesz", fractional_laplacian)(surface, imfs, -0.5, riesz.method, riesz.tol,
+                                                         riesz.eigenpairs, backend)
+
+
+def _imfs(decomposition) -> np.ndarray:
+    return decomposition.imfs
+
+
+def decomposition_stage(stages: Stages, surface, signal, emd: EMDOptions, ensemble: EnsembleOptions | None,
+                        backend: str | None):
+    """EMD (one stage ``emd``), or EEMD: one ``eemd_member`` stage per member, then ``eemd_combine``."""
+    if ensemble is None:
+        return stages.task("emd", decompose)(surface, signal, emd, backend=backend)
+    member = stages.task("eemd_member", eemd_member)
+    members = [member(surface, signal, i, ensemble, emd, backend) for i in range(ensemble.ensemble_size)]
+    return stages.task("eemd_combine", combine_eemd)(surface, signal, members)
+
+
+def hht_stages(stages: Stages, surface, signal, *, emd: EMDOptions, riesz: RieszOptions,
+               ensemble: EnsembleOptions | None = None, backend: str | None = None) -> dict:
+    """The HHT's stages in order (Alg. 2), by name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
+
+    The one list of the stages: :func:`hht` runs it at once, :func:`hht3d.graph.transform`
+    as lazy tasks, and the pipeline's ``hht`` step through the graph.
+    """
+    decomposition = decomposition_stage(stages, surface, signal, emd, ensemble, backend)
+    imfs = stages.task("imfs", _imfs)(decomposition)
+    potential = stages.potential(surface, imfs, riesz, backend)
+    mono = stages.task("monogenic", monogenic_from_potential)(surface, imfs, potential, riesz.gradient,
+                                                             riesz.frequency)
+    result = stages.task("hht", HHTResult.from_parts)(surface, signal, decomposition, mono, riesz.as_dict())
+    return {"emd": decomposition, "imfs": imfs, "riesz": potential, "monogenic": mono, "hht": result}
+
+
+def hht(surface: Surface, signal, *, emd: EMDOptions | dict | None = None, riesz: RieszOptions | dict | None = None,
+        ensemble: EnsembleOptions | dict | None = None, backend: str | None = None) -> HHTResult:
     """Hilbert–Huang transform of a surface signal: EMD, then Algorithm 2 on all IMFs.
 
     Parameters
     ----------
     surface : Surface
     signal : (n,) array_like
-    emd_options : dict, optional
-        Keyword arguments of :func:`hht3d.decomposition.decompose.emd` (``max_imfs``,
-        ``stopping``, ...).
-    gradient, frequency, method, tol, eigenpairs
-        Riesz transform and Eq. 23 options; see :func:`hht3d.spectral.monogenic_signal.monogenic`.
+    emd : EMDOptions or dict, optional
+        Settings of :func:`hht3d.decomposition.emd` (``max_imfs``, ``stopping``, ...).
+    riesz : RieszOptions or dict, optional
+        Settings of the Riesz transform and Eq. 23 (``method``, ``tol``, ``frequency``, ...;
+        see :func:`hht3d.spectral.monogenic`).
+    ensemble : EnsembleOptions or dict, optional
+        Decompose by ensemble EMD with these settings (``ensemble_size``, ``noise_std``,
+        ``seed``) instead of EMD.
     backend : str, optional
-        Sparse solver for EMD and the Riesz transform.
+        Sparse solver of :mod:`hht3d.linalg` for EMD and the Riesz transform.
 
     Returns
     -------
     HHTResult
+        ``info["seconds"]`` holds the wall time of ``"emd"`` and ``"spectra"``.
 
     Examples
     --------
     >>> from hht3d import data_path, hht, load
     >>> from hht3d.geometry.signals import mean_curvature
     >>> surface = load(data_path("spot.ply"))
-    >>> result = hht(surface, mean_curvature(surface), emd_options={"max_imfs": 2})
+    >>> result = hht(surface, mean_curvature(surface), emd={"max_imfs": 2})
     >>> result.n_imfs, result.monogenic.frequency.shape
     (2, (2, 2930))
     >>> result.quality.ok
@@ -161,14 +228,14 @@ def hht(surface: Surface, signal, *, emd_options: dict | None = None, gradient: 
     >>> result.info["riesz"]["tol"]
     1e-08
     """
-    check_emd_options(emd_options or {})
-    riesz_options = RieszOptions(gradient, frequency, method, tol, eigenpairs, backend)
-    options = {"backend": backend, **(emd_options or {})}
-    start = time.perf_counter()
-    decomposition = emd(surface, signal, **options)
-    middle = time.perf_counter()
-    mono = monogenic(surface, decomposition.imfs, gradient=gradient, frequency=frequency, method=method,
-                     tol=tol, eigenpairs=eigenpairs, backend=backend)
-    end = time.perf_counter()
-    return HHTResult.from_parts(surface, signal, decomposition, mono, riesz_options.recorded(),
-                                {"emd": middle - start, "spectra": end - middle})
+    if ensemble is None:
+        emd_options, ensemble_options = EMDOptions.of(emd), None
+    else:
+        emd_options, ensemble_options = ensemble_settings(emd, ensemble, {})
+    stages = _Eager()
+    result = hht_stages(stages, surface, signal, emd=emd_options, riesz=RieszOptions.of(riesz),
+                        ensemble=ensemble_options, backend=backend)["hht"]
+    spent = stages.seconds
+    result.info["seconds"] = {"emd": sum(spent.get(k, 0.0) for k in ("emd", "eemd_member", "eemd_combine")),
+                              "spectra": spent.get("riesz", 0.0) + spent.get("monogenic", 0.0)}
+    return result

@@ -13,7 +13,7 @@ from hht3d import InputError, Surface
 from hht3d.apps import (FEATURE_EMD_OPTIONS, FeatureResult, heat_kernel_signature, hks_features, merge_hits, prominent_features,
                         repeatability)
 from hht3d.cli import demo_model_path
-from hht3d.decomposition.decompose import emd, local_extrema
+from hht3d.decomposition import emd, local_extrema
 from hht3d.geometry.signals import mean_curvature
 
 
@@ -26,7 +26,7 @@ def mean_edge_length(surface: Surface) -> float:
 def spot():
     """The shipped demo model (2,930 vertices) and its mean-curvature EMD, as features take it."""
     surface = hht3d.load(demo_model_path())
-    return surface, emd(surface, mean_curvature(surface), **FEATURE_EMD_OPTIONS)
+    return surface, emd(surface, mean_curvature(surface), FEATURE_EMD_OPTIONS)
 
 
 # -- counting and merging -----------------------------------------------------------------------
@@ -88,7 +88,7 @@ def test_features_invariant_to_rotation_and_scale(spot):
     assert reference.n_features > 0
     for c in (2.5, 1e-3):
         moved = Surface(c * surface.vertices @ rotation.T + [1.0, -2.0, 3.0], surface.faces)
-        result = prominent_features(moved, emd(moved, mean_curvature(moved), **FEATURE_EMD_OPTIONS))
+        result = prominent_features(moved, emd(moved, mean_curvature(moved), FEATURE_EMD_OPTIONS))
         assert np.array_equal(result.vertices, reference.vertices)
         assert np.array_equal(result.vertex_counts, reference.vertex_counts)
         hks_moved = hks_features(moved, eigenpairs=60)
@@ -131,7 +131,7 @@ def test_noise_repeatability(spot):
     for seed in range(3):
         rng = np.random.default_rng(seed)
         noisy = Surface(p + rng.normal(scale=0.15 * h, size=p.shape), surface.faces)
-        found = prominent_features(noisy, emd(noisy, mean_curvature(noisy), **FEATURE_EMD_OPTIONS)).vertices
+        found = prominent_features(noisy, emd(noisy, mean_curvature(noisy), FEATURE_EMD_OPTIONS)).vertices
         tally("forward", found, clean)
         tally("backward", clean, found)
         tally("hks", hks_features(noisy, eigenpairs=60).vertices, hks_clean)

@@ -17,7 +17,7 @@ from hht3d.apps import (BandBoost, BandStop, Constant, HighBoost, LowPass, Piece
                         manifold_harmonics_filter, reconstruct, reconstruct_from_change)
 from hht3d.apps.reconstruction import DISPLACEMENT_LIMIT
 from hht3d.transform import hht
-from hht3d.decomposition.quality import QualityWarning
+from hht3d.decomposition import QualityWarning
 from hht3d.geometry.signals import mean_curvature
 
 #: Identity: the filtered positions may differ from the input by this fraction of the bounding-box
@@ -42,7 +42,7 @@ def bumps():
     """(surface, clean unit-sphere vertices, unit bump pattern, HHT of the mean curvature)."""
     v, f, clean, pattern = bump_band_sphere(5, WAVES, AMPLITUDE)
     surface = Surface(v, f, name="bump_band_sphere")
-    return surface, clean, pattern, hht(surface, mean_curvature(surface), emd_options={"max_imfs": 4})
+    return surface, clean, pattern, hht(surface, mean_curvature(surface), emd={"max_imfs": 4})
 
 
 def sphere_distance(surface: Surface, vertices: np.ndarray) -> float:
@@ -118,9 +118,9 @@ def test_filtering_does_not_depend_on_the_signal_unit():
     signal = mean_curvature(surface)
     omega = np.sqrt(12 * 13)
     gain = BandStop(omega / 2, 2 * omega, width=omega / 4)
-    reference = hht(surface, signal, emd_options={"max_imfs": 3})
+    reference = hht(surface, signal, emd={"max_imfs": 3})
     for c in (1e3, -1e-3):
-        scaled = hht(surface, c * signal, emd_options={"max_imfs": 3})
+        scaled = hht(surface, c * signal, emd={"max_imfs": 3})
         assert np.abs(gains_of(scaled, gain) - gains_of(reference, gain)).max() <= 1e-11
         error = np.abs(filter_signal(scaled, gain) - c * filter_signal(reference, gain)).max()
         assert error <= 2e-13 * np.abs(c * signal).max()
@@ -145,22 +145,22 @@ def test_identity_closed_mesh(bumps):
 def test_identity_open_grid():
     surface = Surface(*height_field_grid(30, 30), name="height_field")
     assert surface.boundary_vertices.sum() == 4 * 29
-    assert_identity(surface, hht(surface, mean_curvature(surface), emd_options={"max_imfs": 3}))
+    assert_identity(surface, hht(surface, mean_curvature(surface), emd={"max_imfs": 3}))
 
 
 def test_identity_open_scan(shared_model):
     surface = hht3d.load(shared_model("spacetime_face_neutral.ply"))
     assert surface.boundary_vertices.any()
-    assert_identity(surface, hht(surface, mean_curvature(surface), emd_options={"max_imfs": 3}))
+    assert_identity(surface, hht(surface, mean_curvature(surface), emd={"max_imfs": 3}))
 
 
 def test_identity_point_cloud_and_components():
     cloud = Surface(fibonacci_sphere(1500), name="cloud")
-    assert_identity(cloud, hht(cloud, mean_curvature(cloud), emd_options={"max_imfs": 2}))
+    assert_identity(cloud, hht(cloud, mean_curvature(cloud), emd={"max_imfs": 2}))
     v, f = icosphere(3)
     pair = Surface(*disjoint_union((v, f), (0.5 * v + [3.0, 0, 0], f)), name="pair")
     assert pair.n_components == 2
-    assert_identity(pair, hht(pair, mean_curvature(pair), emd_options={"max_imfs": 2}))
+    assert_identity(pair, hht(pair, mean_curvature(pair), emd={"max_imfs": 2}))
 
 
 # -- the least-squares problem -------------------------------------------------------------
@@ -288,7 +288,7 @@ def mixed_bumps():
     """(surface, narrow field, wide field, HHT of the mean curvature): 30 narrow and 30 wide bumps."""
     v, f, narrow, wide = random_bump_sphere()
     surface = Surface(v, f, name="random_bumps")
-    return surface, narrow, wide, hht(surface, mean_curvature(surface), emd_options={"max_imfs": 6})
+    return surface, narrow, wide, hht(surface, mean_curvature(surface), emd={"max_imfs": 6})
 
 
 def bump_classes(surface: Surface, vertices: np.ndarray, narrow: np.ndarray, wide: np.ndarray) -> np.ndarray:
@@ -401,7 +401,7 @@ def test_bad_filter_and_reconstruction_inputs(bumps):
         with pytest.raises(InputError):
             reconstruct(surface, mean_curvature(surface), **bad)
     # an HHT of another signal cannot drive the geometry
-    other = hht(Surface(*icosphere(2)), icosphere(2)[0][:, 0], emd_options={"max_imfs": 1})
+    other = hht(Surface(*icosphere(2)), icosphere(2)[0][:, 0], emd={"max_imfs": 1})
     with pytest.raises(InputError, match="mean-curvature"):
         filter_geometry(other, Constant(1.0))
     with pytest.raises(InputError):

@@ -30,7 +30,7 @@ def test_corrupt_file_is_reported_and_others_finish(tmp_path):
     inputs = _make_inputs(tmp_path / "in")
     out = tmp_path / "out"
     rows = run_dataset(inputs, out, scheduler="synchronous", progress=False,
-                       emd_options={"max_imfs": 2}, riesz_tasks=2)
+                       emd={"max_imfs": 2}, riesz_tasks=2)
     status = {r.source.rsplit("/", 1)[-1]: r for r in rows}
     assert status["good0.ply"].status == status["good1.ply"].status == "ok"
     assert status["good0.ply"].imfs == 2 and status["good0.ply"].vertices == 642
@@ -47,7 +47,7 @@ def test_corrupt_file_is_reported_and_others_finish(tmp_path):
     # each file holds its own input's HHT, as the Python API computes it in memory
     for name in ("good0", "good1"):
         surface = load(inputs / f"{name}.ply")
-        expected = hht(surface, mean_curvature(surface), emd_options={"max_imfs": 2})
+        expected = hht(surface, mean_curvature(surface), emd={"max_imfs": 2})
         with np.load(out / f"{name}_hht.npz") as saved:
             assert_same_hht(saved, expected)
         assert_same_hht(hht_arrays_from_ply(load(out / f"{name}_hht.ply", clean=False).attributes), expected)
@@ -58,10 +58,10 @@ def test_resume_skips_complete_items(tmp_path):
     for name in ("corrupt.ply", "three_points.xyz"):
         (inputs / name).unlink()
     out = tmp_path / "out"
-    run_dataset(inputs, out, scheduler="synchronous", progress=False, emd_options={"max_imfs": 1})
+    run_dataset(inputs, out, scheduler="synchronous", progress=False, emd={"max_imfs": 1})
     (out / "good1_hht.npz").unlink()
     rows = run_dataset(inputs, out, scheduler="synchronous", progress=False, resume=True,
-                       emd_options={"max_imfs": 1})
+                       emd={"max_imfs": 1})
     assert [r.status for r in rows] == ["skipped", "ok"]
     shutil.rmtree(out)
 
@@ -69,7 +69,7 @@ def test_resume_skips_complete_items(tmp_path):
 def test_summary_rows_carry_the_quality(tmp_path):
     inputs = _make_inputs(tmp_path / "in")
     rows = run_dataset(inputs / "good0.ply", tmp_path / "out", scheduler="synchronous", progress=False,
-                       emd_options={"max_imfs": 2}, riesz_tasks=1)
+                       emd={"max_imfs": 2}, riesz_tasks=1)
     (row,) = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert row["energy_ratio"] == rows[0].energy_ratio > 0 and isinstance(row["warnings"], list)
     assert "energy_ratio,orthogonality_index,warnings" in (tmp_path / "out" / "summary.csv").read_text()

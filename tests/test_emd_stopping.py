@@ -10,7 +10,7 @@ from meshes import icosphere
 from scipy.special import sph_harm_y
 
 from hht3d import Surface
-from hht3d.decomposition.decompose import emd
+from hht3d.decomposition import emd
 
 
 @pytest.mark.parametrize("threshold", [0.2, 0.01])

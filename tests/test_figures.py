@@ -25,14 +25,14 @@ def two_scale_signal(vertices):
 @pytest.fixture(scope="module")
 def result() -> HHTResult:
     s = Surface(*icosphere(3), name="sphere")
-    return hht(s, two_scale_signal(s.vertices), emd_options={"max_imfs": 2})
+    return hht(s, two_scale_signal(s.vertices), emd={"max_imfs": 2})
 
 
 @pytest.fixture(scope="module")
 def cloud_result() -> HHTResult:
     points = fibonacci_sphere(1500)
     s = Surface(points, normals=points, name="cloud")
-    return hht(s, two_scale_signal(points), emd_options={"max_imfs": 2})
+    return hht(s, two_scale_signal(points), emd={"max_imfs": 2})
 
 
 def pixels(path):
@@ -78,7 +78,7 @@ def negated(result: HHTResult) -> HHTResult:
     """The HHT of −f, written from the definitions: IMFs, residue and Riesz vectors change sign,
     the phase φ becomes π − φ, the amplitude and frequency stay."""
     mono = result.monogenic
-    flipped = dataclasses.replace(mono, signal=-mono.signal, riesz=-mono.riesz, phase=np.pi - mono.phase)
+    flipped = dataclasses.replace(mono, imfs=-mono.imfs, riesz=-mono.riesz, phase=np.pi - mono.phase)
     return dataclasses.replace(result, signal=-result.signal, imfs=-result.imfs, residue=-result.residue,
                                monogenic=flipped)
 

@@ -17,7 +17,7 @@ from hht3d.errors import InputError
 from hht3d.spectral.frequency import (FREQUENCY_METHODS, instantaneous_frequency, resolution_report,
                              resolvable_frequency)
 from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
-from hht3d.spectral.riesz_transform import fractional_laplacian
+from hht3d.spectral import fractional_laplacian
 from hht3d.geometry.surface import Surface
 from meshes import grid, icosphere
 
@@ -264,8 +264,8 @@ def test_option_reaches_hht_the_graph_and_the_pipeline():
 
     s = Surface(*icosphere(3))
     f = np.cos(6 * np.arctan2(s.vertices[:, 1], s.vertices[:, 0])) + s.vertices[:, 2]
-    eager = hht(s, f, frequency="gradient", emd_options={"max_imfs": 1})
-    (lazy,) = graph.compute(graph.hht(s, f, frequency="gradient", emd_options={"max_imfs": 1}),
+    eager = hht(s, f, riesz={"frequency": "gradient"}, emd={"max_imfs": 1})
+    (lazy,) = graph.compute(graph.hht(s, f, riesz={"frequency": "gradient"}, emd={"max_imfs": 1}),
                             scheduler="synchronous", progress=False)
     assert eager.info["riesz"]["frequency"] == lazy.info["riesz"]["frequency"] == "gradient"
     expected = instantaneous_frequency(s, eager.imfs, eager.monogenic.riesz, method="gradient")

@@ -3,12 +3,12 @@ import numpy as np
 import pytest
 from dask.core import get_dependencies
 
-from hht3d import Surface, graph
+from hht3d import InputError, Surface, graph
 from hht3d.transform import hht as eager_hht
 from hht3d.geometry.signals import mean_curvature
 from meshes import fibonacci_sphere, icosphere
 
-OPTIONS = dict(emd_options={"max_imfs": 3}, riesz_tasks=3)
+OPTIONS = dict(emd={"max_imfs": 3}, riesz_tasks=3)
 
 
 def _surfaces():
@@ -49,7 +49,7 @@ def test_graph_equals_eager_hht():
     s = graph.from_surface(surface)
     (lazy,) = graph.compute(graph.hht(s, graph.signal(s, "mean_curvature"), **OPTIONS),
                             scheduler="synchronous", progress=False)
-    eager = eager_hht(surface, mean_curvature(surface), emd_options=OPTIONS["emd_options"])
+    eager = eager_hht(surface, mean_curvature(surface), emd=OPTIONS["emd"])
     np.testing.assert_array_equal(lazy.imfs, eager.imfs)
     # shifts summed in groups instead of one loop: only the summation order differs
     np.testing.assert_allclose(lazy.monogenic.riesz, eager.monogenic.riesz, rtol=0,
@@ -129,22 +129,37 @@ def test_lazy_twins_have_the_eager_signatures_and_docstrings():
     import inspect
 
     from hht3d import apps
-    from hht3d.decomposition.decompose import eemd, emd
+    from hht3d.decomposition import eemd, emd
     from hht3d.io.read import load
     from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
     from hht3d.geometry.signals import signal
 
-    extras = {"monogenic": ["riesz_tasks"], "hht": ["ensemble", "riesz_tasks"]}
-    eager = [load, signal, emd, eemd, monogenic, monogenic_from_potential, eager_hht, apps.filter_signal,
-             apps.filter_geometry, apps.reconstruct, apps.prominent_features, apps.hks_features,
-             apps.imf_enhancement, apps.manifold_harmonics_filter]
-    for func in eager:
+    mirrored = [load, signal, emd, eemd, monogenic_from_potential, apps.filter_signal, apps.filter_geometry,
+                apps.reconstruct, apps.prominent_features, apps.hks_features, apps.imf_enhancement,
+                apps.manifold_harmonics_filter]
+    for func in mirrored:
         twin = getattr(graph, func.__name__)
-        lazy, core = inspect.signature(twin).parameters, inspect.signature(func).parameters
-        assert list(lazy) == list(core) + extras.get(func.__name__, []), func.__name__
-        assert all(lazy[name] == core[name] for name in core), func.__name__
+        assert inspect.signature(twin).parameters == inspect.signature(func).parameters, func.__name__
         assert twin.__doc__.startswith(f"Lazy :func:`{func.__module__}.{func.__name__}`")
         assert inspect.cleandoc(func.__doc__).split("\nExamples\n")[0].rstrip() in twin.__doc__
+    for func in (monogenic, eager_hht):  # plus the scheduling parameter riesz_tasks, keyword-only
+        lazy, core = inspect.signature(getattr(graph, func.__name__)).parameters, inspect.signature(func).parameters
+        assert {k: v for k, v in lazy.items() if k != "riesz_tasks"} == dict(core), func.__name__
+        assert lazy["riesz_tasks"].kind is inspect.Parameter.KEYWORD_ONLY
+
+
+@pytest.mark.parametrize("build", [
+    lambda s, f: graph.emd(s, f, max_imf=2),
+    lambda s, f: graph.eemd(s, f, ensemble_sise=3),
+    lambda s, f: graph.hht(s, f, emd={"max_imf": 2}),
+    lambda s, f: graph.hht(s, f, riesz={"method": "quadratur"}),
+    lambda s, f: graph.monogenic(s, f, tol=0),
+])
+def test_wrong_settings_raise_while_the_graph_is_built(build):
+    """A misspelled or out-of-range setting is the caller's error before any task exists, with a hint."""
+    surface = _surfaces()[0]
+    with pytest.raises(InputError, match="max_imfs|ensemble_size|quadrature|tol"):
+        build(graph.from_surface(surface), np.zeros(surface.n_vertices))
 
 
 def test_lazy_monogenic_takes_the_eager_arguments():

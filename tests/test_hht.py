@@ -19,7 +19,7 @@ def two_scale_signal(vertices):
 @pytest.fixture(scope="module")
 def result() -> HHTResult:
     s = Surface(*icosphere(4))
-    return hht(s, two_scale_signal(s.vertices), emd_options={"max_imfs": 3})
+    return hht(s, two_scale_signal(s.vertices), emd={"max_imfs": 3})
 
 
 def test_decomposition_and_spectra(result):
@@ -75,7 +75,7 @@ def test_to_open3d_mesh(result):
 
 def test_point_cloud_to_open3d():
     s = Surface(fibonacci_sphere(800), None)
-    r = hht(s, two_scale_signal(s.vertices), emd_options={"max_imfs": 1})
+    r = hht(s, two_scale_signal(s.vertices), emd={"max_imfs": 1})
     cloud = r.to_open3d()
     assert "phase_1" in cloud.point
     assert np.array_equal(cloud.point["imf_1"].numpy()[:, 0], r.imfs[0])

@@ -27,8 +27,9 @@ import hht3d
 from hht3d.linalg import backends as linalg
 from hht3d.errors import InputError, NumericalError
 
-emd_module = importlib.import_module("hht3d.decomposition.decompose")
-riesz_module = importlib.import_module("hht3d.spectral.riesz_transform")
+from hht3d.decomposition import envelope_operator
+from hht3d.spectral import quadrature_plan, spectral_bounds
+from hht3d.spectral.shifts import shifted_matrix
 
 SPOT = Path(hht3d.__file__).parent / "data" / "spot.ply"
 BACKENDS = linalg.available_backends()
@@ -43,7 +44,7 @@ def spot():
 
 def envelope_system(surface, constrained: np.ndarray) -> sp.csr_matrix:
     """``[Q_FF 0; 0 diag(Q)_CC]`` on Q's full pattern, as EMD builds it (hht3d.decomposition.decompose notes)."""
-    q = emd_module.envelope_operator(surface)
+    q = envelope_operator(surface)
     rows = np.repeat(np.arange(surface.n_vertices), np.diff(q.indptr))
     free = ~constrained
     data = q.data * (free[rows] & free[q.indices])
@@ -55,11 +56,11 @@ def envelope_system(surface, constrained: np.ndarray) -> sp.csr_matrix:
 def systems(surface):
     """(name, SPD matrix) pairs: two envelope systems and the extreme quadrature shifts."""
     rng = np.random.default_rng(0)
-    plan = riesz_module.quadrature_plan(surface, 1e-8, "superlu")
+    plan = quadrature_plan(surface, 1e-8, "superlu")
     return [("envelope 5%", envelope_system(surface, rng.random(surface.n_vertices) < 0.05)),
             ("envelope 30%", envelope_system(surface, rng.random(surface.n_vertices) < 0.3)),
-            ("smallest shift", riesz_module.shifted_matrix(surface, plan.sigmas[0])),
-            ("largest shift", riesz_module.shifted_matrix(surface, plan.sigmas[-1]))]
+            ("smallest shift", shifted_matrix(surface, plan.sigmas[0])),
+            ("largest shift", shifted_matrix(surface, plan.sigmas[-1]))]
 
 
 @pytest.fixture(scope="module")
@@ -95,7 +96,7 @@ def test_agrees_with_dense_and_spsolve(references, backend):
 def test_refactorization_gives_the_new_answer(spot, backend):
     (_, first), (_, second), *_ = systems(spot)
     rhs = np.random.default_rng(2).standard_normal(spot.n_vertices)
-    symbolic = linalg.SymbolicFactorization(emd_module.envelope_operator(spot), backend)
+    symbolic = linalg.SymbolicFactorization(envelope_operator(spot), backend)
     x1 = symbolic.factorize(first).solve(rhs)
     x2 = symbolic.factorize(second).solve(rhs)
     exact1, exact2 = spla.spsolve(first.tocsc(), rhs), spla.spsolve(second.tocsc(), rhs)
@@ -133,8 +134,8 @@ def test_singular_matrix_raises_numerical_error(backend):
 @pytest.mark.parametrize("backend", SINGLE_FACTOR)
 def test_indefinite_matrix_raises_numerical_error(spot, backend):
     # L - σM with σ above the smallest non-zero eigenvalue is indefinite: no Cholesky factor
-    m, _ = riesz_module.spectral_bounds(spot, backend="superlu")
-    a = riesz_module.shifted_matrix(spot, -10 * m)
+    m, _ = spectral_bounds(spot, backend="superlu")
+    a = shifted_matrix(spot, -10 * m)
     with pytest.raises(NumericalError):
         linalg.factorize(a, backend).solve(np.ones(spot.n_vertices))
 

@@ -7,7 +7,7 @@ import pytest
 from hht3d.errors import InputError
 from hht3d.spectral.frequency import instantaneous_frequency
 from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
-from hht3d.spectral.riesz_transform import fractional_laplacian, riesz
+from hht3d.spectral import fractional_laplacian, riesz
 from hht3d.spectral.spectrum import HilbertSpectrum
 from hht3d.geometry.surface import Surface
 from meshes import fibonacci_sphere, grid, open_cylinder

@@ -12,7 +12,7 @@ from hht3d import Surface, graph
 from hht3d.apps import (HighBoost, LowPass, PiecewiseLinear, filter_geometry, filter_signal, hks_features,
                         imf_enhancement, manifold_harmonics_filter, prominent_features, reconstruct)
 from hht3d.cli import main
-from hht3d.decomposition.decompose import eemd, emd
+from hht3d.decomposition import eemd, emd
 from hht3d.transform import HHTResult, hht
 from hht3d.io.read import load, write_ply
 from hht3d.spectral.monogenic_signal import monogenic
@@ -126,7 +126,7 @@ def test_point_cloud_example_keeps_points_and_fields(tmp_path, cloud_file):
     assert result.faces is None and result.n_vertices == 300
     assert {"signal", "imf_1", "frequency_1", "residue"} <= set(result.attributes)
     cloud = load(cloud_file, n_neighbors=30)
-    expected = hht(cloud, mean_curvature(cloud), emd_options={"max_imfs": 2})
+    expected = hht(cloud, mean_curvature(cloud), emd={"max_imfs": 2})
     np.testing.assert_array_equal(result.vertices, cloud.vertices)
     with np.load(out / "cloud_hht.npz") as saved:
         assert_same_hht(saved, expected)
@@ -145,7 +145,7 @@ def test_filtering_example_moves_vertices_and_keeps_faces(tmp_path, mesh_file):
     # the same filter through the Python API: Riesz round-off (1e-12) moves the gains and so the
     # vertices by far less than 1e-9 of the model size
     surface = load(mesh_file)
-    result = hht(surface, mean_curvature(surface), emd_options={"max_imfs": 6})
+    result = hht(surface, mean_curvature(surface), emd={"max_imfs": 6})
     expected = filter_geometry(result, LowPass(1.0))
     np.testing.assert_allclose(smooth.vertices, expected.vertices, rtol=0, atol=1e-9)
     enhanced = filter_geometry(result, HighBoost(3.0, 2.0, width=1.0), interior_weight=0.01, boundary_weight=1.0)
@@ -164,7 +164,7 @@ def test_cli_pipeline_and_graph_api_give_the_same_numbers(tmp_path, mesh_file):
     (row,) = run_pipeline(plan, scheduler="synchronous", progress=False)
 
     surface = graph.load(mesh_file)
-    lazy = graph.hht(surface, graph.signal(surface, "mean_curvature"), emd_options={"max_imfs": 3})
+    lazy = graph.hht(surface, graph.signal(surface, "mean_curvature"), emd={"max_imfs": 3})
     (expected,) = graph.compute(lazy, scheduler="synchronous", progress=False)
     assert row.status == "ok" and row.imfs == expected.n_imfs >= 2
     mono = expected.monogenic
@@ -408,7 +408,7 @@ def test_every_operation_and_output_format_runs(tmp_path, mesh_file):
     ensemble = eemd(surface, signal, ensemble_size=2, max_imfs=2, seed=0)
     decompose = emd(surface, signal, max_imfs=2)
     result = HHTResult.from_parts(surface, signal, ensemble, monogenic(surface, ensemble.imfs),
-                                  {"gradient": "lsq", "method": "quadrature", "tol": 1e-8, "eigenpairs": 300}, {})
+                                  {"gradient": "lsq", "method": "quadrature", "tol": 1e-8, "eigenpairs": 300})
     flat = filter_signal(result, PiecewiseLinear([(0, 1), (9, 0.5)]))
     np.testing.assert_array_equal(np.load(out / "eemd.npz")["imfs"], ensemble.imfs)
     np.testing.assert_allclose(np.load(out / "flat.npz")["signal"], flat, rtol=0, atol=1e-9 * np.abs(flat).max())

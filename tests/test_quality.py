@@ -11,8 +11,10 @@ from meshes import grid, icosphere, random_bump_sphere
 
 import hht3d
 from hht3d import InputError, Surface, emd, hht
-from hht3d.decomposition.decompose import GUARD_TENSIONS, PAPER_OPTIONS, local_extrema
-from hht3d.decomposition.quality import ENERGY_RATIO_LIMIT, ORTHOGONALITY_LIMIT, QualityWarning, decomposition_quality, fluctuation
+from hht3d.decomposition import GUARD_TENSIONS, PAPER_OPTIONS, local_extrema
+from hht3d.decomposition import ENERGY_RATIO_LIMIT, ORTHOGONALITY_LIMIT, QualityWarning
+from hht3d.decomposition.quality import decomposition_quality
+from hht3d.geometry.signals import fluctuation
 from hht3d.geometry.signals import mean_curvature
 
 
@@ -70,7 +72,7 @@ def test_paper_envelopes_cancel_on_spot_and_the_defaults_do_not(spot):
     issue's numbers).  The defaults measure 0.65 / +0.35."""
     surface, signal = spot
     with pytest.warns(QualityWarning, match="cancel"):
-        paper = emd(surface, mean_curvature(surface, min_area=0), **PAPER_OPTIONS)
+        paper = emd(surface, mean_curvature(surface, min_area=0), PAPER_OPTIONS)
     assert paper.quality.energy_ratio > 10 and paper.quality.orthogonality_index < -10
     with warnings.catch_warnings():
         warnings.simplefilter("error", QualityWarning)  # the defaults raise no quality warning
@@ -137,10 +139,10 @@ def test_local_mean_correction_keeps_slow_content_out_of_the_imfs():
 
 def test_hht_result_reports_the_same_quality(spot):
     surface, signal = spot
-    result = hht(surface, signal, emd_options={"max_imfs": 3})
+    result = hht(surface, signal, emd={"max_imfs": 3})
     q = result.quality
     reference = decomposition_quality(surface, signal, result.imfs, result.residue)
     assert q.energy_ratio == reference.energy_ratio and q.warnings == reference.warnings
     assert set(q.as_dict()) == {"energy_ratio", "orthogonality_index", "energy_share", "signal_spike", "warnings"}
     with pytest.raises(InputError, match="did you mean 'max_imfs'"):
-        hht(surface, signal, emd_options={"max_imf": 3})
+        hht(surface, signal, emd={"max_imf": 3})

@@ -15,18 +15,9 @@ from scipy.special import sph_harm_y
 
 import hht3d
 from hht3d import linalg
-from hht3d.spectral.riesz_transform import (
-    combine_quadrature_parts,
-    fractional_laplacian,
-    quadrature_nodes,
-    quadrature_part,
-    quadrature_plan,
-    remove_kernel,
-    riesz,
-    shifted_matrix,
-    shifted_solve,
-    spectral_bounds,
-)
+from hht3d.spectral import (combine_quadrature_parts, fractional_laplacian, quadrature_nodes, quadrature_part, quadrature_plan, riesz, spectral_bounds)
+from hht3d.geometry.signals import fluctuation
+from hht3d.spectral.shifts import shifted_matrix, shifted_solve
 from hht3d.errors import InputError
 from hht3d.geometry.surface import Surface
 from conftest import shipped_model_path
@@ -112,7 +103,7 @@ def test_quadrature_error_is_within_its_documented_tolerance(name, request):
     # dense eigh is slow, it is the dense method, checked against that eigh above.
     surface = request.getfixturevalue(name)
     f = mixed_signals(surface)
-    exact = (eigen_reference(surface, remove_kernel(surface, f)) if name == "jittered_grid"
+    exact = (eigen_reference(surface, fluctuation(surface, f)) if name == "jittered_grid"
              else fractional_laplacian(surface, f, method="dense"))
     tolerances = (1e-4, 1e-6, 1e-8, 1e-10) if name == "jittered_grid" else (1e-8,)
     for tol in tolerances:
@@ -130,7 +121,7 @@ def test_spectral_arpack_equals_truncated_generalized_eigh(jittered_grid):
     values, _ = generalized_eigh(s)
     p = 40
     assert values[p] - values[p - 1] > 1e-3 * values[p - 1]  # the cut does not split a cluster
-    reference = eigen_reference(s, remove_kernel(s, f), count=p)
+    reference = eigen_reference(s, fluctuation(s, f), count=p)
     s.cache.pop("riesz:eigenpairs", None)
     approx = fractional_laplacian(s, f, method="spectral", eigenpairs=p)
     assert "riesz:eigenpairs" in s.cache  # computed by ARPACK, not the dense fallback
@@ -140,10 +131,10 @@ def test_spectral_arpack_equals_truncated_generalized_eigh(jittered_grid):
 def test_dense_and_spectral_other_powers(jittered_grid):
     # L^{-1} via powers equals a direct solve of L u = M f̃ on the kernel complement.
     s = jittered_grid
-    f = remove_kernel(s, mixed_signals(s, 1)[0])
+    f = fluctuation(s, mixed_signals(s, 1)[0])
     inverse = fractional_laplacian(s, f, power=-1.0, method="dense")
     reg = (s.stiffness + 1e-12 * s.mass).tocsc()
-    direct = remove_kernel(s, spla.spsolve(reg, s.mass_diagonal * f))
+    direct = fluctuation(s, spla.spsolve(reg, s.mass_diagonal * f))
     assert m_error(s, inverse, direct) < 1e-6
     half = fractional_laplacian(s, f, method="dense")
     twice = fractional_laplacian(s, half, method="dense")
@@ -207,7 +198,7 @@ def test_isometry_face_gradient_is_exact():
     u = fractional_laplacian(s, f)
     grads = (s.face_gradient() @ u.T).reshape(len(s.faces), 3, -1)
     energy = np.einsum("fik,f->k", grads ** 2, s.face_areas)
-    expected = (remove_kernel(s, f) ** 2 * s.mass_diagonal).sum(-1)
+    expected = (fluctuation(s, f) ** 2 * s.mass_diagonal).sum(-1)
     assert np.allclose(energy, expected, rtol=3e-8, atol=0)
 
 
@@ -220,7 +211,7 @@ def test_isometry_vertex_gradients_on_smooth_signals(kind):
     f = np.stack([np.sin(3 * v[:, 0]) * np.cos(2 * v[:, 1]) + v[:, 2] ** 2, v[:, 0] * v[:, 1]])
     r = riesz(s, f, gradient=kind)
     energy = (np.sum(r ** 2, axis=-1) * s.mass_diagonal).sum(-1)
-    expected = (remove_kernel(s, f) ** 2 * s.mass_diagonal).sum(-1)
+    expected = (fluctuation(s, f) ** 2 * s.mass_diagonal).sum(-1)
     assert np.allclose(energy, expected, rtol=0.02)
 
 
@@ -309,7 +300,7 @@ def test_shift_groups_sum_to_the_whole(jittered_grid):
     many = len(plan.sigmas) + 2
     assert not np.any(quadrature_part(s, f, plan, many - 1, many))
     # one shift by hand
-    g = remove_kernel(s, f)
+    g = fluctuation(s, f)
     by_hand = plan.weights[0] * shifted_solve(s, plan.sigmas[0], (s.mass_diagonal * g).T).T
     assert np.allclose(quadrature_part(s, f, plan, 0, len(plan.sigmas)), by_hand, atol=1e-14)
     with pytest.raises(InputError, match="group"):
@@ -367,7 +358,7 @@ def test_bad_inputs(jittered_grid, monkeypatch):
         riesz(s, np.ones(n), gradient="green")
     with pytest.raises(InputError, match="Surface"):
         riesz(s.vertices, np.ones(n))
-    monkeypatch.setattr(sys.modules["hht3d.spectral.riesz_transform"], "DENSE_MAX_VERTICES", 100)
+    monkeypatch.setattr(sys.modules["hht3d.spectral.eigenpairs"], "DENSE_MAX_VERTICES", 100)
     big = Surface(s.vertices, s.faces)
     with pytest.raises(InputError, match="dense eigendecomposition is limited"):
         fractional_laplacian(big, np.ones(n), method="dense")

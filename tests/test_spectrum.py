@@ -42,6 +42,22 @@ def test_monogenic_result_carries_the_limit():
     spectrum = HilbertSpectrum.from_monogenic(s, result)
     assert np.array_equal(spectrum.resolvable, result.resolvable)
     assert spectrum.resolution.ok and spectrum.resolvable_frequency == pytest.approx(32 * np.pi)
-    bare = MonogenicSignal(result.signal, result.riesz, result.amplitude, result.phase, result.frequency)
-    with pytest.raises(InputError, match="resolution limit"):
+    bare = MonogenicSignal(result.imfs, result.riesz, result.amplitude, result.phase, result.frequency)
+    with pytest.raises(InputError, match="vertex areas"):
         bare.resolution
+
+
+def test_one_energy_share_above_the_limit_on_spot():
+    """The monogenic signal and the spectrum report one energy share above the resolution limit:
+    the a²·A_v-weighted one, whose value the test recomputes from the per-vertex arrays."""
+    from hht3d import data_path, hht, load
+    from hht3d.geometry.signals import mean_curvature
+
+    spot = load(data_path("spot.ply"))
+    result = hht(spot, mean_curvature(spot), emd={"max_imfs": 3})
+    mono = result.monogenic
+    energy = mono.amplitude ** 2 * spot.mass_diagonal
+    expected = energy[mono.frequency > np.pi / np.sqrt(spot.mass_diagonal)].sum() / energy.sum()
+    assert expected > 0  # spot's finest IMF has unresolved vertices, so the share is not trivially 0
+    assert mono.resolution.energy_share == pytest.approx(expected, rel=1e-12)
+    assert result.spectrum.resolution.energy_share == pytest.approx(expected, rel=1e-12)

@@ -18,7 +18,7 @@ A band-stop of the Hilbert spectrum moves vertices and keeps the faces
 >>> from hht3d.geometry.signals import mean_curvature
 >>> from hht3d.apps import BandStop, filter_geometry, prominent_features
 >>> surface = load(data_path("spot.ply"))
->>> result = hht(surface, mean_curvature(surface), emd_options={"max_imfs": 3})
+>>> result = hht(surface, mean_curvature(surface), emd={"max_imfs": 3})
 >>> smooth = filter_geometry(result, BandStop(low=40.0, high=120.0, width=10.0))  # a Surface: smooth.to_open3d()
 >>> bool(np.abs(smooth.vertices - surface.vertices).max() > 0), np.array_equal(smooth.faces, surface.faces)
 (True, True)

@@ -22,9 +22,10 @@ import math
 
 import numpy as np
 
-from ..decomposition.decompose import local_extrema
+from ..decomposition.extrema import local_extrema
 from ..errors import InputError
-from ..spectral.riesz_transform import remove_kernel, smallest_eigenpairs
+from ..geometry.signals import fluctuation
+from ..spectral.eigenpairs import smallest_eigenpairs
 from ..geometry.surface import Surface
 from ..geometry.validation import as_imfs, check_distance, check_surface, finite
 from .features import FeatureResult, features_from_counts
@@ -128,7 +129,7 @@ def manifold_harmonics_filter(surface: Surface, gain, *, eigenpairs: int = 300, 
     if keep_remainder:
         new = v + vectors @ ((mu - 1.0)[:, None] * coefficients)
     else:
-        centroid = v - remove_kernel(surface, v.T).T
+        centroid = v - fluctuation(surface, v.T).T
         new = centroid + vectors @ (mu[:, None] * coefficients)
     return Surface(new, surface.faces, colors=surface.colors, attributes=dict(surface.attributes),
                    laplacian=surface.laplacian, n_neighbors=surface.n_neighbors,

@@ -20,7 +20,7 @@ Which EMD
 -------------
 Features count extrema across scales, so they need IMFs whose scales are the
 same for a shape and a noisy copy of it.  The cancellation guard of
-:func:`hht3d.decomposition.decompose.emd` picks the tension per IMF from the signal, which moves
+:func:`hht3d.decomposition.emd` picks the tension per IMF from the signal, which moves
 the scales between copies; with one fixed tension the features repeat far
 better (spot under 15% noise, three seeds, z-scores against chance: 13.7
 noisy→clean and 10.2 clean→noisy, against 4.1 and 2.2 with the guard).
@@ -40,7 +40,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ..decomposition.decompose import local_extrema
+from ..decomposition.extrema import local_extrema
+from ..decomposition.options import EMDOptions
 from ..errors import InputError
 from ..geometry.surface import Surface
 from ..geometry.validation import as_imfs, check_distance, check_surface
@@ -49,7 +50,7 @@ __all__ = ["FEATURE_EMD_OPTIONS", "FeatureResult", "prominent_features", "featur
 
 
 #: EMD options for feature detection: one fixed tension, no cancellation guard (module notes).
-FEATURE_EMD_OPTIONS = {"cancellation_tolerance": None}
+FEATURE_EMD_OPTIONS = EMDOptions(cancellation_tolerance=None)
 
 
 @dataclass(frozen=True)

@@ -85,7 +85,7 @@ import scipy.sparse as sp
 from .. import linalg
 from ..errors import InputError
 from ..decomposition.quality import QualityWarning
-from ..spectral.riesz_transform import remove_kernel
+from ..geometry.signals import fluctuation
 from ..geometry.signals import mean_curvature
 from ..geometry.surface import Surface
 from ..geometry.validation import check_signal, check_surface, positive
@@ -173,7 +173,7 @@ def reconstruct_from_change(surface: Surface, change, *, interior_weight: float 
     surface = check_surface(surface)
     ds = check_signal(surface, change, "signal change")
     if preserve_scale:
-        ds = remove_kernel(surface, ds)
+        ds = fluctuation(surface, ds)
     mu = _weights(surface, interior_weight, boundary_weight, weights)
     area = surface.mass_diagonal
     mean_area = float(np.mean(area))

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..geometry.signals import fluctuation
 from ..geometry.surface import Surface
 from ..geometry.validation import check_surface
 
@@ -35,7 +36,6 @@ __all__ = [
     "Quality",
     "QualityWarning",
     "decomposition_quality",
-    "fluctuation",
     "ENERGY_RATIO_LIMIT",
     "ORTHOGONALITY_LIMIT",
     "SPIKE_LIMIT",
@@ -91,16 +91,6 @@ class Quality:
         return {"energy_ratio": self.energy_ratio, "orthogonality_index": self.orthogonality_index,
                 "energy_share": [float(x) for x in self.energy_share], "signal_spike": self.signal_spike,
                 "warnings": list(self.warnings)}
-
-
-def fluctuation(surface: Surface, f: np.ndarray) -> np.ndarray:
-    """``f`` (n,) or (k, n) minus its area-weighted mean on each connected component."""
-    labels, mass = surface.component_labels, surface.mass_diagonal
-    a = np.atleast_2d(f)
-    area = np.bincount(labels, weights=mass)
-    means = np.stack([np.bincount(labels, weights=mass * row) for row in a]) / area
-    out = a - means[:, labels]
-    return out[0] if np.ndim(f) == 1 else out
 
 
 def _spike(s: np.ndarray) -> float:

@@ -6,5 +6,5 @@ from . import topology
 from .signals import (MIN_AREA_FRACTION, CLUSTER_AREA_FRACTION, ROUND_OFF_ULPS, NEEDLE_ANGLE, CAP_ANGLE,
                       unreliable_vertices, mean_curvature, gaussian_curvature, centroid_distance, coordinate,
                       luminance, stored, check_signal_path, load_signal, SIGNALS, signal)
-from .validation import (check_surface, check_signal, as_signals, as_imfs, did_you_mean, check_choice,
+from .validation import (check_surface, check_signal, as_signals, as_imfs, check_choice,
                          check_int, nonnegative, finite, positive, check_distance)

@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from . import operators as ops
@@ -17,6 +18,7 @@ from .surface import Surface
 from .validation import check_signal
 
 __all__ = [
+    "fluctuation",
     "mean_curvature",
     "gaussian_curvature",
     "unreliable_vertices",
@@ -295,3 +297,18 @@ def signal(surface: Surface, kind: str, *, attribute: str | None = None, path=No
     if kind == "array":
         return check_signal(surface, values)
     raise InputError(f"unknown signal {kind!r}; choose one of {sorted(SIGNALS) + ['stored', 'file', 'array']}")
+
+
+def fluctuation(surface: Surface, f) -> np.ndarray:
+    """``f`` (n,) or (k, n) minus its area-weighted mean on each connected component.
+
+    ``f − Σ_c 1_c (1_cᵀ M f)/(1_cᵀ M 1_c)`` is M-orthogonal to the kernel of
+    ``L`` (the per-component constants): the part of ``f`` that EMD
+    decomposes and ``L^{-1/2}`` acts on (Sec. 4.2).  The caller checks ``f``.
+    """
+    labels, mass, n = surface.component_labels, surface.mass_diagonal, surface.n_vertices
+    a = np.atleast_2d(f)
+    indicator = sp.csr_matrix((mass, (np.arange(n), labels)), shape=(n, surface.n_components))
+    means = np.asarray(indicator.T @ a.T).T / np.asarray(indicator.sum(axis=0))  # (k, components)
+    out = a - means[:, labels]
+    return out[0] if np.ndim(f) == 1 else out

@@ -9,12 +9,11 @@ module needs it.
 """
 from __future__ import annotations
 
-import difflib
 import math
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, did_you_mean
 from .surface import Surface
 
 __all__ = [
@@ -109,27 +108,6 @@ def as_imfs(surface: Surface, imfs) -> np.ndarray:
     if not np.all(np.isfinite(a)):
         raise InputError("imfs have NaN or infinite values")
     return a
-
-
-def did_you_mean(word, known, *, listing: bool = True) -> str:
-    """``"; did you mean 'x'?"`` for the closest of ``known``; else the list of ``known``
-    (with ``listing``) or nothing.
-
-    Examples
-    --------
-    >>> did_you_mean("quadratur", ("quadrature", "spectral", "dense"))
-    "; did you mean 'quadrature'?"
-    >>> did_you_mean("x", ("quadrature", "dense"))
-    '; known: dense, quadrature'
-    >>> did_you_mean("x", ("quadrature", "dense"), listing=False)
-    ''
-    """
-    known = [str(k) for k in known]
-    plausible = isinstance(word, str) and len(word) <= 100  # never format a huge or nested value
-    close = difflib.get_close_matches(word, known, n=1, cutoff=0.6) if plausible else []
-    if close:
-        return f"; did you mean {close[0]!r}?"
-    return f"; known: {', '.join(sorted(known))}" if known and listing else ""
 
 
 def check_choice(value, choices, what: str, *, suggest: bool = False):

@@ -1,10 +1,20 @@
-"""Lazy Dask stages over the core, dataset fan-out and schedulers."""
-from .stages import (Builder, mirror, compute, load, from_surface, as_key, resident, operators, signal, emd,
-                     eemd, eemd_tasks, riesz_potential, monogenic, monogenic_from_potential, hht, save,
-                     transform, transform_file, filter_signal, filter_geometry, reconstruct,
-                     prominent_features, hks_features, imf_enhancement, manifold_harmonics_filter)
-from .scheduling import (SCHEDULERS, MAX_WORKERS, PROGRESS_INTERVAL, SINGLE_THREAD_ENV, worker_count,
-                         open_client, compute, ProgressLines)
-from .dataset import (FORMATS, SUMMARY_FILES, MAX_ERROR, Failure, Guarded, ItemSummary, output_paths,
-                      summary_paths, quality_fields, item_summary, skipped_summary, dataset_graph,
-                      write_summary, run_dataset)
+"""The lazy Dask layer: one task per stage over the core, the dataset fan-out and the schedulers.
+
+Data flow: :mod:`.tasks` (how tasks are made and surfaces shared) →
+:mod:`.stages` (the lazy twins of the core functions) → :mod:`.dataset`
+(many files) → :mod:`.scheduling` (run on threads, processes or a cluster).
+"""
+from .dataset import FORMATS, ItemSummary, dataset_graph, run_dataset, write_summary
+from .scheduling import SCHEDULERS, compute, open_client, worker_count
+from .stages import (eemd, emd, filter_geometry, filter_signal, hht, hks_features, imf_enhancement, load,
+                     manifold_harmonics_filter, mirror, monogenic, monogenic_from_potential, operators,
+                     prominent_features, reconstruct, save, signal, transform, transform_file)
+from .tasks import Builder, as_key, from_surface, resident, riesz_potential
+
+__all__ = [
+    "Builder", "mirror", "compute", "load", "from_surface", "as_key", "resident", "operators", "signal", "emd",
+    "eemd", "riesz_potential", "monogenic", "monogenic_from_potential", "hht", "save", "transform",
+    "transform_file", "filter_signal", "filter_geometry", "reconstruct", "prominent_features", "hks_features",
+    "imf_enhancement", "manifold_harmonics_filter", "FORMATS", "ItemSummary", "dataset_graph", "run_dataset",
+    "write_summary", "SCHEDULERS", "open_client", "worker_count",
+]

@@ -296,7 +296,7 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     >>> from hht3d.graph.dataset import run_dataset
     >>> out = Path(tempfile.mkdtemp())
     >>> rows = run_dataset([data_path("spot.ply")], out, scheduler="synchronous", progress=False,
-    ...                    emd_options={"max_imfs": 2})
+    ...                    emd={"max_imfs": 2})
     >>> [(row.status, row.vertices, row.imfs) for row in rows]
     [('ok', 2930, 2)]
     >>> sorted(path.name for path in out.iterdir())

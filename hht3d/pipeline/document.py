@@ -13,8 +13,7 @@ import re
 
 import yaml
 
-from ..errors import MAX_SHOWN, PipelineError, one_line, shown
-from ..geometry.validation import did_you_mean
+from ..errors import MAX_SHOWN, PipelineError, did_you_mean, one_line, shown
 
 __all__ = ["YAMLMapping", "MAX_YAML_VALUES", "read_yaml", "at", "apply_overrides", "add_implicit_load"]
 

@@ -14,10 +14,10 @@ import math
 from dataclasses import dataclass
 
 from ..apps.filters import GAINS, make_gain
-from ..errors import InputError, PipelineError, one_line, shown
-from ..geometry.validation import did_you_mean
+from ..errors import InputError, PipelineError, did_you_mean, one_line, shown
+from ..records import Record, Spec
 
-__all__ = ["Param", "REQUIRED", "did_you_mean", "with_defaults", "yaml_text"]
+__all__ = ["Param", "REQUIRED", "did_you_mean", "record_params", "with_defaults", "yaml_text"]
 
 
 class _Required:
@@ -89,16 +89,14 @@ class Param:
         text = self.kind + self._range()
         return f"{text} or null" if self.default is None or self.nullable else text
 
+    @property
+    def spec(self) -> Spec:
+        """The parameter's allowed values as an option :class:`~hht3d.records.Spec`."""
+        return Spec(self.doc, self.kind, self.choices, self.minimum, self.maximum, self.open_minimum,
+                    self.open_maximum, self.nullable)
+
     def _range(self) -> str:
-        lo, hi = (None if x is None else f"{x:d}" if isinstance(x, int) else f"{x:g}"
-                  for x in (self.minimum, self.maximum))
-        if lo is not None and hi is not None:
-            return f" in {'(' if self.open_minimum else '['}{lo}, {hi}{')' if self.open_maximum else ']'}"
-        if lo is not None:
-            return f" {'>' if self.open_minimum else '>='} {lo}"
-        if hi is not None:
-            return f" {'<' if self.open_maximum else '<='} {hi}"
-        return ""
+        return self.spec.range_text()
 
     def check(self, value, where: str):
         """The checked value (ints stay ints, gains become :class:`~hht3d.apps.Gain` objects).
@@ -134,9 +132,7 @@ class Param:
         return value if self.kind == "int" else float(value)
 
     def _in_range(self, x) -> bool:
-        lo, hi = self.minimum, self.maximum
-        return ((lo is None or (x > lo if self.open_minimum else x >= lo))
-                and (hi is None or (x < hi if self.open_maximum else x <= hi)))
+        return self.spec.in_range(x)
 
     def _fail(self, where: str, value):
         article = {"int": "an integer", "float": "a number", "bool": "true or false", "str": "a string"}
@@ -163,6 +159,15 @@ def _gain(value, where: str):
         return make_gain(kind, **options)
     except InputError as exc:
         raise PipelineError(f"{where}: {one_line(exc)}") from None
+
+
+def record_params(record: type[Record]) -> tuple[Param, ...]:
+    """One parameter per setting of an option record, with the record's default, range and description."""
+    defaults = record.defaults()
+    return tuple(Param(name, spec.kind, spec.doc, default=defaults[name], choices=spec.choices,
+                       minimum=spec.minimum, maximum=spec.maximum, open_minimum=spec.open_minimum,
+                       open_maximum=spec.open_maximum, nullable=spec.nullable)
+                 for name, spec in record.specs().items())
 
 
 def with_defaults(func, *params: Param) -> tuple[Param, ...]:

@@ -44,13 +44,15 @@ from dataclasses import dataclass, field
 from .. import graph, linalg
 from ..apps import (filter_geometry, filter_signal, hks_features, imf_enhancement, manifold_harmonics_filter,
                     prominent_features, reconstruct)
-from ..decomposition.decompose import ENVELOPES, EXTREMA_RULES, STOPPING_RULES, emd
+from ..decomposition.decompose import emd
+from ..decomposition.options import MAX_ENSEMBLE, MAX_IMFS, MAX_RING, MAX_SEED, EMDOptions, EnsembleOptions
 from ..errors import InputError, PipelineError, shown
 from ..io.read import load
-from ..spectral.options import FREQUENCY_METHODS, GRADIENTS, METHODS, MIN_TOL
+from ..spectral.options import MAX_EIGENPAIRS, RieszOptions
+from ..transform import decomposition_stage
 from ..geometry.signals import SIGNALS, check_signal_path, signal
 from ..geometry.surface import LAPLACIANS
-from .params import REQUIRED, Param, did_you_mean, with_defaults
+from .params import REQUIRED, Param, did_you_mean, record_params, with_defaults
 
 __all__ = ["Slot", "Operation", "OPERATIONS", "operation"]
 
@@ -131,29 +133,16 @@ class Operation:
 # useful values; they stop a typo from hanging validation or a run (a billion EEMD tasks, 100,000
 # shift-group tasks, a dense block of a million eigenvectors).  Parameters in model units
 # (merge_radius, time, gain frequencies) scale with the model and are only required to be finite.
+# The settings of EMD, EEMD and the Riesz transform declare theirs in their option records.
 
-#: IMFs: more than log2 of the vertex count of any mesh that fits in memory.
-MAX_IMFS = 64
-#: EEMD members (Wu & Huang 2009 use 100); one graph task each.
-MAX_ENSEMBLE = 1000
 #: Shift-group tasks of the Riesz quadrature, which has about 60 shifts even at the finest tol.
 MAX_RIESZ_TASKS = 64
-#: Laplacian eigenpairs (the paper uses 300); the eigenvectors are a dense (vertices, eigenpairs) block.
-MAX_EIGENPAIRS = 2000
-#: Envelope tension (scale-free; the cancellation guard stops at 48, then goes harmonic).
-MAX_TENSION = 1000
-#: Sifts per IMF (each solves one envelope system per extremum kind).
-MAX_SIFTS = 1000
-#: Neighbourhood rings of extrema and features.
-MAX_RING = 16
 #: Neighbours of the point-cloud Laplacian and normals.
 MAX_NEIGHBORS = 256
 #: Position weights μ of Eq. 27 (the paper's are 0.01 and 1).
 MAX_WEIGHT = 1e6
 #: IMF factor of the enhancement baseline.
 MAX_FACTOR = 1e3
-#: Random seeds.
-MAX_SEED = 2**32 - 1
 
 
 # -- parameters -------------------------------------------------------------------------------------
@@ -175,52 +164,21 @@ SIGNAL = (
     Param("path", "str", "a .npy file of one value per vertex, with kind: file", default=None),
 )
 
-EMD = with_defaults(
-    emd,
-    Param("max_imfs", "int", "at most this many IMFs", minimum=0, maximum=MAX_IMFS),
-    Param("stopping", "choice", "sifting stop rule", choices=STOPPING_RULES),
-    Param("sd_threshold", "float", "SD stopping threshold", minimum=0, maximum=10),
-    Param("s_number", "int", "S-number: unchanged extrema counts in a row", minimum=1, maximum=100),
-    Param("fixed_sifts", "int", "sifts per IMF with stopping: fixed", minimum=1, maximum=MAX_SIFTS),
-    Param("max_sifts", "int", "cap on sifts per IMF", minimum=1, maximum=MAX_SIFTS),
-    Param("envelope", "choice", "envelope interpolant: thin plate in tension, the paper's thin plate (Eqs. 8, 11) "
-          "or membrane", choices=ENVELOPES),
-    Param("tension", "float", "tension of the envelope, relative to the extrema spacing", minimum=0,
-          maximum=MAX_TENSION),
-    Param("cancellation_tolerance", "float", "largest energy increase one IMF may cause before more tension "
-          "is tried (null: no guard)", minimum=0, maximum=1, nullable=True),
-    Param("mean_correction", "float", "move each IMF's part slower than this many of its wavelengths to the "
-          "residue (null: off)", minimum=0, maximum=10, nullable=True),
-    Param("extrema", "choice", "extremum rule: 1-ring, or ratio of the ring-ring", choices=EXTREMA_RULES),
-    Param("ring", "int", "neighbourhood of extrema: ring", minimum=1, maximum=MAX_RING),
-    Param("ratio", "float", "fraction of extrema: ring", minimum=0.5, maximum=1, open_minimum=True),
-    Param("energy_threshold", "float", "stop when the residue keeps less of the energy", minimum=0, maximum=1),
-    _BACKEND,
-)
+EMD = (*record_params(EMDOptions), _BACKEND)
 
-ENSEMBLE = with_defaults(
-    graph.eemd,
-    Param("ensemble_size", "int", "EEMD members", minimum=1, maximum=MAX_ENSEMBLE),
-    Param("noise_std", "float", "EEMD noise, relative to the signal's standard deviation", minimum=0, maximum=10),
-) + (Param("seed", "int", "EEMD noise seed (default: execution.seed)", default=None, minimum=0,
-           maximum=MAX_SEED),)
+_SEED = Param("seed", "int", "EEMD noise seed (default: execution.seed)", default=None, minimum=0,
+              maximum=MAX_SEED)
+ENSEMBLE = (*(p for p in record_params(EnsembleOptions) if p.name != "seed"), _SEED)
 
-SPECTRA = with_defaults(
-    graph.transform,
-    Param("gradient", "choice", "tangent gradient of the monogenic signal", choices=GRADIENTS),
-    Param("frequency", "choice", "Eq. 23 estimator: edge phase increments (exact for plane waves up to the "
-          "resolution limit) or the paper's gradients", choices=FREQUENCY_METHODS),
-    Param("method", "choice", "L^{-1/2}: exact quadrature, spectral truncation or dense", choices=METHODS),
-    Param("tol", "float", "relative accuracy of the quadrature", minimum=MIN_TOL, maximum=1, open_maximum=True),
-    Param("eigenpairs", "int", "eigenpairs of method: spectral", minimum=1, maximum=MAX_EIGENPAIRS),
-    Param("riesz_tasks", "int", "parallel shift-group tasks of the quadrature", minimum=1, maximum=MAX_RIESZ_TASKS),
-)
+_RIESZ_TASKS = Param("riesz_tasks", "int", "parallel shift-group tasks of the quadrature (default: one per "
+                     "worker)", default=None, minimum=1, maximum=MAX_RIESZ_TASKS)
+SPECTRA = (*record_params(RieszOptions), _RIESZ_TASKS)
 
 HHT = (
-    *(p for p in EMD if p.name != "backend"),
+    *record_params(EMDOptions),
     Param("ensemble_size", "int", "use EEMD with this many members (default: plain EMD)", default=None,
           minimum=1, maximum=MAX_ENSEMBLE),
-    *ENSEMBLE[1:],
+    *(p for p in ENSEMBLE if p.name != "ensemble_size"),
     *SPECTRA,
     _BACKEND,
 )
@@ -300,14 +258,19 @@ def _eigenpair_vertices(params) -> tuple[str, int] | None:
 
 
 def _hht_tasks(builder, surface, signal, **params):
-    """The HHT's stages (:func:`hht3d.graph.stages.transform`) from the step's flat parameters."""
-    emd_names = {p.name for p in EMD} - {"backend"}
-    emd_options = {k: v for k, v in params.items() if k in emd_names}
-    ensemble = {k: params[k] for k in ("ensemble_size", "noise_std", "seed")}
-    spectra = {k: params[k] for k in (*(p.name for p in SPECTRA), "backend")}
-    stages = graph.transform(builder, surface, signal, emd_options=emd_options,
-                             ensemble=ensemble if ensemble["ensemble_size"] is not None else None, **spectra)
+    """The HHT's stages (:func:`hht3d.graph.transform`) from the step's flat parameters."""
+    emd, riesz, ensemble = ({k: params[k] for k in record.specs() if k in params}
+                            for record in (EMDOptions, RieszOptions, EnsembleOptions))
+    stages = graph.transform(builder, surface, signal, emd=emd, riesz=riesz,
+                             ensemble=ensemble if ensemble["ensemble_size"] is not None else None,
+                             backend=params["backend"], riesz_tasks=params["riesz_tasks"])
     return {**stages, "result": stages["hht"]}
+
+
+def _eemd_tasks(builder, surface, signal, **params):
+    """EEMD's member and averaging tasks from the step's flat parameters."""
+    emd, ensemble = (record.of({k: params[k] for k in record.specs()}) for record in (EMDOptions, EnsembleOptions))
+    return decomposition_stage(builder, surface, signal, emd, ensemble, params["backend"])
 
 
 _SURFACE = Slot("surface", ("surface",))
@@ -324,7 +287,7 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("emd", "empirical mode decomposition with thin-plate envelopes (Sec. 4.1)",
               (_SURFACE, _SIGNAL_IN), "emd", EMD, func=emd),
     Operation("eemd", "ensemble EMD: one task per noisy member, then the average",
-              (_SURFACE, _SIGNAL_IN), "emd", ENSEMBLE + EMD, build=graph.eemd_tasks),
+              (_SURFACE, _SIGNAL_IN), "emd", ENSEMBLE + EMD, build=_eemd_tasks),
     Operation("hht", "Hilbert–Huang transform: EMD, Riesz transform, Hilbert spectra (Alg. 2)",
               (_SURFACE, _SIGNAL_IN), "hht", HHT, build=_hht_tasks, vertices=_eigenpair_vertices),
     Operation("filter_signal", "the signal through a gain of the instantaneous frequency (Eq. 26)",

@@ -1,10 +1,22 @@
-"""Riesz transform (Sec. 4.2, Alg. 1), monogenic signal and Hilbert spectra (Sec. 4.3, Alg. 2)."""
-from .options import (METHODS, GRADIENTS, FREQUENCY_METHODS, MIN_TOL, RieszOptions, RIESZ_DEFAULTS)
-from .riesz_transform import (DENSE_MAX_VERTICES, SAFETY, remove_kernel, shifted_matrix, shifted_solve,
-                              shift_analysis, spectral_bounds, quadrature_nodes, QuadraturePlan,
-                              quadrature_plan, quadrature_part, combine_quadrature_parts,
-                              smallest_eigenpairs, fractional_laplacian, riesz, vertex_gradient)
-from .frequency import (instantaneous_frequency, resolvable_frequency, resolvable_from_area,
-                        ResolutionReport, resolution_report)
-from .monogenic_signal import (MonogenicSignal, monogenic, monogenic_from_potential)
-from .spectrum import (SCALES, HilbertSpectrum)
+"""Riesz transform (Sec. 4.2, Alg. 1), monogenic signal and Hilbert spectra (Sec. 4.3, Alg. 2).
+
+Data flow: :mod:`.shifts` and :mod:`.eigenpairs` → :mod:`.quadrature` →
+:mod:`.riesz_transform` (:func:`fractional_laplacian`, :func:`riesz`) →
+:mod:`.frequency` → :mod:`.monogenic_signal` (:func:`monogenic`) →
+:mod:`.spectrum`, with the settings in :mod:`.options`.
+"""
+from .eigenpairs import DENSE_MAX_VERTICES, dense_eigenpairs, smallest_eigenpairs, spectral_bounds
+from .frequency import instantaneous_frequency, resolution_report, resolvable_frequency
+from .monogenic_signal import MonogenicSignal, monogenic, monogenic_from_potential
+from .options import FREQUENCY_METHODS, GRADIENTS, METHODS, RIESZ_DEFAULTS, RieszOptions
+from .quadrature import QuadraturePlan, combine_quadrature_parts, quadrature_nodes, quadrature_part, quadrature_plan
+from .riesz_transform import fractional_laplacian, riesz, vertex_gradient
+from .spectrum import HilbertSpectrum
+
+__all__ = [
+    "fractional_laplacian", "riesz", "vertex_gradient", "monogenic", "monogenic_from_potential", "MonogenicSignal",
+    "HilbertSpectrum", "RieszOptions", "RIESZ_DEFAULTS", "METHODS", "GRADIENTS", "FREQUENCY_METHODS",
+    "instantaneous_frequency", "resolvable_frequency", "resolution_report",
+    "spectral_bounds", "smallest_eigenpairs", "dense_eigenpairs", "DENSE_MAX_VERTICES",
+    "quadrature_nodes", "QuadraturePlan", "quadrature_plan", "quadrature_part", "combine_quadrature_parts",
+]

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from .frequency import ResolutionReport, instantaneous_frequency, resolution_report, resolvable_frequency
-from .options import FREQUENCY_METHODS, GRADIENTS, RIESZ_DEFAULTS
+from .frequency import ResolutionReport, instantaneous_frequency, resolution_report, resolvable_from_area
+from .options import FREQUENCY_METHODS, GRADIENTS, RIESZ_DEFAULTS, RieszOptions
 from .riesz_transform import fractional_laplacian, vertex_gradient
 from ..geometry.surface import Surface
 from ..geometry.validation import as_signals, check_choice, check_surface
@@ -40,8 +40,8 @@ class MonogenicSignal:
 
     Attributes
     ----------
-    signal : (k, n) ndarray
-        The input signals ``f_k``.
+    imfs : (k, n) ndarray
+        The input signals ``f_k`` (IMFs).
     riesz : (k, n, 3) ndarray
         Riesz transforms ``R f_k`` (tangent vectors).
     amplitude : (k, n) ndarray
@@ -52,21 +52,33 @@ class MonogenicSignal:
         Instantaneous frequency ``|∇φ_k|`` (Eq. 23), radians per unit
         length; 0 where ``a_k = 0``.  What it means for 1-D and isotropic
         patterns: :mod:`hht3d.spectral.frequency`.
-    resolvable : (n,) ndarray, optional
-        Per-vertex resolution limit ``π/√A_v``
-        (:func:`hht3d.spectral.frequency.resolvable_frequency`).
+    area : (n,) ndarray, optional
+        Vertex areas ``A_v`` (the lumped mass): they give the resolution
+        limit ``π/√A_v`` (:attr:`resolvable`) and weigh the energy
+        ``a² A_v`` of :attr:`resolution`.
     """
 
-    signal: np.ndarray
+    imfs: np.ndarray
     riesz: np.ndarray
     amplitude: np.ndarray
     phase: np.ndarray
     frequency: np.ndarray
-    resolvable: np.ndarray | None = None
+    area: np.ndarray | None = None
 
     @property
     def n_signals(self) -> int:
-        return len(self.signal)
+        return len(self.imfs)
+
+    @property
+    def resolvable(self) -> np.ndarray:
+        """Per-vertex resolution limit ``π/√A_v`` (:func:`hht3d.spectral.frequency.resolvable_from_area`)."""
+        return resolvable_from_area(self._area())
+
+    def _area(self) -> np.ndarray:
+        if self.area is None:
+            raise InputError("this monogenic signal carries no vertex areas; build it with "
+                             "hht3d.spectral.monogenic or pass area=")
+        return self.area
 
     def reconstruct(self) -> np.ndarray:
         """``Σ_k a_k cos φ_k`` (n,): the sum of the signals, to round-off."""
@@ -74,17 +86,15 @@ class MonogenicSignal:
 
     @property
     def resolution(self) -> ResolutionReport:
-        """Frequencies above their vertex's resolution limit (vertex–signal pairs, weighted by ``a²``)."""
-        if self.resolvable is None:
-            raise InputError("this monogenic signal carries no resolution limit; build it with "
-                             "hht3d.spectral.monogenic_signal.monogenic or pass resolvable=")
-        return resolution_report(self.frequency, self.resolvable, self.amplitude ** 2)
+        """Frequencies above their vertex's resolution limit, weighted by the energy ``a² A_v``.
+
+        The same figures as :attr:`hht3d.spectral.spectrum.HilbertSpectrum.resolution`.
+        """
+        return resolution_report(self.frequency, self.resolvable, self.amplitude ** 2 * self._area())
 
 
-def monogenic(surface: Surface, imfs, *, gradient: str = RIESZ_DEFAULTS.gradient,
-              frequency: str = RIESZ_DEFAULTS.frequency, method: str = RIESZ_DEFAULTS.method,
-              tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
-              backend: str | None = RIESZ_DEFAULTS.backend) -> MonogenicSignal:
+def monogenic(surface: Surface, imfs, options: RieszOptions | dict | None = None, *, backend: str | None = None,
+              **overrides) -> MonogenicSignal:
     """Monogenic signal of every IMF: Algorithm 2, steps 2–5 (Eqs. 20–23).
 
     ``L^{-1/2}`` of all IMFs comes from one multi-signal call of
@@ -96,15 +106,19 @@ def monogenic(surface: Surface, imfs, *, gradient: str = RIESZ_DEFAULTS.gradient
     surface : Surface
     imfs : (k, n) or (n,) array_like
         IMFs (a single signal is treated as ``k = 1``).
-    gradient : {"lsq", "fem"}
-        Vertex gradient used for the Riesz transform and for ``∇φ``
-        (Eq. 17 least squares, or area-averaged FEM gradients on meshes).
-    frequency : {"phase", "gradient"}
-        Estimator of Eq. 23 (:func:`hht3d.spectral.frequency.instantaneous_frequency`):
-        edge phase increments, exact for plane waves up to the resolution
-        limit, or the paper's gradients of the sampled fields.
-    method, tol, eigenpairs, backend
-        How ``L^{-1/2}`` is applied; see :func:`hht3d.spectral.riesz_transform.fractional_laplacian`.
+    options : RieszOptions or dict, optional
+        ``gradient`` (used for the Riesz transform and for ``∇φ``),
+        ``frequency`` (the estimator of Eq. 23,
+        :func:`hht3d.spectral.frequency.instantaneous_frequency`: edge phase
+        increments, exact for plane waves up to the resolution limit, or the
+        paper's gradients of the sampled fields), and ``method``, ``tol``,
+        ``eigenpairs`` (how ``L^{-1/2}`` is applied, see
+        :func:`hht3d.spectral.riesz_transform.fractional_laplacian`);
+        default :data:`~hht3d.spectral.options.RIESZ_DEFAULTS`.
+    backend : str, optional
+        Sparse solver of :mod:`hht3d.linalg`.
+    **overrides
+        Settings that replace those of ``options``.
 
     Returns
     -------
@@ -127,11 +141,10 @@ def monogenic(surface: Surface, imfs, *, gradient: str = RIESZ_DEFAULTS.gradient
     >>> np.round(energy, 2)
     array([1., 1.])
     """
+    options = RieszOptions.of(options, **overrides)
     f = _signals(surface, imfs)
-    check_choice(gradient, GRADIENTS, "gradient")
-    check_choice(frequency, FREQUENCY_METHODS, "frequency")
-    potential = fractional_laplacian(surface, f, -0.5, method, tol, eigenpairs, backend)
-    return monogenic_from_potential(surface, f, potential, gradient, frequency)
+    potential = fractional_laplacian(surface, f, -0.5, options.method, options.tol, options.eigenpairs, backend)
+    return monogenic_from_potential(surface, f, potential, options.gradient, options.frequency)
 
 
 def _signals(surface: Surface, imfs) -> np.ndarray:
@@ -166,5 +179,5 @@ def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = 
     rf = vertex_gradient(surface, u, gradient)
     q = np.linalg.norm(rf, axis=-1)
     omega = instantaneous_frequency(surface, f, rf, method=frequency, gradient=gradient)
-    return MonogenicSignal(signal=f, riesz=rf, amplitude=np.sqrt(f ** 2 + q ** 2), phase=np.arctan2(q, f),
-                           frequency=omega, resolvable=resolvable_frequency(surface))
+    return MonogenicSignal(imfs=f, riesz=rf, amplitude=np.sqrt(f ** 2 + q ** 2), phase=np.arctan2(q, f),
+                           frequency=omega, area=surface.mass_diagonal.copy())

@@ -1,0 +1,236 @@
+"""Envelopes through extrema: thin plates, in tension or not, and membranes (Sec. 4.1, Eqs. 8-11).
+
+Envelopes
+---------
+On a surface the cubic spline of 1-D EMD becomes the biharmonic field of
+Eqs. (8)–(11) (Wang et al. 2012): ``g`` minimises the thin-plate energy
+``gᵀ Q g``, ``Q = L M⁻¹ L``, subject to ``g = f`` at the extrema.  Between
+sparse extrema a thin plate overshoots: through one sharp crease it bulges
+over the whole neighbourhood, and the IMFs then cancel each other (see
+:mod:`hht3d.decomposition.quality`; measured in ``benchmarks/results/quality.md``).  The default
+envelope is therefore a thin plate *in tension* (Smith & Wessel 1990),
+
+    Q_τ = L M⁻¹ L + (τ / d)² L,      d = √(A / |C|),
+
+with ``A`` the surface area and ``|C|`` the number of extrema, so ``d`` is
+their mean spacing, ``L`` in the tension term the membrane part of the
+Laplacian (its non-negative edge weights, :func:`_membrane`; all of ``L`` on
+a Delaunay mesh), and the tension ``τ`` is scale-free: the same ``τ``
+behaves alike on every IMF and every model.  ``τ = 0`` is the paper's
+biharmonic envelope and ``τ → ∞`` the membrane (harmonic) one, ``L g = 0``,
+which obeys a discrete maximum principle but loses the scale separation of
+the thin plate (on white noise the extrema thin out far less per IMF;
+``benchmarks/results/quality.md``).
+
+Solver design
+-------------
+Every envelope of a surface is solved with one matrix *pattern* (that of
+``L M⁻¹ L`` and ``L`` together): the rows and columns of the constrained
+vertices ``C`` are replaced by diagonal rows and columns (their off-diagonal
+entries stored as explicit zeros),
+
+    [Q_FF  0   ] [g_F]   [-Q_FC f_C]
+    [0     D_CC] [g_C] = [ D_CC f_C ],      D_CC = diag(Q)_CC,
+
+which is exactly the eliminated system ``Q_FF g_F = −Q_FC f_C`` plus
+``g_C = f_C``, symmetric positive definite whenever every connected component
+holds a constraint.  The sparsity pattern never changes, whatever the
+tension, so the fill-reducing ordering and symbolic factorization are done
+once per EMD run (:class:`hht3d.linalg.backends.SymbolicFactorization`) and each
+envelope costs one numeric factorization and one solve.
+
+Boundaries
+----------
+``L`` is the Neumann Laplacian, so on an open surface the envelopes have zero
+normal derivative at the boundary: on a strip or cylinder a biharmonic
+envelope is the *clamped* cubic spline through the extrema, the surface
+analogue of the mirrored end extrema of 1-D EMD codes.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.sparse as sp
+
+from .. import linalg
+from ..errors import InputError
+from ..geometry.surface import Surface
+from ..geometry.validation import check_choice, check_signal, check_surface, nonnegative
+from .extrema import extrema_spacing
+from .options import EMD_DEFAULTS, ENVELOPES, start_tension
+
+__all__ = ["envelope_operator", "envelope_interpolation", "EnvelopeSolver", "envelope_energies", "MASS_FLOOR"]
+
+#: The local-mean correction's bilaplacian divides by vertex areas floored at this fraction of
+#: their median, so tiny vertices of a scan do not make its system numerically indefinite.
+MASS_FLOOR = 0.1
+
+
+class _EnvelopeEnergies:
+    """``L M⁻¹ L`` and the membrane ``L`` stored on one pattern (theirs together, diagonal included).
+
+    Every envelope energy ``Q_τ`` is a combination of the two data arrays, so
+    all tensions share one symbolic analysis.
+    """
+
+    def __init__(self, surface: Surface):
+        lap = surface.stiffness
+        bilaplacian = lap @ sp.diags(1.0 / surface.mass_diagonal) @ lap
+        bilaplacian = 0.5 * (bilaplacian + bilaplacian.T)
+        n = surface.n_vertices
+        pattern = (abs(bilaplacian) + abs(lap) + sp.eye(n)).tocsr()
+        pattern.sort_indices()
+        self.indptr, self.indices, self.n = pattern.indptr, pattern.indices, n
+        self.rows = np.repeat(np.arange(n), np.diff(pattern.indptr))
+        self.diagonal = np.flatnonzero(self.indices == self.rows)
+        self.bilaplacian = self._on_pattern(bilaplacian)
+        membrane = _membrane(lap)
+        self.laplacian = self._on_pattern(membrane)
+        floored = np.maximum(surface.mass_diagonal, MASS_FLOOR * np.median(surface.mass_diagonal))
+        self.smoothing = self._on_pattern(membrane @ sp.diags(1.0 / floored) @ membrane)
+
+    def _on_pattern(self, a) -> np.ndarray:
+        """The entries of ``a`` at the positions of the shared pattern (zeros elsewhere)."""
+        keys = self.rows.astype(np.int64) * self.n + self.indices
+        coo = a.tocoo()
+        data = np.zeros(len(keys))
+        np.add.at(data, np.searchsorted(keys, coo.row.astype(np.int64) * self.n + coo.col), coo.data)
+        return data
+
+    def data(self, tension: float, spacing: float) -> np.ndarray:
+        """Entries of ``Q_τ = L M⁻¹ L + (τ/d)² L``; ``τ = inf`` gives ``L`` (the harmonic limit)."""
+        if math.isinf(tension):
+            return self.laplacian
+        if tension == 0:
+            return self.bilaplacian
+        return self.bilaplacian + (tension / spacing) ** 2 * self.laplacian
+
+    def matrix(self, data: np.ndarray) -> sp.csr_matrix:
+        return sp.csr_matrix((data, self.indices.copy(), self.indptr.copy()), shape=(self.n, self.n))
+
+
+def _membrane(lap: sp.csr_matrix) -> sp.csr_matrix:
+    """``L`` without its positive off-diagonal entries (negative cotangent weights of
+    non-Delaunay edges), the diagonal rebuilt so rows still sum to 0.
+
+    An M-matrix: the membrane envelope then obeys a discrete maximum principle, and every
+    constrained system stays numerically definite even with caps whose cotangents reach −500
+    (dragon_vrip).  On a Delaunay mesh it is ``L`` itself.
+    """
+    off = sp.csr_matrix(lap - sp.diags(lap.diagonal()))
+    off.data = np.minimum(off.data, 0.0)
+    off.eliminate_zeros()
+    return (off - sp.diags(np.asarray(off.sum(axis=1)).ravel())).tocsr()
+
+
+def envelope_energies(surface: Surface) -> _EnvelopeEnergies:
+    key = "emd:energies"
+    if key not in surface.cache:
+        surface.cache[key] = _EnvelopeEnergies(surface)
+    return surface.cache[key]
+
+
+def envelope_operator(surface: Surface, envelope: str = "biharmonic", *, tension: float = EMD_DEFAULTS.tension,
+                      spacing: float | None = None) -> sp.csr_matrix:
+    """The energy matrix ``Q`` of the envelope interpolation (Eqs. 8–11).
+
+    ``Q = L M⁻¹ L`` for ``"biharmonic"`` (thin-plate energy, the paper's
+    choice; on a line it gives cubic splines), ``Q = L M⁻¹ L + (τ/d)² L``
+    for ``"tension"`` and ``Q = L`` for ``"harmonic"`` (membrane energy,
+    piecewise-linear on a line).  ``Q`` is symmetric PSD, stored on the
+    pattern shared by all envelopes with every diagonal entry present.
+
+    Parameters
+    ----------
+    surface : Surface
+    envelope : {"biharmonic", "tension", "harmonic"}
+    tension : float
+        ``τ >= 0`` of ``"tension"``.
+    spacing : float, optional
+        ``d`` of ``"tension"`` (e.g. :func:`extrema_spacing`); required for it.
+    """
+    start = start_tension(check_choice(envelope, ENVELOPES, "envelope"), nonnegative("tension", tension))
+    if envelope == "tension" and spacing is None:
+        raise InputError("the tension envelope needs the extrema spacing d (see extrema_spacing)")
+    energies = envelope_energies(check_surface(surface))
+    return energies.matrix(energies.data(start, spacing or 1.0))
+
+
+class EnvelopeSolver:
+    """Constrained envelope solves sharing one symbolic factorization.
+
+    The fill-reducing ordering and symbolic analysis of the shared pattern
+    are done on the first solve; every envelope then costs one numeric
+    factorization and one solve (module notes, "Solver design").
+    """
+
+    def __init__(self, surface: Surface, backend: str | None):
+        self.backend = linalg.check_backend(backend)
+        self.energies = envelope_energies(surface)
+        self._symbolic: linalg.SymbolicFactorization | None = None
+
+    @property
+    def n_factorizations(self) -> int:
+        return 0 if self._symbolic is None else self._symbolic.n_factorizations
+
+    def factorize(self, matrix: sp.csr_matrix) -> linalg.Factor:
+        """Numeric factorization of an SPD matrix on the shared pattern (analysed on first use)."""
+        if self._symbolic is None:
+            self._symbolic = linalg.SymbolicFactorization(matrix, self.backend)
+        return self._symbolic.factorize(matrix)
+
+    def solve(self, f: np.ndarray, constrained: np.ndarray, tension: float, spacing: float) -> np.ndarray:
+        """The envelope ``g`` with ``g_C = f_C`` minimising ``gᵀQ_τg`` (Eq. 11 for ``τ = 0``)."""
+        e = self.energies
+        q = e.data(tension, spacing)
+        diag = q[e.diagonal]
+        scale = np.where(diag > 0, diag, 1.0)
+        free = ~constrained
+        data = q * (free[e.rows] & free[e.indices])
+        data[e.diagonal[constrained]] = scale[constrained]
+        factor = self.factorize(e.matrix(data))
+        rhs = -(e.matrix(q) @ np.where(constrained, f, 0.0))
+        rhs[constrained] = scale[constrained] * f[constrained]
+        return factor.solve(rhs)
+
+
+def envelope_interpolation(surface: Surface, values, constrained, *, envelope: str = "biharmonic",
+                           tension: float = EMD_DEFAULTS.tension, backend: str | None = None) -> np.ndarray:
+    """Interpolate ``values`` from the ``constrained`` vertices (Eq. 11).
+
+    Solves ``min gᵀQg`` subject to ``g_C = values_C`` with ``Q`` from
+    :func:`envelope_operator`; this is one EMD envelope.
+
+    Parameters
+    ----------
+    surface : Surface
+    values : (n,) array_like
+        Only the entries at ``constrained`` are used.
+    constrained : (n,) bool array_like or int indices
+        The vertices ``C``; every connected component needs at least one.
+    envelope : {"biharmonic", "tension", "harmonic"}
+    tension : float
+        ``τ`` of ``"tension"``; the spacing ``d`` is :func:`extrema_spacing` of ``|C|``.
+    backend : str, optional
+        Sparse solver of :mod:`hht3d.linalg.backends`.
+
+    Returns
+    -------
+    (n,) ndarray
+    """
+    f = check_signal(check_surface(surface), values)
+    start = start_tension(check_choice(envelope, ENVELOPES, "envelope"), nonnegative("tension", tension))
+    c = np.asarray(constrained)
+    if c.dtype == bool and c.shape != f.shape:
+        raise InputError(f"constrained mask has shape {c.shape}; expected {f.shape}")
+    if c.dtype != bool and (c.size and (not np.issubdtype(c.dtype, np.integer)
+                                        or c.min() < -len(f) or c.max() >= len(f))):
+        raise InputError(f"constrained indices must be integers in [0, {len(f)})")
+    mask = np.zeros(len(f), dtype=bool)
+    mask[c] = True
+    covered = np.bincount(surface.component_labels[mask], minlength=surface.n_components) > 0
+    if not covered.all():
+        raise InputError(f"{int((~covered).sum())} connected components of {surface.name} have no "
+                         "constrained vertex; their interpolant is undefined")
+    return EnvelopeSolver(surface, backend).solve(f, mask, start, extrema_spacing(surface, mask.sum()))

@@ -1,0 +1,126 @@
+"""The settings of EMD and ensemble EMD, checked once, with their presets.
+
+:class:`EMDOptions` holds every setting of :func:`~hht3d.decomposition.emd`
+and :class:`EnsembleOptions` those of the noise ensemble of
+:func:`~hht3d.decomposition.eemd`.  Each field declares its range and a
+one-line description (:func:`hht3d.records.option`); the pipeline's
+parameters, ``hht3d ops`` and the JSON Schema are read from them.  Presets
+are instances: vary them with :func:`dataclasses.replace` or by passing
+overrides to the function.
+
+Examples
+--------
+>>> import dataclasses
+>>> from hht3d.decomposition.options import EMDOptions, PAPER_OPTIONS
+>>> EMDOptions().sd_threshold
+0.2
+>>> EMDOptions(envelope="biharmonic").tensions
+(0.0, 3.0, 12.0, 48.0, inf)
+>>> dataclasses.replace(PAPER_OPTIONS, max_imfs=3).envelope
+'biharmonic'
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..records import Record, option
+
+__all__ = ["EMDOptions", "EnsembleOptions", "EMD_DEFAULTS", "ENSEMBLE_DEFAULTS", "PAPER_OPTIONS",
+           "STOPPING_RULES", "ENVELOPES", "EXTREMA_RULES", "GUARD_TENSIONS", "start_tension"]
+
+#: Sifting stopping rules.
+STOPPING_RULES = ("sd", "rfg", "s_number", "fixed")
+#: Envelope interpolants: thin plate in tension (default), the paper's thin plate (Eq. 11), membrane.
+ENVELOPES = ("tension", "biharmonic", "harmonic")
+#: Extremum rules: all of the ring (``strict``) or a fraction ``ratio`` of it (``ring``, Sec. 5.2).
+EXTREMA_RULES = ("strict", "ring")
+#: Tensions the cancellation guard tries, in order, above the starting one; then the harmonic envelope.
+GUARD_TENSIONS = (3.0, 12.0, 48.0)
+
+# Upper bounds lie far above useful values; they stop a typo from hanging a run.
+#: IMFs: more than log2 of the vertex count of any mesh that fits in memory.
+MAX_IMFS = 64
+#: Sifts per IMF (each solves one envelope system per extremum kind).
+MAX_SIFTS = 1000
+#: Envelope tension (scale-free; the cancellation guard stops at 48, then goes harmonic).
+MAX_TENSION = 1000
+#: Neighbourhood rings of extrema.
+MAX_RING = 16
+#: EEMD members (Wu & Huang 2009 use 100); one graph task each.
+MAX_ENSEMBLE = 1000
+#: Random seeds (numpy's SeedSequence takes any non-negative integer; YAML and JSON need a bound).
+MAX_SEED = 2**32 - 1
+
+
+def start_tension(envelope: str, tension: float) -> float:
+    """The tension ``τ`` an envelope starts from: ``tension``, 0 (thin plate) or ``inf`` (membrane)."""
+    return {"tension": float(tension), "biharmonic": 0.0, "harmonic": math.inf}[envelope]
+
+
+@dataclass(frozen=True)
+class EMDOptions(Record):
+    """The settings of :func:`~hht3d.decomposition.emd` (Sec. 4.1), checked on creation.
+
+    Frozen, so that one value describes one decomposition (it is recorded in
+    ``EMDResult.info["options"]``).  The sparse-solver ``backend`` is not a
+    setting of the method and is passed apart.  The meaning of each field is
+    documented at :func:`~hht3d.decomposition.emd`.
+
+    Raises
+    ------
+    InputError
+        An unknown choice, a value out of range, a non-integer count.
+    """
+
+    label = "EMD"
+
+    max_imfs: int = option(10, "at most this many IMFs", minimum=0, maximum=MAX_IMFS)
+    stopping: str = option("sd", "sifting stop rule", choices=STOPPING_RULES)
+    sd_threshold: float = option(0.2, "SD stopping threshold", minimum=0, maximum=10)
+    s_number: int = option(4, "S-number: unchanged extrema counts in a row", minimum=1, maximum=100)
+    fixed_sifts: int = option(10, "sifts per IMF with stopping: fixed", minimum=1, maximum=MAX_SIFTS)
+    max_sifts: int = option(50, "cap on sifts per IMF", minimum=1, maximum=MAX_SIFTS)
+    envelope: str = option("tension", "envelope interpolant: thin plate in tension, the paper's thin plate "
+                           "(Eqs. 8, 11) or membrane", choices=ENVELOPES)
+    tension: float = option(3.0, "tension of the envelope, relative to the extrema spacing", minimum=0,
+                            maximum=MAX_TENSION)
+    cancellation_tolerance: float | None = option(
+        0.05, "largest energy increase one IMF may cause before more tension is tried (null: no guard)",
+        minimum=0, maximum=1, nullable=True)
+    mean_correction: float | None = option(
+        0.6, "move each IMF's part slower than this many of its wavelengths to the residue (null: off)",
+        minimum=0, maximum=10, nullable=True)
+    extrema: str = option("strict", "extremum rule: 1-ring, or ratio of the ring-ring", choices=EXTREMA_RULES)
+    ring: int = option(2, "neighbourhood of extrema: ring", minimum=1, maximum=MAX_RING)
+    ratio: float = option(0.8, "fraction of extrema: ring", minimum=0.5, maximum=1, open_minimum=True)
+    energy_threshold: float = option(1e-8, "stop when the residue keeps less of the energy", minimum=0,
+                                     maximum=1)
+
+    @property
+    def tensions(self) -> tuple[float, ...]:
+        """The starting tension, then those the cancellation guard may try (:mod:`.sifting`)."""
+        start = start_tension(self.envelope, self.tension)
+        if self.cancellation_tolerance is None:
+            return (start,)
+        return (start, *(t for t in GUARD_TENSIONS if t > start), *((math.inf,) if start < math.inf else ()))
+
+
+@dataclass(frozen=True)
+class EnsembleOptions(Record):
+    """The noise ensemble of :func:`~hht3d.decomposition.eemd` (Wu & Huang 2009)."""
+
+    label = "EEMD"
+
+    ensemble_size: int = option(100, "EEMD members", minimum=1, maximum=MAX_ENSEMBLE)
+    noise_std: float = option(0.2, "EEMD noise, relative to the signal's standard deviation", minimum=0,
+                              maximum=10)
+    seed: int = option(0, "EEMD noise seed", minimum=0, maximum=MAX_SEED)
+
+
+#: The defaults of :func:`~hht3d.decomposition.emd`.
+EMD_DEFAULTS = EMDOptions()
+#: The defaults of :func:`~hht3d.decomposition.eemd`'s ensemble.
+ENSEMBLE_DEFAULTS = EnsembleOptions()
+#: The paper's EMD (Sec. 4.1): thin-plate envelopes, no cancellation guard, no local-mean correction.
+PAPER_OPTIONS = EMDOptions(envelope="biharmonic", cancellation_tolerance=None, mean_correction=None)

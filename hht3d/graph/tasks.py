@@ -1,0 +1,193 @@
+"""How the lazy graph makes its tasks: one key per surface, operators resident on each worker.
+
+A :class:`Builder` turns core functions into ``dask.delayed`` tasks.  In-memory
+surfaces and arrays enter a graph once, as one key each (:func:`as_key`), and
+are shared by reference between the tasks that use them.
+
+Worker-side caching
+-------------------
+A task receives a fresh copy of a surface whenever the scheduler pickles it
+(process pools, transfers between workers), and pickling drops the cached
+operators.  Every task therefore passes its surfaces through
+:func:`resident`: tasks on the same geometry in one process share one cache,
+so a worker builds ``L``, ``M``, the gradient, the spectral bounds and the
+symbolic analysis of the shifted systems once for all the tasks it runs on
+that surface.
+"""
+from __future__ import annotations
+
+import contextlib
+import functools
+import threading
+from collections import OrderedDict
+
+import numpy as np
+from dask import delayed
+from dask.base import tokenize
+
+from ..geometry.surface import Surface
+from ..geometry.validation import check_int
+from ..linalg.backends import default_backend
+from ..spectral.options import RIESZ_DEFAULTS, RieszOptions
+from ..spectral.quadrature import combine_quadrature_parts, quadrature_part, quadrature_plan
+from ..spectral.riesz_transform import fractional_laplacian
+from ..spectral.shifts import shift_analysis
+from .scheduling import worker_count
+
+__all__ = ["Builder", "resident", "as_key", "from_surface", "riesz_potential", "RESIDENT_SURFACES",
+           "ARRAY_KEY_SIZE"]
+
+#: Arrays with more entries than this enter a graph as a key of their own (shared by reference);
+#: smaller ones are copied into each task, where a key would cost more than the copy.
+ARRAY_KEY_SIZE = 64
+
+
+class Builder:
+    """Makes the tasks of a graph.
+
+    Parameters
+    ----------
+    guard : callable, optional
+        ``guard(step, func) -> callable`` wrapping every task's function; the
+        dataset runner uses it to isolate failures per file
+        (:class:`hht3d.graph.dataset.Failure`).  Default: tasks raise normally.
+    riesz_tasks : int, optional
+        Shift-group tasks of the Riesz quadrature (:func:`riesz_potential`).
+    """
+
+    def __init__(self, guard=None, riesz_tasks: int | None = None):
+        self.guard = guard
+        self.riesz_tasks = riesz_tasks
+
+    def task(self, step: str, func):
+        """A ``dask.delayed`` of ``func`` named after ``step``.
+
+        In-memory surfaces and arrays among its arguments enter the graph once,
+        as their own keys (:func:`as_key`), instead of being copied into every task.
+        """
+        func = _OnWorker(func)
+        wrapped = delayed(func if self.guard is None else self.guard(step, func), pure=True)
+
+        def call(*args, **kwargs):
+            return wrapped(*map(as_key, args), **{k: as_key(v) for k, v in kwargs.items()})
+
+        return call
+
+    def potential(self, surface, imfs, riesz: RieszOptions, backend: str | None):
+        """``L^{-1/2}`` of the IMFs as :func:`riesz_potential`'s tasks (the ``Stages`` of
+        :func:`hht3d.transform.hht_stages`)."""
+        return riesz_potential(surface, imfs, method=riesz.method, tol=riesz.tol, eigenpairs=riesz.eigenpairs,
+                               backend=backend, riesz_tasks=self.riesz_tasks, builder=self)
+
+
+#: Geometries whose caches a process keeps across tasks (the least recently used is dropped).
+RESIDENT_SURFACES = 2
+_RESIDENT: OrderedDict = OrderedDict()
+_RESIDENT_LOCK = threading.Lock()
+
+
+def resident(surface: Surface) -> Surface:
+    """``surface``, sharing this process's cache for its geometry (operators, bounds, analyses).
+
+    The cache is keyed by the vertices, faces, Laplacian options and given
+    normals; the :data:`RESIDENT_SURFACES` most recently used ones are kept.
+    Returns the same object, whose ``cache`` is now the shared one.
+    """
+    key = tokenize(surface.vertices, surface.faces, surface.laplacian, surface.n_neighbors,
+                   surface.cache.get("normals"))
+    with _RESIDENT_LOCK:
+        cache = _RESIDENT.pop(key, surface.cache)
+        for name, value in surface.cache.items():
+            cache.setdefault(name, value)
+        _RESIDENT[key] = cache
+        while len(_RESIDENT) > RESIDENT_SURFACES:
+            _RESIDENT.popitem(last=False)
+    surface.cache = cache
+    return surface
+
+
+class _OnWorker:
+    """A task function that receives its surfaces through :func:`resident`."""
+
+    def __init__(self, func):
+        self.func = func
+        functools.update_wrapper(self, func)
+
+    def __call__(self, *args, **kwargs):
+        def local(value):
+            return resident(value) if isinstance(value, Surface) else value
+
+        return self.func(*map(local, args), **{k: local(v) for k, v in kwargs.items()})
+
+    def __dask_tokenize__(self):
+        return "hht3d.graph.tasks._OnWorker", tokenize(self.func)
+
+
+class _SharedAnalysis:
+    """A surface's shift analysis (:func:`hht3d.spectral.riesz_transform.shift_analysis`), one task at a time.
+
+    PARDISO and CHOLMOD keep one numeric factor per analysis, so tasks sharing
+    it in one process (threads) take turns.
+    """
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._symbolic = None
+
+    @classmethod
+    @contextlib.contextmanager
+    def of(cls, surface: Surface, backend: str | None):
+        backend = default_backend() if backend is None else backend
+        with _RESIDENT_LOCK:
+            shared = surface.cache.setdefault(f"graph:shift_analysis:{backend}", cls())
+        with shared._lock:
+            if shared._symbolic is None:
+                shared._symbolic = shift_analysis(surface, backend)
+            yield shared._symbolic
+
+
+def _quadrature_plan(surface: Surface, tol: float, backend: str | None):
+    """:func:`hht3d.spectral.riesz_transform.quadrature_plan` with this process's shared shift analysis."""
+    with _SharedAnalysis.of(surface, backend) as symbolic:
+        return quadrature_plan(surface, tol, symbolic=symbolic)
+
+
+def _quadrature_part(surface: Surface, f, plan, group: int, groups: int, backend: str | None):
+    """:func:`hht3d.spectral.riesz_transform.quadrature_part` with this process's shared shift analysis."""
+    with _SharedAnalysis.of(surface, backend) as symbolic:
+        return quadrature_part(surface, f, plan, group, groups, symbolic=symbolic)
+
+
+def from_surface(surface: Surface):
+    """Put an in-memory surface into the graph once, as a single key."""
+    return delayed(surface, name=f"surface-{surface.name}-{id(surface):x}")
+
+
+def as_key(value):
+    """A surface or array as one graph key (Delayed objects and small values pass through)."""
+    if isinstance(value, Surface):
+        return from_surface(value)
+    if isinstance(value, np.ndarray) and value.size > ARRAY_KEY_SIZE:
+        return delayed(value, name=f"array-{tokenize(value)}")
+    return value
+
+
+def riesz_potential(surface, imfs, *, method: str = RIESZ_DEFAULTS.method, tol: float = RIESZ_DEFAULTS.tol,
+                    eigenpairs: int = RIESZ_DEFAULTS.eigenpairs, backend: str | None = None,
+                    riesz_tasks: int | None = None, builder: Builder | None = None):
+    """Lazy ``L^{-1/2}`` of all IMFs, ``(k, n)``.
+
+    ``method="quadrature"``: a bounds task, ``riesz_tasks`` shift-group tasks
+    (:func:`hht3d.spectral.riesz_transform.quadrature_part`; default one per worker of the
+    scheduler, :func:`hht3d.graph.scheduling.worker_count`) and a summing task.
+    Other methods: one task (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`).
+    """
+    builder = Builder() if builder is None else builder
+    if method != "quadrature":
+        return builder.task("riesz", fractional_laplacian)(
+            surface, imfs, -0.5, method, tol, eigenpairs, backend)
+    riesz_tasks = worker_count() if riesz_tasks is None else check_int("riesz_tasks", riesz_tasks, 1)
+    plan = builder.task("riesz_bounds", _quadrature_plan)(surface, tol, backend)
+    part = builder.task("riesz_shifts", _quadrature_part)
+    parts = [part(surface, imfs, plan, group, riesz_tasks, backend) for group in range(riesz_tasks)]
+    return builder.task("riesz_sum", combine_quadrature_parts)(surface, parts)

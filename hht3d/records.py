@@ -1,0 +1,181 @@
+"""Frozen, validated option records: each setting's type, range and description written once.
+
+The settings of a method (:class:`~hht3d.decomposition.options.EMDOptions`,
+:class:`~hht3d.decomposition.options.EnsembleOptions`,
+:class:`~hht3d.spectral.options.RieszOptions`) are frozen dataclasses whose
+fields are declared with :func:`option`.  The record checks every field when
+it is made, presets are instances varied with :func:`dataclasses.replace`,
+and the functions that take a record also take a dict (:meth:`Record.of`).
+The pipeline's parameters, ``hht3d ops`` and the JSON Schema read the same
+declarations (:meth:`Record.specs`), so a range or a description is never
+written twice.
+
+Examples
+--------
+>>> from dataclasses import dataclass
+>>> from hht3d.records import Record, option
+>>> @dataclass(frozen=True)
+... class Smoothing(Record):
+...     label = "smoothing"
+...     steps: int = option(3, "diffusion steps", minimum=1, maximum=100)
+...     method: str = option("heat", "kernel", choices=("heat", "mean"))
+>>> Smoothing.of({"steps": 5}).steps
+5
+>>> Smoothing.of(steps=0)
+Traceback (most recent call last):
+...
+hht3d.errors.InputError: smoothing option steps must be an integer in [1, 100]; got 0
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+from dataclasses import dataclass
+from typing import ClassVar
+
+from .errors import InputError, did_you_mean, shown
+
+__all__ = ["Spec", "Record", "option"]
+
+#: Kinds of settings.
+KINDS = ("int", "float", "bool", "str", "choice")
+
+
+@dataclass(frozen=True)
+class Spec:
+    """One setting's type, allowed values and one-line description.
+
+    ``kind`` is one of :data:`KINDS`; ``choices`` the values of a
+    ``"choice"``; ``minimum``/``maximum`` the range of numbers, open at an
+    end when ``open_minimum``/``open_maximum``; ``nullable`` allows ``None``.
+    """
+
+    doc: str
+    kind: str
+    choices: tuple = ()
+    minimum: float | None = None
+    maximum: float | None = None
+    open_minimum: bool = False
+    open_maximum: bool = False
+    nullable: bool = False
+
+    def range_text(self) -> str:
+        """The range, e.g. ``" in (0.5, 1]"``, ``" >= 0"`` or ``""``."""
+        lo, hi = (None if x is None else f"{x:d}" if isinstance(x, int) else f"{x:g}"
+                  for x in (self.minimum, self.maximum))
+        if lo is not None and hi is not None:
+            return f" in {'(' if self.open_minimum else '['}{lo}, {hi}{')' if self.open_maximum else ']'}"
+        if lo is not None:
+            return f" {'>' if self.open_minimum else '>='} {lo}"
+        if hi is not None:
+            return f" {'<' if self.open_maximum else '<='} {hi}"
+        return ""
+
+    def expected(self) -> str:
+        """What a valid value is, in words: ``an integer in [1, 100]``, ``one of sd, rfg``."""
+        if self.kind == "choice":
+            text = "one of " + ", ".join(map(str, self.choices))
+        else:
+            text = {"int": "an integer", "float": "a number", "bool": "true or false",
+                    "str": "a string"}[self.kind] + self.range_text()
+        return text + (" or None" if self.nullable else "")
+
+    def accepts(self, value) -> bool:
+        """Whether ``value`` is a valid setting."""
+        if value is None:
+            return self.nullable
+        if self.kind == "choice":
+            return isinstance(value, str) and value in self.choices
+        if self.kind == "bool":
+            return isinstance(value, bool)
+        if self.kind == "str":
+            return isinstance(value, str)
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            return False
+        if self.kind == "int" and not isinstance(value, numbers.Integral):
+            return False
+        return math.isfinite(value) and self.in_range(value)
+
+    def in_range(self, x) -> bool:
+        lo, hi = self.minimum, self.maximum
+        return ((lo is None or (x > lo if self.open_minimum else x >= lo))
+                and (hi is None or (x < hi if self.open_maximum else x <= hi)))
+
+
+def option(default, doc: str, *, choices: tuple = (), kind: str | None = None, minimum: float | None = None,
+           maximum: float | None = None, open_minimum: bool = False, open_maximum: bool = False,
+           nullable: bool = False):
+    """A dataclass field of a :class:`Record` with its :class:`Spec`.
+
+    The kind follows from ``choices`` or the default's type unless given;
+    a default of ``None`` makes the setting nullable.
+    """
+    if kind is None:
+        kind = ("choice" if choices else "bool" if isinstance(default, bool)
+                else "int" if isinstance(default, int) else "float" if isinstance(default, float) else "str")
+    spec = Spec(doc, kind, tuple(choices), minimum, maximum, open_minimum, open_maximum,
+                nullable or default is None)
+    return dataclasses.field(default=default, metadata={"spec": spec})
+
+
+class Record:
+    """Base of the option records: checks every field on creation; :meth:`of` takes a record or a dict."""
+
+    #: How messages name the record's settings ("EMD option max_imfs ...").
+    label: ClassVar[str] = "option"
+
+    def __post_init__(self):
+        for name, spec in self.specs().items():
+            value = getattr(self, name)
+            if not spec.accepts(value):
+                raise InputError(f"{self.label} option {name} must be {spec.expected()}; got {shown(value)}")
+            if spec.kind == "float" and value is not None:
+                object.__setattr__(self, name, float(value))
+            if spec.kind == "int" and value is not None:
+                object.__setattr__(self, name, int(value))
+
+    @classmethod
+    def specs(cls) -> dict[str, Spec]:
+        """Every setting's :class:`Spec`, in field order."""
+        return {f.name: f.metadata["spec"] for f in dataclasses.fields(cls)}
+
+    @classmethod
+    def defaults(cls) -> dict:
+        """Every setting's default."""
+        return {f.name: f.default for f in dataclasses.fields(cls)}
+
+    @classmethod
+    def of(cls, value=None, /, **overrides):
+        """A record from ``None`` (the defaults), a record or a dict, with ``overrides`` applied.
+
+        Raises
+        ------
+        InputError
+            An unknown setting (with the closest known name) or an invalid value.
+        """
+        if isinstance(value, cls):
+            settings = {}
+        elif value is None:
+            settings = {}
+        elif isinstance(value, dict):
+            settings = dict(value)
+        else:
+            raise InputError(f"{cls.label} options must be a {cls.__name__} or a dict; got {shown(value)}")
+        settings.update(overrides)
+        cls.check_names(settings)
+        return dataclasses.replace(value, **settings) if isinstance(value, cls) else cls(**settings)
+
+    @classmethod
+    def check_names(cls, settings) -> None:
+        """Raise :class:`InputError` for a name that is not a setting of this record."""
+        known = tuple(cls.specs())
+        for key in settings:
+            if key not in known:
+                raise InputError(f"unknown {cls.label} option {shown(key)}"
+                                 f"{did_you_mean(str(key), known, listing=False)}; "
+                                 f"{cls.label} options are {', '.join(known)}")
+
+    def as_dict(self) -> dict:
+        """The settings by name."""
+        return {name: getattr(self, name) for name in self.specs()}
