@@ -55,7 +55,7 @@ OPEN3D_TIMEOUT = 300
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from hht3d.viz import figures, render  # noqa: E402
+from hht3d.viz import figures, panels, render  # noqa: E402
 from hht3d.transform import HHTResult  # noqa: E402
 from hht3d.io.read import load  # noqa: E402
 from hht3d.spectral.monogenic_signal import MonogenicSignal  # noqa: E402
@@ -107,8 +107,8 @@ def time_figures(surface: Surface, repeat: int) -> dict:
     SCRATCH.mkdir(parents=True, exist_ok=True)
     hht_path = SCRATCH / f"render_{surface.name}_hht.png"
     spectrum_path = SCRATCH / f"render_{surface.name}_spectrum.png"
-    composite = best_of(repeat, lambda: figures.save_figure(figures.hht_figure(result), hht_path))
-    spectrum = best_of(repeat, lambda: figures.save_figure(figures.spectrum_figure(result), spectrum_path))
+    composite = best_of(repeat, lambda: panels.save_figure(figures.hht_figure(result), hht_path))
+    spectrum = best_of(repeat, lambda: panels.save_figure(figures.spectrum_figure(result), spectrum_path))
     return {"composite_s": composite, "spectrum_s": spectrum, "composite_png": str(hht_path.relative_to(ROOT)),
             "spectrum_png": str(spectrum_path.relative_to(ROOT))}
 

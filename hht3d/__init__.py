@@ -25,11 +25,11 @@ from .geometry import Surface
 from .io.read import data_path, load
 from .spectral import HilbertSpectrum, MonogenicSignal, fractional_laplacian, monogenic, riesz
 from .transform import HHTResult, hht
+from .version import __version__
 
-__version__ = "0.1.0"
 
 __all__ = [
     "EMDResult", "HHTResult", "HilbertSpectrum", "MonogenicSignal", "Surface",
     "HHT3DError", "InputError", "NumericalError", "PipelineError",
-    "data_path", "eemd", "emd", "fractional_laplacian", "hht", "load", "monogenic", "riesz",
+    "__version__", "data_path", "eemd", "emd", "fractional_laplacian", "hht", "load", "monogenic", "riesz",
 ]

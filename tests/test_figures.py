@@ -118,7 +118,7 @@ def test_composite_default_height_fits_the_model(result):
 
 
 def test_point_cloud_result(cloud_result, tmp_path):
-    from hht3d.viz.figures import render_png
+    from hht3d.viz.panels import render_png
 
     paths = figures.write_figures(cloud_result, tmp_path, stem="pc", hht_size=(700, 420), field_size=(400, 360))
     assert pixels(paths["hht"]).shape[:2] == (420, 700)

@@ -14,8 +14,7 @@ import pytest
 from scipy.special import lpmv
 
 from hht3d.errors import InputError
-from hht3d.spectral.frequency import (FREQUENCY_METHODS, instantaneous_frequency, resolution_report,
-                             resolvable_frequency)
+from hht3d.spectral import FREQUENCY_METHODS, instantaneous_frequency, resolution_report, resolvable_frequency
 from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
 from hht3d.spectral import fractional_laplacian
 from hht3d.geometry.surface import Surface

@@ -15,7 +15,6 @@ which is small in practice for sparse factors).
 """
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
 
 import numpy as np

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from conftest import assert_red_blue_swapped
-from hht3d.viz import figures
+from hht3d.viz import panels
 from hht3d.viz import render as R
 from hht3d.errors import InputError
 from hht3d.geometry.surface import Surface
@@ -115,7 +115,7 @@ def test_render_png_has_the_requested_size(sphere, tmp_path):
     from PIL import Image
 
     pyplot_loaded = "matplotlib.pyplot" in sys.modules
-    path = figures.render_png(tmp_path / "x.png", sphere, sphere.vertices[:, 0], title="x", label="x (m)",
+    path = panels.render_png(tmp_path / "x.png", sphere, sphere.vertices[:, 0], title="x", label="x (m)",
                         size=(420, 300), dpi=90)
     with Image.open(path) as image:
         assert image.size == (420, 300)
@@ -126,9 +126,9 @@ def test_render_png_has_the_requested_size(sphere, tmp_path):
     # the PNG shows the field: with −x (same symmetric limits, so the same title and colour bar)
     # only the model's pixels change, red and blue swap there, and red lies right of blue (the
     # front view looks down −z with y up, so x grows to the right)
-    other = figures.render_png(tmp_path / "y.png", sphere, -sphere.vertices[:, 0], title="x", label="x (m)",
+    other = panels.render_png(tmp_path / "y.png", sphere, -sphere.vertices[:, 0], title="x", label="x (m)",
                          size=(420, 300), dpi=90, limits=(-1, 1), cmap="RdBu_r")
-    path = figures.render_png(tmp_path / "x.png", sphere, sphere.vertices[:, 0], title="x", label="x (m)",
+    path = panels.render_png(tmp_path / "x.png", sphere, sphere.vertices[:, 0], title="x", label="x (m)",
                         size=(420, 300), dpi=90, limits=(-1, 1), cmap="RdBu_r")
     with Image.open(path) as image, Image.open(other) as flipped:
         a, b = (np.asarray(i.convert("RGB"), dtype=float) for i in (image, flipped))
@@ -151,7 +151,7 @@ def test_render_png_has_the_requested_size(sphere, tmp_path):
     (lambda s: R.render(s, size=(10.5, 10)), "size"),
     (lambda s: R.render(s, backend="povray"), "unknown render backend"),
     (lambda s: R.render(s, supersample=9), "supersample"),
-    (lambda s: figures.render_png("x.jpg", s), "PNG"),
+    (lambda s: panels.render_png("x.jpg", s), "PNG"),
 ])
 def test_bad_parameters_raise_input_error(sphere, call, message):
     with pytest.raises(InputError, match=message):
@@ -163,7 +163,7 @@ import sys
 import numpy as np
 sys.path.insert(0, {tests!r})
 from conftest import assert_red_blue_swapped
-from hht3d.viz import figures
+from hht3d.viz import figures, panels
 from hht3d.viz import render as R
 from hht3d.errors import InputError
 from hht3d.geometry.surface import Surface

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from hht3d.errors import InputError
-from hht3d.spectral.frequency import resolvable_frequency
+from hht3d.spectral import resolvable_frequency
 from hht3d.spectral.monogenic_signal import MonogenicSignal, monogenic
 from hht3d.spectral.spectrum import HilbertSpectrum
 from hht3d.geometry.surface import Surface

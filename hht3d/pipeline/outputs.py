@@ -109,7 +109,7 @@ def _hht_colored(result, surface, path, *, field, cmap):
 
 def _hht_png(result, surface, path, *, figure, field, signal_name, view, up):
     from ..viz.figures import hht_figure, spectrum_figure
-    from ..viz.figures import field_figure, save_figure
+    from ..viz.panels import field_figure, save_figure
 
     if figure == "hht":
         fig = hht_figure(result, view=view, up=up, signal_name=signal_name)
@@ -143,7 +143,7 @@ def _signal_colored(values, surface, path, *, cmap):
 
 
 def _signal_png(values, surface, path, *, view, up, cmap, title):
-    from ..viz.figures import render_png
+    from ..viz.panels import render_png
 
     return render_png(path, surface, values, view=view, up=up, cmap=cmap, title=title or f"{surface.name}: signal")
 
@@ -153,7 +153,7 @@ def _surface_ply(surface, _, path):
 
 
 def _surface_png(surface, _, path, *, view, up, title):
-    from ..viz.figures import render_png
+    from ..viz.panels import render_png
 
     return render_png(path, surface, None, view=view, up=up, title=title)
 

@@ -6,7 +6,8 @@ Data flow: :mod:`.shifts` and :mod:`.eigenpairs` → :mod:`.quadrature` →
 :mod:`.spectrum`, with the settings in :mod:`.options`.
 """
 from .eigenpairs import DENSE_MAX_VERTICES, dense_eigenpairs, smallest_eigenpairs, spectral_bounds
-from .frequency import instantaneous_frequency, resolution_report, resolvable_frequency
+from .frequency import instantaneous_frequency
+from .resolution import resolution_report, resolvable_frequency
 from .monogenic_signal import MonogenicSignal, monogenic, monogenic_from_potential
 from .options import FREQUENCY_METHODS, GRADIENTS, METHODS, RIESZ_DEFAULTS, RieszOptions
 from .quadrature import QuadraturePlan, combine_quadrature_parts, quadrature_nodes, quadrature_part, quadrature_plan

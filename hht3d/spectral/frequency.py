@@ -60,7 +60,7 @@ Estimators (``method``)
 Resolution limit
 ----------------
 A vertex carrying area ``A_v`` (the lumped mass) resolves wavenumbers up to
-``π/√A_v`` (:func:`resolvable_frequency`): the Nyquist wavenumber of a square
+``π/√A_v`` (:func:`hht3d.spectral.resolution.resolvable_frequency`): the Nyquist wavenumber of a square
 lattice with one sample per ``A_v``, i.e. ``π/h`` on a grid of spacing ``h``
 (about 7 % below the isotropic limit of an equilateral triangulation).
 Frequencies above it are reported (:func:`resolution_report`), never clipped.
@@ -78,10 +78,9 @@ from ..errors import InputError
 from .options import FREQUENCY_METHODS, RIESZ_DEFAULTS
 from .riesz_transform import vertex_gradient
 from ..geometry.surface import Surface
-from ..geometry.validation import check_choice, check_surface
+from ..geometry.validation import check_choice
 
-__all__ = ["FREQUENCY_METHODS", "instantaneous_frequency", "resolvable_frequency", "resolvable_from_area",
-           "ResolutionReport", "resolution_report"]
+__all__ = ["FREQUENCY_METHODS", "instantaneous_frequency"]
 
 #: ``|Rf|`` below this fraction of its maximum (per signal) is round-off: a zero of ``Rf``.
 _ZERO_RTOL = 1e-10
@@ -331,94 +330,3 @@ def _riesz_response(st: _Stencil, grad: np.ndarray, energy: np.ndarray) -> np.nd
     laplacian_ratio = np.sqrt(np.divide(dispersion, long_wave, out=np.ones(st.n),
                                         where=(long_wave > 0) & (dispersion > 0)))
     return np.clip(gradient_ratio / laplacian_ratio, _MIN_RESPONSE, 1 / _MIN_RESPONSE)
-
-
-# -- the resolution limit -------------------------------------------------------------------------
-
-def resolvable_frequency(surface: Surface) -> np.ndarray:
-    """Highest frequency each vertex can resolve, ``π/√A_v`` (n,), radians per unit length.
-
-    ``A_v`` is the vertex area (lumped mass, :attr:`Surface.mass_diagonal`):
-    the Nyquist wavenumber of a square lattice with one sample per ``A_v``
-    (``π/h`` on a grid of spacing ``h``).  A pattern whose wavelength is
-    shorter than about two sample spacings aliases: its frequency cannot be
-    read from the samples.
-    """
-    check_surface(surface)
-    return resolvable_from_area(surface.mass_diagonal)
-
-
-def resolvable_from_area(area) -> np.ndarray:
-    """``π/√A_v`` for vertex areas ``A_v`` (:func:`resolvable_frequency` without the surface)."""
-    return np.pi / np.sqrt(np.asarray(area, dtype=np.float64))
-
-
-@dataclass(frozen=True)
-class ResolutionReport:
-    """Instantaneous frequencies above the resolution limit (:func:`resolution_report`).
-
-    Attributes
-    ----------
-    limit : float
-        Median per-vertex resolvable frequency ``π/√A_v`` of the surface.
-    pairs : int
-        Vertex–signal pairs whose frequency exceeds their vertex's limit.
-    fraction : float
-        ``pairs`` over all vertex–signal pairs.
-    per_signal : (k,) ndarray
-        That fraction per signal (IMF).
-    energy_share : float
-        Share of the weighted energy (``a² A_v``) carried by those pairs;
-        ``nan`` without weights or energy.
-    """
-
-    limit: float
-    pairs: int
-    fraction: float
-    per_signal: np.ndarray
-    energy_share: float
-
-    @property
-    def ok(self) -> bool:
-        """True when every frequency is within its vertex's limit."""
-        return self.pairs == 0
-
-    def summary(self) -> str:
-        """One line, e.g. for a log or a figure."""
-        if self.ok:
-            return f"all frequencies within the resolution limit (median π/√A = {self.limit:.4g})"
-        share = "" if np.isnan(self.energy_share) else f", {100 * self.energy_share:.2g}% of the energy"
-        return (f"{self.pairs} vertex–IMF pairs ({100 * self.fraction:.2g}%{share}) above the resolution "
-                f"limit (median π/√A = {self.limit:.4g}): their frequencies are aliased")
-
-
-def resolution_report(frequency, resolvable, weights=None) -> ResolutionReport:
-    """Which instantaneous frequencies exceed the resolution limit of their vertex.
-
-    Parameters
-    ----------
-    frequency : (k, n) array_like
-        Instantaneous frequencies.
-    resolvable : (n,) array_like
-        Per-vertex limits (:func:`resolvable_frequency`).
-    weights : (k, n) array_like, optional
-        E.g. ``a² A_v``, for :attr:`ResolutionReport.energy_share`.
-
-    Returns
-    -------
-    ResolutionReport
-    """
-    frequency = np.atleast_2d(np.asarray(frequency, dtype=np.float64))
-    resolvable = np.asarray(resolvable, dtype=np.float64)
-    if resolvable.shape != frequency.shape[1:]:
-        raise InputError(f"resolvable has shape {resolvable.shape}; expected ({frequency.shape[1]},)")
-    above = frequency > resolvable
-    share = np.nan
-    if weights is not None:
-        weights = np.broadcast_to(np.asarray(weights, dtype=np.float64), frequency.shape)
-        total = weights.sum()
-        share = float(weights[above].sum() / total) if total > 0 else np.nan
-    per_signal = above.mean(axis=1) if above.shape[1] else np.zeros(len(above))
-    return ResolutionReport(limit=float(np.median(resolvable)) if resolvable.size else np.nan,
-                            pairs=int(above.sum()), fraction=float(above.mean()) if above.size else 0.0,
-                            per_signal=per_signal, energy_share=share)

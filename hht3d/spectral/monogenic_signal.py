@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from .frequency import ResolutionReport, instantaneous_frequency, resolution_report, resolvable_from_area
+from .frequency import instantaneous_frequency
+from .resolution import ResolutionReport, resolution_report, resolvable_from_area
 from .options import FREQUENCY_METHODS, GRADIENTS, RIESZ_DEFAULTS, RieszOptions
 from .riesz_transform import fractional_laplacian, vertex_gradient
 from ..geometry.surface import Surface
@@ -71,7 +72,7 @@ class MonogenicSignal:
 
     @property
     def resolvable(self) -> np.ndarray:
-        """Per-vertex resolution limit ``π/√A_v`` (:func:`hht3d.spectral.frequency.resolvable_from_area`)."""
+        """Per-vertex resolution limit ``π/√A_v`` (:func:`hht3d.spectral.resolution.resolvable_from_area`)."""
         return resolvable_from_area(self._area())
 
     def _area(self) -> np.ndarray:

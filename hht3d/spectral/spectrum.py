@@ -13,7 +13,7 @@ Frequencies are Eq. 23 as :mod:`hht3d.spectral.frequency` estimates it (the
 wavenumber for waves varying in one direction, less for patterns varying in
 two: 0.77 of it for an isotropic random wave, energy-weighted).  A
 vertex resolves frequencies up to ``π/√A_v``
-(:func:`hht3d.spectral.frequency.resolvable_frequency`); the spectrum keeps these
+(:func:`hht3d.spectral.resolution.resolvable_frequency`); the spectrum keeps these
 limits, and :attr:`HilbertSpectrum.resolution` counts the vertex–IMF pairs
 above them (their frequencies are aliased).
 """
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from .frequency import ResolutionReport, resolution_report, resolvable_from_area
+from .resolution import ResolutionReport, resolution_report, resolvable_from_area
 from .monogenic_signal import MonogenicSignal
 from ..geometry.surface import Surface
 
@@ -48,7 +48,7 @@ class HilbertSpectrum:
         Vertex areas (the lumped mass) used to integrate over the surface.
     resolvable : (n,) ndarray, optional
         Per-vertex resolution limit; default ``π/√A_v`` from ``area``
-        (:func:`hht3d.spectral.frequency.resolvable_from_area`).
+        (:func:`hht3d.spectral.resolution.resolvable_from_area`).
     """
 
     frequency: np.ndarray

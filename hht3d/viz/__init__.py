@@ -1,5 +1,14 @@
-"""Figures, rendering and the interactive HTML viewer."""
-from .figures import (IMF_CMAP, FREQUENCY_CMAP, AMPLITUDE_CMAP, font_points, draw_colorbar, draw_image,
-                      field_figure, save_figure, render_png, hht_figure, spectrum_figure, write_figures)
-from .viewer import (VERTEX_BUDGET, CLUSTER_ABOVE, PAGE_BUDGETS, PERCENTILES, SHAPE, Shown, shown_copy,
-                     color_limits, write_page, result_html, surfaces_html, read_fields, file_html)
+"""Presentation: rendered figures (PNG) and the interactive HTML viewer.
+
+Data flow: :mod:`.render` (colour scales, cameras, renderers) → :mod:`.figures`
+(the paper's figures) and :mod:`.shown` → :mod:`.page_data` → :mod:`.viewer`
+(one self-contained page).
+"""
+from .figures import hht_figure, spectrum_figure, write_figures
+from .panels import field_figure, render_png, save_figure
+from .shown import VERTEX_BUDGET, color_limits, shown_copy
+from .viewer import PAGE_BUDGETS, SHAPE, file_html, read_fields, result_html, surfaces_html, write_page
+
+__all__ = ["hht_figure", "render_png", "field_figure", "save_figure", "spectrum_figure", "write_figures", "VERTEX_BUDGET", "color_limits",
+           "shown_copy", "PAGE_BUDGETS", "SHAPE", "file_html", "read_fields", "result_html", "surfaces_html",
+           "write_page"]

@@ -1,9 +1,7 @@
-"""Figures: one field with a title and a colour bar, an HHT result in the paper's Fig. 4 layout,
-and plots of the Hilbert spectrum.
+"""Figures of an HHT result: the paper's Fig. 4 layout and plots of the Hilbert spectrum.
 
-- :func:`field_figure` / :func:`render_png`: one field on the model (or
-  the shaded model) with a title and a colour bar; :func:`draw_image` and
-  :func:`draw_colorbar` place a rendering and a colour bar in any figure.
+Single fields with a title and a colour bar are :mod:`hht3d.viz.panels`.
+
 - :func:`hht_figure`: the model (shaded), the signal, every IMF and the
   residue in one row; the instantaneous frequency (Eq. 23) and the local
   amplitude (Eq. 21) of each IMF in the two rows below, each panel with its
@@ -27,143 +25,19 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..transform import HHTResult
-from ..io.read import atomic_path
-from .render import ColorScale, Rendering, color_scale, model_aspect, renderer
-from .render.image import check_field, check_size
 from ..spectral.spectrum import SCALES, HilbertSpectrum
-from ..geometry.surface import Surface
+from ..transform import HHTResult
+from .panels import (check_dpi, check_result, draw_colorbar, draw_image, field_figure, font_points, fractions,
+                     save_figure)
+from .render import PERCENTILES, SEQUENTIAL_CMAP, SYMMETRIC_CMAP, color_scale, model_aspect, renderer
+from .render.image import check_size
 
-__all__ = ["FREQUENCY_CMAP", "AMPLITUDE_CMAP", "IMF_CMAP", "field_figure", "render_png", "draw_image",
-           "draw_colorbar", "font_points", "hht_figure", "spectrum_figure", "write_figures", "save_figure"]
+__all__ = ["FREQUENCY_CMAP", "AMPLITUDE_CMAP", "IMF_CMAP", "hht_figure", "spectrum_figure", "write_figures"]
 
 #: Colour maps of the composite figure.
-IMF_CMAP = "RdBu_r"
-FREQUENCY_CMAP = "viridis"
+IMF_CMAP = SYMMETRIC_CMAP
+FREQUENCY_CMAP = SEQUENTIAL_CMAP
 AMPLITUDE_CMAP = "plasma"
-
-
-# -- one field with a title and a colour bar -----------------------------------------------------
-def font_points(width_pixels: float, dpi: float) -> float:
-    """A readable font size (points) for a panel ``width_pixels`` wide: 1/20 of it, 7–16 pt."""
-    return float(np.clip(width_pixels / 20 * 72 / dpi, 7.0, 16.0))
-
-
-def draw_colorbar(fig, box, scale: ColorScale, *, label: str | None = None, orientation: str = "vertical",
-                  font: float = 10.0) -> None:
-    """A colour bar in ``box`` (figure fractions ``[left, bottom, width, height]``) with three
-    ticks: the limits and the middle (0 for a symmetric scale)."""
-    axes = fig.add_axes(box)
-    bar = fig.colorbar(scale.mappable(), cax=axes, orientation=orientation)
-    ticks = [scale.vmin, (scale.vmin + scale.vmax) / 2, scale.vmax]
-    bar.set_ticks(ticks, labels=[_tick_label(t, scale) for t in ticks])
-    bar.ax.tick_params(labelsize=font * 0.85, length=2, pad=1.5)
-    bar.outline.set_linewidth(0.5)
-    if label:
-        bar.set_label(label, fontsize=font * 0.85, labelpad=2)
-
-
-def _tick_label(value: float, scale: ColorScale) -> str:
-    """Three significant digits, without an exponent between 0.01 and 10⁵."""
-    size = abs(value)
-    if size < 1e-9 * max(abs(scale.vmin), abs(scale.vmax)):
-        return "0"
-    if 1e-2 <= size < 1e5:
-        return f"{value:.{max(0, 2 - int(np.floor(np.log10(size))))}f}"
-    return f"{value:.2e}"
-
-
-def draw_image(fig, box, rendering: Rendering, *, title: str | None = None, font: float = 10.0) -> None:
-    """Show a rendering in ``box`` (figure fractions) on white, with an optional title."""
-    axes = fig.add_axes(box)
-    axes.imshow(rendering.rgb(), interpolation="none")
-    axes.set_axis_off()
-    if title:
-        axes.set_title(title, fontsize=font, pad=2)
-
-
-def field_figure(surface: Surface, values=None, *, title: str | None = None, label: str | None = None,
-                 size=(800, 800), dpi: float = 100, view="front", up="y", cmap: str | None = None,
-                 limits=None, symmetric: bool | None = None, percentiles=(1.0, 99.0),
-                 backend: str = "auto", supersample: int = 2, point_size: float | None = None):
-    """A Matplotlib ``Figure`` of one field on the model with a title and a colour bar.
-
-    Parameters
-    ----------
-    surface, values
-        See :func:`hht3d.viz.render.render`; ``values=None`` shows the shaded model without a colour bar.
-    title : str, optional
-        Default: the surface name.
-    label : str, optional
-        Colour bar label (e.g. the quantity and its unit).
-    size : (int, int)
-        Figure width and height in pixels.
-    dpi : float
-        Dots per inch (sets the font scale; the pixel size stays ``size``).
-    view, up, cmap, limits, symmetric, percentiles, backend, supersample, point_size
-        See :func:`hht3d.viz.render.render`.
-    """
-    from matplotlib.figure import Figure
-
-    width, height = check_size(size)
-    _check_dpi(dpi)
-    font = font_points(min(width, height), dpi)
-    em = font * dpi / 72
-    top, pad = 2.4 * em, 0.6 * em
-    side = 6.5 * em if values is not None else 0.0
-    image_height = max(int(height - top - pad), 1)
-    image_width = max(int(min(width - side - 2 * pad, image_height / model_aspect(surface, view, up))), 1)
-    left = (width - image_width - side) / 2
-    field = None if values is None else check_field(surface, values)
-    scale = None if field is None else color_scale(field, cmap=cmap, limits=limits, symmetric=symmetric,
-                                                   percentiles=percentiles)
-    drawer = renderer(surface, view=view, up=up, size=(image_width, image_height), backend=backend,
-                      supersample=supersample, point_size=point_size)
-    fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi)
-    box = (round(left), round(pad), image_width, image_height)
-    draw_image(fig, _fractions(box, width, height), drawer.render(field, scale))
-    fig.text(0.5, 1 - 0.5 * top / height, surface.name if title is None else title, ha="center",
-             va="center", fontsize=font * 1.15)
-    if scale is not None:
-        bar = (left + image_width + 0.8 * em, height * 0.15, 0.9 * em, height * 0.7 - top)
-        draw_colorbar(fig, _fractions(bar, width, height), scale, label=label, font=font)
-    return fig
-
-
-def _fractions(box, width: float, height: float) -> list[float]:
-    """Pixel box ``(left, bottom, width, height)`` → figure fractions."""
-    left, bottom, w, h = box
-    return [left / width, bottom / height, w / width, h / height]
-
-
-def _check_dpi(dpi) -> None:
-    if not (isinstance(dpi, (int, float)) and 10 <= dpi <= 1200):
-        raise InputError(f"dpi must be a number in [10, 1200], got {dpi!r}")
-
-
-def save_figure(fig, path) -> Path:
-    """Write a Matplotlib figure to a PNG atomically at its own size and dpi; returns the path."""
-    path = _png_path(path)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=fig.dpi, facecolor="white")
-    return path
-
-
-def render_png(path, surface: Surface, values=None, **options):
-    """Render a field with a title and a colour bar to a PNG (atomically); returns the path.
-
-    ``options`` are those of :func:`field_figure` (``title``, ``label``,
-    ``size`` in pixels, ``dpi``, ``view``, ``up``, ``cmap``, ``limits``, ...).
-    """
-    path = _png_path(path)
-    return save_figure(field_figure(surface, values, **options), path)
-
-
-def _png_path(path) -> Path:
-    path = Path(path)
-    if path.suffix.lower() != ".png":
-        raise InputError(f"{path}: figures are written as PNG; use a .png file name")
-    return path
 
 
 # -- the composite figure (paper Fig. 4) --------------------------------------------------------
@@ -201,14 +75,14 @@ class _Grid:
     def image_box(self, row: int, column: int) -> list[float]:
         left = column * self.column_width + (self.column_width - self.image_width) / 2
         bottom = self._row_top(row) - self.title - self.image_height
-        return _fractions((round(left), round(bottom), self.image_width, self.image_height),
+        return fractions((round(left), round(bottom), self.image_width, self.image_height),
                           self.width, self.height)
 
     def bar_box(self, row: int, column: int) -> list[float]:
         width = 0.8 * self.image_width
         left = column * self.column_width + (self.column_width - width) / 2
         bottom = self._row_top(row) - self.title - self.image_height - 0.75 * self.em
-        return _fractions((left, bottom, width, 0.5 * self.em), self.width, self.height)
+        return fractions((left, bottom, width, 0.5 * self.em), self.width, self.height)
 
     def row_label_position(self, row: int, column: int) -> tuple[float, float]:
         """Figure fractions of the right end of a row label that ends left of ``column``."""
@@ -218,7 +92,7 @@ class _Grid:
 
 def hht_figure(result: HHTResult, *, size=None, dpi: float = 100, panel_width: int = 240, view="front",
                up="y", backend: str = "auto", supersample: int = 2, signal_name: str = "signal",
-               percentiles=(1.0, 99.0)):
+               percentiles=PERCENTILES):
     """The composite figure of the paper's Fig. 4 as a Matplotlib ``Figure``.
 
     Row 1: the shaded model, the signal, IMF 1 … k (finest first) and the
@@ -249,8 +123,8 @@ def hht_figure(result: HHTResult, *, size=None, dpi: float = 100, panel_width: i
     """
     from matplotlib.figure import Figure
 
-    _check_result(result)
-    _check_dpi(dpi)
+    check_result(result)
+    check_dpi(dpi)
     if int(panel_width) != panel_width or not 64 <= panel_width <= 2048:
         raise InputError(f"panel_width must be an integer in [64, 2048] pixels, got {panel_width!r}")
     surface, k = result.surface, result.n_imfs
@@ -279,11 +153,6 @@ def hht_figure(result: HHTResult, *, size=None, dpi: float = 100, panel_width: i
     return fig
 
 
-def _check_result(result) -> None:
-    if not isinstance(result, HHTResult):
-        raise InputError(f"expected an HHTResult (from hht3d.transform.hht), got {type(result).__name__}")
-
-
 # -- Hilbert spectrum plots ------------------------------------------------------------------------
 def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", limits=None,
                     size=(1400, 520), dpi: float = 100):
@@ -294,7 +163,7 @@ def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", li
     with its energy-weighted mean frequency dashed.  Both show the share of
     the total IMF energy ``Σ_k ∫ a_k² dA`` per frequency bin, in percent.
     A dash-dotted line marks the surface's resolution limit (the median of
-    ``π/√A_v``, :func:`hht3d.spectral.frequency.resolvable_frequency`; the axis
+    ``π/√A_v``, :func:`hht3d.spectral.resolution.resolvable_frequency`; the axis
     extends to it when it lies less than twice beyond the data), and the
     title gives the share of the energy above each vertex's limit.
 
@@ -319,8 +188,8 @@ def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", li
     """
     from matplotlib.figure import Figure
 
-    _check_result(result)
-    _check_dpi(dpi)
+    check_result(result)
+    check_dpi(dpi)
     width, height = check_size(size)
     if scale not in SCALES:
         raise InputError(f"unknown frequency scale {scale!r}; choose one of {SCALES}")
@@ -416,7 +285,7 @@ def write_figures(result: HHTResult, folder, *, stem: str | None = None, view="f
     dict of str to Path
         ``{"hht": ..., "spectrum": ..., "signal": ...}``.
     """
-    _check_result(result)
+    check_result(result)
     folder = Path(folder)
     stem = stem or result.surface.name
     figures = {

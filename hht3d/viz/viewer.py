@@ -44,245 +44,39 @@ the spectrum and the quality figures always come from every vertex.
 """
 from __future__ import annotations
 
-import base64
 import html
 import json
-import re
-from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
+from ..version import __version__
 from ..errors import InputError
 from ..io.read import atomic_path
 from ..io.read import load as load_surface
-from ..decomposition.quality import ENERGY_RATIO_LIMIT, ORTHOGONALITY_LIMIT, SPIKE_LIMIT, Quality, decomposition_quality
-from .render import camera, color_scale
+from ..decomposition.quality import Quality, decomposition_quality
+from .page_data import colorscale, field_title, figure_json, order, quality_data, size_text, spectrum_data, typed
+from .render import PERCENTILES, SEQUENTIAL_CMAP, SYMMETRIC_CMAP, camera
+from .shown import VERTEX_BUDGET, shown_copy, color_limits
 from ..spectral.spectrum import HilbertSpectrum
 from ..geometry.surface import Surface
 
-__all__ = ["VERTEX_BUDGET", "CLUSTER_ABOVE", "PAGE_BUDGETS", "PERCENTILES", "Shown", "shown_copy", "color_limits",
+__all__ = ["PAGE_BUDGETS", "SHAPE",
            "write_page", "result_html", "surfaces_html", "read_fields", "file_html"]
 
-#: Surfaces with more vertices are drawn as a decimated copy carrying the fields.
-VERTEX_BUDGET = 150_000
-#: Meshes with more than this many times the budget are clustered (O(n)) before the quadric
-#: decimation: at 1M vertices 2 s + 7 s instead of 36 s for the decimation alone.
-CLUSTER_ABOVE = 4
 #: What a page may cost, by vertices of the surface: (MB on disk, seconds until drawn in
 #: headless Chromium with software WebGL on this project's 2-core machine).
 PAGE_BUDGETS = {100_000: (30.0, 15.0), 1_000_000: (40.0, 20.0)}
-#: Robust colour limits: percentiles of each field's values.
-PERCENTILES = (1.0, 99.0)
 #: The pseudo-field that shows the plain shaded model.
 SHAPE = "shape"
-
-_SPECTRUM_BINS = 64
-_SHAPE_COLOR = "#c9c7c0"
-_CMAPS = {"symmetric": "RdBu_r", "sequential": "viridis"}
-_SEED = 0
-_GROUPED = re.compile(r"^(imf|amplitude|phase|frequency)_([1-9][0-9]*)$")
-_GROUPS = {"imf": "decomposition", "amplitude": "local amplitude (Eq. 21)", "phase": "local phase (Eq. 22)",
-           "frequency": "instantaneous frequency (Eq. 23)"}
+#: Colour of the plain shaded model.
+SHAPE_COLOR = "#c9c7c0"
+#: Stacked arrays of a saved result and the per-IMF field names they become.
 _STACKED = {"imfs": "imf", "amplitude": "amplitude", "phase": "phase", "frequency": "frequency"}
 
 
-# -- what is drawn -------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Shown:
-    """The geometry a page draws of one surface: the surface itself or a decimated copy.
-
-    Attributes
-    ----------
-    vertices : (m, 3) ndarray
-    faces : (g, 3) ndarray or None
-        ``None`` for a point cloud.
-    source : (m,) ndarray of int
-        The original vertex whose field values each drawn vertex shows.
-    n_original : int
-        Vertices of the surface.
-    """
-
-    vertices: np.ndarray
-    faces: np.ndarray | None
-    source: np.ndarray
-    n_original: int
-
-    @property
-    def decimated(self) -> bool:
-        return len(self.source) < self.n_original
-
-    def carry(self, values) -> np.ndarray:
-        """``values`` (n,) of the original vertices at the drawn vertices (m,)."""
-        return np.asarray(values)[self.source]
-
-
-def shown_copy(surface: Surface, max_vertices: int = VERTEX_BUDGET) -> Shown:
-    """What a page draws of ``surface``: itself, or a copy with at most ``max_vertices`` vertices.
-
-    A mesh is simplified by Open3D's quadric decimation (about twice as
-    many triangles as vertices), after a vertex clustering to about twice
-    ``max_vertices`` when it has more than :data:`CLUSTER_ABOVE` times as
-    many, and each kept vertex takes its fields from the nearest original
-    vertex (``scipy.spatial.cKDTree``).  A point cloud
-    keeps a random subset of its points (seed 0), which carry their own
-    values.
-
-    Raises
-    ------
-    InputError
-        ``max_vertices`` below 4.
-    """
-    if int(max_vertices) != max_vertices or max_vertices < 4:
-        raise InputError(f"max_vertices must be an integer >= 4, got {max_vertices!r}")
-    n = surface.n_vertices
-    if n <= max_vertices:
-        return Shown(surface.vertices, surface.faces, np.arange(n), n)
-    if not surface.is_mesh:
-        keep = np.sort(np.random.default_rng(_SEED).choice(n, int(max_vertices), replace=False))
-        return Shown(surface.vertices[keep], None, keep, n)
-    import open3d as o3d
-    from scipy.spatial import cKDTree
-
-    mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(surface.vertices),
-                                     o3d.utility.Vector3iVector(surface.faces))
-    if n > CLUSTER_ABOVE * max_vertices:  # a voxel per two kept vertices' worth of area
-        mesh = mesh.simplify_vertex_clustering(voxel_size=float(np.sqrt(surface.face_areas.sum() / (2 * max_vertices))))
-    target, small = int(len(mesh.triangles) * max_vertices / len(mesh.vertices)), mesh
-    while len(small.vertices) > max_vertices and target >= 4:  # triangles set the vertex count only roughly
-        small = small.simplify_quadric_decimation(target_number_of_triangles=target)
-        small.remove_unreferenced_vertices()
-        target = min(target - 1, int(target * max_vertices / len(small.vertices)))
-    vertices = np.asarray(small.vertices)
-    _, nearest = cKDTree(surface.vertices).query(vertices)
-    return Shown(vertices, np.asarray(small.triangles), nearest, n)
-
-
-def color_limits(values, percentiles=PERCENTILES) -> dict:
-    """Colour limits of a field in both scales and the one chosen by default.
-
-    Returns
-    -------
-    dict
-        ``"symmetric"``: ``[-b, b]`` with ``b = max(|p_low|, |p_high|)``;
-        ``"sequential"``: ``[p_low, p_high]``; ``"auto"``: the name of the
-        default (symmetric when the robust range holds both signs in earnest,
-        :func:`hht3d.viz.render.color_scale`).  Degenerate ranges are widened.
-    """
-    auto = color_scale(values, percentiles=percentiles)
-    symmetric = auto.cmap == _CMAPS["symmetric"]
-    other = color_scale(values, percentiles=percentiles, symmetric=not symmetric)
-    chosen, alternative = ("symmetric", "sequential") if symmetric else ("sequential", "symmetric")
-    return {chosen: [auto.vmin, auto.vmax], alternative: [other.vmin, other.vmax], "auto": chosen}
-
-
 # -- the page ------------------------------------------------------------------------------------
-def _typed(values) -> dict:
-    """plotly.js's typed-array form: little-endian float32 in base64."""
-    raw = np.ascontiguousarray(values, dtype="<f4").tobytes()
-    return {"dtype": "f4", "bdata": base64.b64encode(raw).decode("ascii")}
-
-
-def _colorscale(name: str) -> list:
-    import matplotlib
-
-    cmap = matplotlib.colormaps[name]
-    stops = np.linspace(0.0, 1.0, 11)
-    return [[float(t), "rgb({},{},{})".format(*(int(round(255 * c)) for c in cmap(t)[:3]))] for t in stops]
-
-
-def _title(name: str) -> tuple[str, str]:
-    """Display name and selector group of a field."""
-    match = _GROUPED.match(name)
-    if match is None:
-        return name, "decomposition" if name in ("signal", "residue") else "other"
-    kind, k = match.groups()
-    return f"IMF {k}" if kind == "imf" else f"{kind} {k}", _GROUPS[kind]
-
-
-def _order(names) -> list[str]:
-    """Signal, IMFs, residue, then amplitude, phase and frequency of each IMF, then the rest."""
-    def key(name):
-        match = _GROUPED.match(name)
-        if match is not None:
-            kind, k = match.groups()
-            return (1 if kind == "imf" else 3 + list(_GROUPS).index(kind), int(k))
-        return {"signal": (0, 0), "residue": (2, 0)}.get(name, (7, 0))
-    return sorted(names, key=key)
-
-
-def _trace(shown: Shown, index: int, label: str) -> dict:
-    import plotly.graph_objects as go
-
-    x, y, z = (np.asarray(c, dtype=np.float32) for c in shown.vertices.T)
-    scene = "scene" if index == 0 else f"scene{index + 1}"
-    if shown.faces is None:
-        size = 2 if len(shown.source) > 20_000 else 3
-        return go.Scatter3d(x=x, y=y, z=z, mode="markers", marker={"size": size}, name=label, scene=scene,
-                            showlegend=False)
-    i, j, k = (np.asarray(c, dtype=np.int32) for c in shown.faces.T)
-    return go.Mesh3d(x=x, y=y, z=z, i=i, j=j, k=k, name=label, scene=scene, flatshading=False,
-                     lighting={"ambient": 0.6, "diffuse": 0.7, "specular": 0.1, "roughness": 0.7},
-                     showlegend=False)
-
-
-def _figure_json(shown: list[Shown], labels: list[str], view, up) -> str:
-    import plotly.graph_objects as go
-    import plotly.io as pio
-
-    cam = camera(view, up)
-    eye = dict(zip("xyz", (1.75 * cam.toward).tolist()))
-    cam_up = dict(zip("xyz", cam.up.tolist()))
-    hidden = {"visible": False, "showspikes": False}
-    layout = {"margin": {"l": 0, "r": 0, "t": 28, "b": 0}, "uirevision": "hht3d", "annotations": []}
-    width = 1.0 / len(shown)
-    for index, label in enumerate(labels):
-        name = "scene" if index == 0 else f"scene{index + 1}"
-        layout[name] = {"domain": {"x": [index * width, (index + 1) * width], "y": [0, 1]},
-                        "aspectmode": "data", "xaxis": hidden, "yaxis": hidden, "zaxis": hidden,
-                        "camera": {"eye": eye, "up": cam_up, "center": {"x": 0, "y": 0, "z": 0}}}
-        if len(shown) > 1:
-            layout["annotations"].append({"text": label, "x": (index + 0.5) * width, "y": 1.0, "xref": "paper",
-                                          "yref": "paper", "yanchor": "bottom", "showarrow": False,
-                                          "font": {"size": 14}})
-    figure = go.Figure([_trace(s, i, label) for i, (s, label) in enumerate(zip(shown, labels))], layout)
-    return pio.to_json(figure, validate=True, pretty=False)
-
-
-def _spectrum_data(spectrum: HilbertSpectrum) -> dict | None:
-    total = float(spectrum.imf_energy().sum())
-    if not total > 0 or not np.any(spectrum.frequency > 0):
-        return None
-    edges, marginal = spectrum.marginal(_SPECTRUM_BINS, "log", spectrum.frequency_limits("log"))
-    per_imf = [100 * HilbertSpectrum(spectrum.frequency[k:k + 1], spectrum.amplitude[k:k + 1],
-                                     spectrum.area).marginal(_SPECTRUM_BINS, "log", (edges[0], edges[-1]))[1] / total
-               for k in range(len(spectrum.frequency))]
-    limit = getattr(spectrum, "resolvable_frequency", None)
-    limit = limit() if callable(limit) else limit
-    within = 100 * marginal.sum() / total
-    caption = (f"Share of the IMF energy ∫a²dA per log-spaced frequency bin ({_SPECTRUM_BINS} bins, "
-               f"{within:.1f}% of the energy in the plotted range); the selected frequency field's colour "
-               "range is shaded.")
-    return {"edges": edges.tolist(), "marginal": (100 * marginal / total).tolist(),
-            "imfs": [row.tolist() for row in per_imf], "scale": "log", "caption": caption,
-            "resolvable_frequency": None if limit is None else float(limit)}
-
-
-def _quality_data(quality: Quality) -> dict:
-    rows = [["energy ratio (1 when orthogonal)", f"{quality.energy_ratio:.3g}",
-             quality.energy_ratio > ENERGY_RATIO_LIMIT],
-            ["index of orthogonality (0 when orthogonal)", f"{quality.orthogonality_index:.3g}",
-             quality.orthogonality_index < ORTHOGONALITY_LIMIT],
-            ["signal spike max|s̃| / p99|s̃|", f"{quality.signal_spike:.3g}", quality.signal_spike > SPIKE_LIMIT]]
-    names = [f"IMF {k + 1}" for k in range(len(quality.energy_share) - 1)] + ["residue"]
-    rows += [[f"energy share: {name}", f"{share:.1%}", False] for name, share in zip(names, quality.energy_share)]
-    return {"rows": rows, "warnings": list(quality.warnings)}
-
-
-def _size_text(surface: Surface) -> str:
-    kind = f"{len(surface.faces):,} triangles" if surface.is_mesh else "point cloud"
-    return f"{surface.n_vertices:,} vertices, {kind}"
 
 
 def _json_script(text: str) -> str:
@@ -346,7 +140,7 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
     initial = field or ("signal" if "signal" in arrays else next(iter(arrays), SHAPE))
     if initial != SHAPE and initial not in arrays:
         raise InputError(f"{path.name}: no field {initial!r} to show first; available: "
-                         f"{', '.join([SHAPE, *_order(arrays)])}")
+                         f"{', '.join([SHAPE, *order(arrays)])}")
     camera(view, up)  # checks view and up before the expensive part
     shown = [shown_copy(s, max_vertices) for s in surfaces]
     copies, copy_of = [], []
@@ -360,32 +154,32 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
         shares = {f"imf_{k + 1}": share for k, share in enumerate(quality.energy_share[:-1])}
         shares["residue"] = quality.energy_share[-1]
     entries = []
-    for name in _order(arrays):
-        short, group = _title(name)
+    for name in order(arrays):
+        short, group = field_title(name)
         label = short + (f" — {shares[name]:.1%} of the energy" if name in shares else "")
         try:
             limits = color_limits(arrays[name], percentiles)
         except InputError as exc:
             raise InputError(f"{path.name}: field {name!r}: {exc}") from None
         entries.append({"name": name, "title": short, "label": label, "group": group, **limits,
-                        "values": [_typed(c.carry(arrays[name])) for c in copies]})
+                        "values": [typed(c.carry(arrays[name])) for c in copies]})
     notices = [f"{label}: {s.n_original:,} vertices, more than {max_vertices:,}: showing "
                + (f"a random subset of {len(s.source):,} points. " if s.faces is None else
                   f"a decimated copy with {len(s.source):,} vertices, each carrying the fields of the nearest "
                   "original vertex. ")
                + "Colour limits, spectrum and quality figures use every vertex."
                for s, label in zip(shown, labels) if s.decimated]
-    meta = {"title": title, "size": "; ".join(f"{label}: {_size_text(s)}" if len(surfaces) > 1 else _size_text(s)
+    meta = {"title": title, "size": "; ".join(f"{label}: {size_text(s)}" if len(surfaces) > 1 else size_text(s)
                                               for s, label in zip(surfaces, labels)),
             "notices": notices, "fields": entries, "initial": initial, "shape": SHAPE,
-            "shape_color": _SHAPE_COLOR, "percentiles": [float(p) for p in percentiles],
-            "colorscales": {scale: _colorscale(cmap) for scale, cmap in _CMAPS.items()},
+            "shape_color": SHAPE_COLOR, "percentiles": [float(p) for p in percentiles],
+            "colorscales": {scale: colorscale(cmap) for scale, cmap in (("symmetric", SYMMETRIC_CMAP), ("sequential", SEQUENTIAL_CMAP))},
             "surfaces": [{"label": label, "copy": c, "points": s.faces is None}
                          for s, label, c in zip(shown, labels, copy_of)],
-            "spectrum": None if spectrum is None else _spectrum_data(spectrum),
-            "quality": None if quality is None else _quality_data(quality),
+            "spectrum": None if spectrum is None else spectrum_data(spectrum),
+            "quality": None if quality is None else quality_data(quality),
             "config": {"displaylogo": False, "responsive": True}}
-    figure = _figure_json(shown, labels, view, up)
+    figure = figure_json(shown, labels, view, up)
     data = _json_script(json.dumps(meta, allow_nan=False)[:-1] + ', "figure": ' + figure + "}")
     page = _template().replace("{{TITLE}}", html.escape(title))
     for key, text in (("{{PLOTLY}}", _plotly_js()), ("{{SCRIPT}}", _asset("viewer.js")), ("{{DATA}}", data)):
@@ -401,8 +195,6 @@ def _asset(name: str) -> str:
 
 
 def _template() -> str:
-    from .. import __version__
-
     return _asset("viewer.html").replace("{{VERSION}}", __version__)
 
 
@@ -428,10 +220,8 @@ def result_html(result, path, *, beside=None, field: str | None = None, max_vert
     field, max_vertices, percentiles, view, up
         See :func:`write_page`.
     """
-    from ..transform import HHTResult
-
-    if not isinstance(result, HHTResult):
-        raise InputError(f"expected an HHTResult (from hht3d.transform), got {type(result).__name__}")
+    if not all(hasattr(result, name) for name in ("surface", "vertex_attributes", "spectrum", "quality")):
+        raise InputError(f"expected an HHTResult (from hht3d.hht), got {type(result).__name__}")
     surfaces = [result.surface] if beside is None else [result.surface, beside]
     return write_page(path, surfaces, result.vertex_attributes(), title=f"{result.surface.name}: HHT",
                       spectrum=result.spectrum, quality=result.quality, field=field, max_vertices=max_vertices,

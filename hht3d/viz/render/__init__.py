@@ -28,7 +28,7 @@ run raises :class:`~hht3d.errors.InputError` saying why (found in a child
 process, since Filament aborts the process that fails to start it).
 
 :func:`render` returns a :class:`Rendering` (RGBA, alpha = model coverage);
-:func:`hht3d.viz.figures.field_figure` / :func:`hht3d.viz.figures.render_png` add a
+:func:`hht3d.viz.panels.field_figure` / :func:`hht3d.viz.panels.render_png` add a
 title and a colour bar.
 
 Modules: :mod:`~hht3d.viz.render.view` (the camera), :mod:`~hht3d.viz.render.colors`
@@ -36,12 +36,12 @@ Modules: :mod:`~hht3d.viz.render.view` (the camera), :mod:`~hht3d.viz.render.col
 :mod:`~hht3d.viz.render.software` (the z-buffer), :mod:`~hht3d.viz.render.offscreen`
 (Open3D) and :mod:`~hht3d.viz.render.backends` (choosing one).
 """
-from .backends import BACKENDS, available_backends, render, renderer
-from .colors import ColorScale, color_scale
+from .backends import RENDERERS, available_backends, render, renderer
+from .colors import PERCENTILES, SEQUENTIAL_CMAP, SYMMETRIC_CMAP, ColorScale, color_scale
 from .image import Rendering
 from .offscreen import Open3DRenderer
 from .software import SoftwareRenderer
 from .view import UP_AXES, VIEWS, Camera, camera, model_aspect
 
-__all__ = ["BACKENDS", "UP_AXES", "VIEWS", "Camera", "ColorScale", "Rendering", "SoftwareRenderer",
+__all__ = ["RENDERERS", "UP_AXES", "VIEWS", "Camera", "ColorScale", "Rendering", "SoftwareRenderer",
            "Open3DRenderer", "available_backends", "camera", "color_scale", "model_aspect", "render", "renderer"]

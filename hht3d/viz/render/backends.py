@@ -3,16 +3,16 @@ from __future__ import annotations
 
 from ...errors import InputError
 from ...geometry.surface import Surface
-from .colors import color_scale
+from .colors import PERCENTILES, color_scale
 from .image import Rendering, check_field
 from .offscreen import Open3DRenderer, open3d_problem
 from .software import SoftwareRenderer
 from .view import camera
 
-__all__ = ["BACKENDS", "available_backends", "renderer", "render"]
+__all__ = ["RENDERERS", "available_backends", "renderer", "render"]
 
 #: Renderers; ``"auto"`` is ``"software"``, the one that is always available.
-BACKENDS = ("auto", "software", "open3d")
+RENDERERS = ("auto", "software", "open3d")
 
 
 def available_backends() -> list[str]:
@@ -45,8 +45,8 @@ def renderer(surface: Surface, *, view="front", up="y", size=(800, 800), backend
     InputError
         Unknown backend, or a requested backend that is unavailable here.
     """
-    if backend not in BACKENDS:
-        raise InputError(f"unknown render backend {backend!r}; choose one of {BACKENDS}")
+    if backend not in RENDERERS:
+        raise InputError(f"unknown render backend {backend!r}; choose one of {RENDERERS}")
     if not isinstance(surface, Surface):
         raise InputError(f"expected a Surface to render, got {type(surface).__name__}")
     cam = camera(view, up)
@@ -56,7 +56,7 @@ def renderer(surface: Surface, *, view="front", up="y", size=(800, 800), backend
 
 
 def render(surface: Surface, values=None, *, view="front", up="y", size=(800, 800), cmap: str | None = None,
-           limits=None, symmetric: bool | None = None, percentiles=(1.0, 99.0), backend: str = "auto",
+           limits=None, symmetric: bool | None = None, percentiles=PERCENTILES, backend: str = "auto",
            supersample: int = 2, point_size: float | None = None) -> Rendering:
     """Render a per-vertex field (or, with ``values=None``, the shaded model) to an RGBA image.
 

@@ -7,10 +7,16 @@ import numpy as np
 
 from ...errors import InputError
 
-__all__ = ["ColorScale", "color_scale", "BAD_COLOR"]
+__all__ = ["ColorScale", "color_scale", "BAD_COLOR", "PERCENTILES", "SYMMETRIC_CMAP", "SEQUENTIAL_CMAP"]
 
 #: The colour of NaN values.
 BAD_COLOR = np.array([0.55, 0.55, 0.55])
+#: Robust colour limits: these percentiles of a field's values, so a few outliers do not wash it out.
+PERCENTILES = (1.0, 99.0)
+#: Colour map of signed fields (diverging, white at 0).
+SYMMETRIC_CMAP = "RdBu_r"
+#: Colour map of one-signed fields.
+SEQUENTIAL_CMAP = "viridis"
 
 
 @dataclass(frozen=True)
@@ -48,7 +54,7 @@ class ColorScale:
 
 
 def color_scale(values, *, cmap: str | None = None, limits=None, symmetric: bool | None = None,
-                percentiles=(1.0, 99.0)) -> ColorScale:
+                percentiles=PERCENTILES) -> ColorScale:
     """Choose colour limits for a field: robust percentiles, symmetric about 0 for signed fields.
 
     Parameters
@@ -75,7 +81,7 @@ def color_scale(values, *, cmap: str | None = None, limits=None, symmetric: bool
         _check_cmap(cmap)
     if limits is not None:
         vmin, vmax = _checked_limits(limits)
-        return ColorScale(cmap or "viridis", vmin, vmax)
+        return ColorScale(cmap or SEQUENTIAL_CMAP, vmin, vmax)
     values = np.asarray(values, dtype=np.float64)
     finite = values[np.isfinite(values)]
     if finite.size == 0:
@@ -90,7 +96,7 @@ def color_scale(values, *, cmap: str | None = None, limits=None, symmetric: bool
     if vmax <= vmin:
         pad = abs(vmin) * 0.5 or 1.0
         vmin, vmax = vmin - pad, vmax + pad
-    return ColorScale(cmap or ("RdBu_r" if symmetric else "viridis"), vmin, vmax)
+    return ColorScale(cmap or (SYMMETRIC_CMAP if symmetric else SEQUENTIAL_CMAP), vmin, vmax)
 
 
 def _check_cmap(cmap: str) -> None:
