@@ -93,7 +93,7 @@ def _response(surface, signals, wavenumbers, mask) -> dict:
 
 def run_response() -> dict:
     from hht3d.geometry.surface import Surface
-    from meshes import grid
+    from helpers.meshes import grid
 
     h = 1.0 / (GRID - 1)
     modes = np.array([round(2 * (GRID - 1) / p) for p in TARGET_PPW])
@@ -204,7 +204,7 @@ def run_noise() -> dict:
     from hht3d.spectral import fractional_laplacian
     from hht3d.spectral.spectrum import HilbertSpectrum
     from hht3d.geometry.surface import Surface
-    from meshes import grid, icosphere
+    from helpers.meshes import grid, icosphere
 
     rng = np.random.default_rng(SEED)
     out = {}

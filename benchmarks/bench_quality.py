@@ -50,7 +50,7 @@ from common import DATA, ROOT, machine, table, write_results
 
 sys.path.insert(0, str(ROOT / "tests"))
 
-from meshes import grid, icosphere, open_cylinder, random_bump_sphere, sliver_sphere  # noqa: E402
+from helpers.meshes import grid, icosphere, open_cylinder, random_bump_sphere, sliver_sphere  # noqa: E402
 
 import hht3d  # noqa: E402
 from hht3d import Surface, emd, hht  # noqa: E402

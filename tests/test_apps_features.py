@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.linalg
-from meshes import grid, icosphere
+from helpers.meshes import grid, icosphere
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 

@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 import pytest
-from meshes import (boundary_mask, bump_band_sphere, disjoint_union, fibonacci_sphere, grid, height_field_grid, icosphere,
+from helpers.meshes import (boundary_mask, bump_band_sphere, disjoint_union, fibonacci_sphere, grid, height_field_grid, icosphere,
                     jittered_height_field, random_bump_sphere, reference_operators)
 from scipy.spatial.transform import Rotation
 

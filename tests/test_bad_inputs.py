@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from meshes import grid, icosphere
+from helpers.meshes import grid, icosphere
 from dask import delayed
 from plyfile import PlyData, PlyElement
 

@@ -6,9 +6,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from meshes import icosphere
+from helpers.meshes import icosphere
 
-from conftest import assert_same_hht
+from helpers.results import assert_same_hht
 from hht3d import Surface
 from hht3d.cli import demo_model_path, demo_pipeline_path, main
 from hht3d.transform import hht
@@ -126,6 +126,7 @@ def test_info_describes_a_file(mesh_file, tmp_path, capsys):
     assert "no such file" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_demo_runs_the_shipped_pipeline_into_out(tmp_path, capsys):
     """The README's main job: ``hht3d demo --out out/demo``, on the shipped model."""
     import matplotlib

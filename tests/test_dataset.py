@@ -4,7 +4,7 @@ import shutil
 
 import numpy as np
 import pytest
-from conftest import assert_same_hht, hht_arrays_from_ply
+from helpers.results import assert_same_hht, hht_arrays_from_ply
 
 from hht3d import Surface, load
 from hht3d.graph.dataset import run_dataset
@@ -12,7 +12,7 @@ from hht3d.errors import OutputError
 from hht3d.transform import hht
 from hht3d.io.read import write_ply
 from hht3d.geometry.signals import mean_curvature
-from meshes import icosphere
+from helpers.meshes import icosphere
 
 
 def _make_inputs(folder):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from meshes import fibonacci_sphere, grid, icosphere, open_cylinder
+from helpers.meshes import fibonacci_sphere, grid, icosphere, open_cylinder
 from scipy.interpolate import CubicSpline
 from scipy.special import sph_harm_y
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from meshes import icosphere
+from helpers.meshes import icosphere
 from scipy.special import sph_harm_y
 
 from hht3d import Surface

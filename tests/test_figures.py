@@ -7,12 +7,12 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import assert_red_blue_swapped
+from helpers.images import assert_red_blue_swapped
 from hht3d.viz import figures
 from hht3d.errors import InputError
 from hht3d.transform import HHTResult, hht
 from hht3d.geometry.surface import Surface
-from meshes import fibonacci_sphere, icosphere
+from helpers.meshes import fibonacci_sphere, icosphere
 
 
 def two_scale_signal(vertices):

@@ -18,7 +18,7 @@ from hht3d.spectral import FREQUENCY_METHODS, instantaneous_frequency, resolutio
 from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
 from hht3d.spectral import fractional_laplacian
 from hht3d.geometry.surface import Surface
-from meshes import grid, icosphere
+from helpers.meshes import grid, icosphere
 
 # A strip [0, 1] x [0, 16h], h = 1/128.  cos(mπx) is a Neumann eigenfunction of the
 # continuum strip and, sampled, of the cotangent Laplacian of the regular grid

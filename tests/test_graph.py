@@ -6,7 +6,7 @@ from dask.core import get_dependencies
 from hht3d import InputError, Surface, graph
 from hht3d.transform import hht as eager_hht
 from hht3d.geometry.signals import mean_curvature
-from meshes import fibonacci_sphere, icosphere
+from helpers.meshes import fibonacci_sphere, icosphere
 
 OPTIONS = dict(emd={"max_imfs": 3}, riesz_tasks=3)
 

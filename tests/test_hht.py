@@ -8,7 +8,7 @@ import hht3d
 from hht3d.errors import InputError
 from hht3d.transform import HHTResult, hht
 from hht3d.geometry.surface import Surface
-from meshes import fibonacci_sphere, icosphere
+from helpers.meshes import fibonacci_sphere, icosphere
 
 
 def two_scale_signal(vertices):

@@ -10,7 +10,7 @@ from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
 from hht3d.spectral import fractional_laplacian, riesz
 from hht3d.spectral.spectrum import HilbertSpectrum
 from hht3d.geometry.surface import Surface
-from meshes import fibonacci_sphere, grid, open_cylinder
+from helpers.meshes import fibonacci_sphere, grid, open_cylinder
 
 RADIUS = 1.5
 LENGTH = 6.0

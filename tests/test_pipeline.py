@@ -5,9 +5,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from meshes import fibonacci_sphere, icosphere
+from helpers.meshes import fibonacci_sphere, icosphere
 
-from conftest import assert_same_hht, field_values, hht_arrays_from_ply, page_data
+from helpers.results import assert_same_hht, hht_arrays_from_ply
+from helpers.pages import field_values, page_data
 from hht3d import Surface, graph
 from hht3d.apps import (HighBoost, LowPass, PiecewiseLinear, filter_geometry, filter_signal, hks_features,
                         imf_enhancement, manifold_harmonics_filter, prominent_features, reconstruct)
@@ -99,6 +100,7 @@ def test_examples_are_there():
                                           "point_cloud.yaml"}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
 def test_example_runs_and_writes_its_outputs(example, tmp_path, mesh_file, cloud_file, folder):
     inputs = {"point_cloud": cloud_file, "dataset_features": folder}.get(example.stem, mesh_file)

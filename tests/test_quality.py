@@ -6,8 +6,8 @@ import warnings
 import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
-from conftest import shipped_model_path
-from meshes import grid, icosphere, random_bump_sphere
+from helpers.models import shipped_model_path
+from helpers.meshes import grid, icosphere, random_bump_sphere
 
 import hht3d
 from hht3d import InputError, Surface, emd, hht

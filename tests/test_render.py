@@ -6,12 +6,12 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import assert_red_blue_swapped
+from helpers.images import assert_red_blue_swapped
 from hht3d.viz import panels
 from hht3d.viz import render as R
 from hht3d.errors import InputError
 from hht3d.geometry.surface import Surface
-from meshes import fibonacci_sphere, icosphere
+from helpers.meshes import fibonacci_sphere, icosphere
 
 
 @pytest.fixture(scope="module")
@@ -162,12 +162,12 @@ OPEN3D_CHECK = """
 import sys
 import numpy as np
 sys.path.insert(0, {tests!r})
-from conftest import assert_red_blue_swapped
+from helpers.images import assert_red_blue_swapped
 from hht3d.viz import figures, panels
 from hht3d.viz import render as R
 from hht3d.errors import InputError
 from hht3d.geometry.surface import Surface
-from meshes import icosphere
+from helpers.meshes import icosphere
 sphere = Surface(*icosphere(3))
 try:
     first = R.renderer(sphere, size=(96, 64), backend="open3d")

@@ -20,8 +20,8 @@ from hht3d.geometry.signals import fluctuation
 from hht3d.spectral.shifts import shifted_matrix, shifted_solve
 from hht3d.errors import InputError
 from hht3d.geometry.surface import Surface
-from conftest import shipped_model_path
-from meshes import fibonacci_sphere, grid, icosphere
+from helpers.models import shipped_model_path
+from helpers.meshes import fibonacci_sphere, grid, icosphere
 
 SPOT = shipped_model_path("spot.ply")
 
@@ -90,6 +90,7 @@ def test_dense_method_matches_generalized_eigh(jittered_grid):
     assert np.all(m_error(s, dense, eigen_reference(s, f)) < 5e-13)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["spot", "cloud", "jittered_grid"])
 def test_quadrature_error_is_within_its_documented_tolerance(name, request):
     # quadrature_nodes takes the fewest nodes whose scalar error max |Σ w/(λ+σ) √λ − 1| over

@@ -4,7 +4,7 @@ import pytest
 
 from hht3d import InputError, Surface, emd, load
 from hht3d.geometry import signals
-from meshes import fibonacci_sphere, grid, icosphere, sliver_sphere
+from helpers.meshes import fibonacci_sphere, grid, icosphere, sliver_sphere
 
 
 def test_mean_curvature_on_unit_sphere_is_two():

@@ -9,7 +9,7 @@ from hht3d.spectral import resolvable_frequency
 from hht3d.spectral.monogenic_signal import MonogenicSignal, monogenic
 from hht3d.spectral.spectrum import HilbertSpectrum
 from hht3d.geometry.surface import Surface
-from meshes import grid
+from helpers.meshes import grid
 
 
 def test_default_limit_comes_from_the_vertex_areas():

@@ -14,8 +14,8 @@ from html.parser import HTMLParser
 
 import numpy as np
 import pytest
-from conftest import decoded, field_values, page_data
-from meshes import fibonacci_sphere, icosphere
+from helpers.pages import decoded, field_values, page_data
+from helpers.meshes import fibonacci_sphere, icosphere
 
 import hht3d
 from hht3d import HilbertSpectrum, Surface
@@ -199,6 +199,7 @@ def test_page_limits_are_those_of_every_vertex(result, result_page):
 
 
 # -- big surfaces --------------------------------------------------------------------------------
+@pytest.mark.slow
 @pytest.mark.parametrize("budget", [2000, 3000])  # 10,242 > 4 x 2000: clustered first; < 4 x 3000: not
 def test_decimation_transfers_fields_to_the_nearest_vertex(tmp_path, budget):
     v, f = icosphere(5)            # 10,242 vertices
