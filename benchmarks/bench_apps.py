@@ -120,8 +120,8 @@ def stage_filter(name: str, scratch: Path) -> dict:
     cutoff = _cutoff(result)
     baseline = _peak_rss_mb()
     record = {"cutoff": cutoff, "baseline_rss_mb": baseline}
-    for label, gain in (("low_pass", LowPass(cutoff, width=cutoff / 4)),
-                        ("high_boost", HighBoost(cutoff, 2.5, width=cutoff / 4))):
+    for label, gain in (("low_pass", LowPass(cutoff=cutoff, width=cutoff / 4)),
+                        ("high_boost", HighBoost(cutoff=cutoff, factor=2.5, width=cutoff / 4))):
         t0 = time.perf_counter()
         out = filter_geometry(result, gain)
         record[f"{label}_seconds"] = time.perf_counter() - t0

@@ -155,7 +155,7 @@ def part_bumps() -> list[dict]:
             warnings.simplefilter("ignore")
             result = hht(surface, curvature(surface, config), emd=options)
             for cutoff in (3.0, 4.0, 6.0):
-                out = filter_geometry(result, LowPass(cutoff, width=cutoff / 3), **weights)
+                out = filter_geometry(result, LowPass(cutoff=cutoff, width=cutoff / 3), **weights)
                 radial, fitted = _sphere_distances(surface, out.vertices)
                 rows.append({"case": "random_bumps", "config": config, "cutoff": cutoff,
                              "energy_ratio": result.quality.energy_ratio, "closer_radial": radial0 / radial,
@@ -174,7 +174,7 @@ def part_bumps() -> list[dict]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             result = hht(mixed, curvature(mixed, config), emd=dataclasses.replace(options, max_imfs=6))
-            out = filter_geometry(result, LowPass(6.0, width=2.0), **weights)
+            out = filter_geometry(result, LowPass(cutoff=6.0, width=2.0), **weights)
         deviation = np.linalg.norm(out.vertices, axis=1) - 1
         kept = np.linalg.solve(basis.T @ (area[:, None] * basis), basis.T @ (area * deviation))
         rows.append({"case": "mixed_bumps", "config": config, "cutoff": 6.0, "energy_ratio": result.quality.energy_ratio,

@@ -62,39 +62,39 @@ def bump_amplitude(surface: Surface, vertices: np.ndarray, pattern: np.ndarray) 
 
 def test_gain_shapes():
     omega = np.array([0.0, 5.0, 10.0, 10.5, 20.0, 30.0, 40.0])
-    assert LowPass(10.0)(omega).tolist() == [1, 1, 1, 0, 0, 0, 0]
-    assert LowPass(10.0, stop=0.25)(omega)[-1] == 0.25
-    assert HighBoost(10.0, 3.0)(omega).tolist() == [1, 1, 1, 3, 3, 3, 3]
-    assert BandStop(5.0, 20.0)(omega).tolist() == [1, 1, 0, 0, 0, 1, 1]
-    assert BandBoost(5.0, 20.0, 2.5)(omega).tolist() == [1, 1, 2.5, 2.5, 2.5, 1, 1]
+    assert LowPass(cutoff=10.0)(omega).tolist() == [1, 1, 1, 0, 0, 0, 0]
+    assert LowPass(cutoff=10.0, stop=0.25)(omega)[-1] == 0.25
+    assert HighBoost(cutoff=10.0, factor=3.0)(omega).tolist() == [1, 1, 1, 3, 3, 3, 3]
+    assert BandStop(low=5.0, high=20.0)(omega).tolist() == [1, 1, 0, 0, 0, 1, 1]
+    assert BandBoost(low=5.0, high=20.0, factor=2.5)(omega).tolist() == [1, 1, 2.5, 2.5, 2.5, 1, 1]
     assert Constant(0.5)(omega).tolist() == [0.5] * 7
     # user points: linear between, constant beyond
     user = PiecewiseLinear([(10.0, 1.0), (30.0, 3.0)])
     assert np.allclose(user(omega), [1, 1, 1, 1.05, 2, 3, 3])
     # raised-cosine edges: half-way at the edge, flat beyond edge ± width/2, monotone between
-    smooth = LowPass(10.0, width=4.0)
+    smooth = LowPass(cutoff=10.0, width=4.0)
     assert smooth(np.array([7.9, 8.0, 10.0, 12.0, 12.1])).tolist() == pytest.approx([1, 1, 0.5, 0, 0])
     assert np.all(np.diff(smooth(np.linspace(7, 13, 50))) <= 0)
-    band = BandStop(5.0, 20.0, width=2.0)
+    band = BandStop(low=5.0, high=20.0, width=2.0)
     assert band(np.array([3.9, 5.0, 6.0, 12.0, 19.0, 20.0, 21.0])).tolist() == pytest.approx(
         [1, 0.5, 0, 0, 0, 0.5, 1])
 
 
 def test_gains_pickle_and_by_name():
-    gains = [LowPass(3.0, width=1.0), HighBoost(2.0, 2.5), BandStop(1.0, 2.0), BandBoost(1.0, 2.0, 3.0),
+    gains = [LowPass(cutoff=3.0, width=1.0), HighBoost(cutoff=2.0, factor=2.5), BandStop(low=1.0, high=2.0), BandBoost(low=1.0, high=2.0, factor=3.0),
              PiecewiseLinear([(0.0, 1.0), (5.0, 0.0)]), Constant(1.0)]
     omega = np.linspace(0, 10, 11)
     for gain in gains:
         back = pickle.loads(pickle.dumps(gain))
         assert back == gain and np.array_equal(back(omega), gain(omega))
-    assert make_gain("band_stop", low=1.0, high=2.0) == BandStop(1.0, 2.0)
+    assert make_gain("band_stop", low=1.0, high=2.0) == BandStop(low=1.0, high=2.0)
     assert make_gain("piecewise_linear", points=[[0, 1], [5, 0]]) == gains[4]
 
 
 def test_filter_signal_is_eq26(bumps):
     result = bumps[3]
     mono = result.monogenic
-    gain = BandStop(OMEGA / 2, 2 * OMEGA, width=OMEGA / 4)
+    gain = BandStop(low=OMEGA / 2, high=2 * OMEGA, width=OMEGA / 4)
     expected = np.sum(gain(mono.frequency) * mono.amplitude * np.cos(mono.phase), axis=0) + result.residue
     assert np.allclose(filter_signal(result, gain), expected, rtol=0, atol=1e-12 * np.abs(result.signal).max())
     # tuple input, identity, all-stop, any callable
@@ -103,7 +103,7 @@ def test_filter_signal_is_eq26(bumps):
                        atol=1e-13 * np.abs(result.signal).max())
     assert np.array_equal(filter_signal(parts, Constant(0.0)), result.residue)
     assert np.array_equal(filter_signal(parts, lambda w: np.where(w > 5, 2.0, 1.0)),
-                          filter_signal(parts, HighBoost(5.0, 2.0)))
+                          filter_signal(parts, HighBoost(cutoff=5.0, factor=2.0)))
     assert gains_of(result, gain).shape == result.imfs.shape
 
 
@@ -117,7 +117,7 @@ def test_filtering_does_not_depend_on_the_signal_unit():
     surface = Surface(v, f)
     signal = mean_curvature(surface)
     omega = np.sqrt(12 * 13)
-    gain = BandStop(omega / 2, 2 * omega, width=omega / 4)
+    gain = BandStop(low=omega / 2, high=2 * omega, width=omega / 4)
     reference = hht(surface, signal, emd={"max_imfs": 3})
     for c in (1e3, -1e-3):
         scaled = hht(surface, c * signal, emd={"max_imfs": 3})
@@ -232,14 +232,14 @@ def test_preserve_scale_removes_the_mean_change():
 def test_band_stop_removes_bumps(bumps):
     surface, _, pattern, result = bumps
     before = sphere_distance(surface, surface.vertices)
-    out = filter_geometry(result, BandStop(OMEGA / 2, 2 * OMEGA, width=OMEGA / 4))
+    out = filter_geometry(result, BandStop(low=OMEGA / 2, high=2 * OMEGA, width=OMEGA / 4))
     factor = before / sphere_distance(surface, out.vertices)
     print(f"band-stop at the bump scale: RMS distance to the clean sphere {before:.3g} -> "
           f"{before / factor:.3g} ({factor:.2f}x lower)")
     assert factor >= 3, factor  # measured 4.94
     assert abs(bump_amplitude(surface, out.vertices, pattern)) <= 0.25 * AMPLITUDE  # measured 0.14
     # a band far above the bumps holds no energy: the geometry barely moves
-    untouched = filter_geometry(result, BandStop(3 * OMEGA, 8 * OMEGA, width=OMEGA / 4))
+    untouched = filter_geometry(result, BandStop(low=3 * OMEGA, high=8 * OMEGA, width=OMEGA / 4))
     assert relative_rms(untouched.vertices, surface.vertices, 1.0) <= 0.01 * AMPLITUDE
 
 
@@ -247,7 +247,7 @@ def test_a_gain_that_changes_nothing_says_so(bumps):
     surface, _, _, result = bumps
     top = result.monogenic.frequency.max()
     with pytest.warns(QualityWarning, match="changes no frequency"):
-        same = filter_geometry(result, LowPass(2 * top))
+        same = filter_geometry(result, LowPass(cutoff=2 * top))
     np.testing.assert_array_equal(same.vertices, surface.vertices)
 
 
@@ -267,14 +267,14 @@ def test_large_moves_are_warned_about():
 
 def test_low_pass_keeps_volume(bumps):
     surface, _, _, result = bumps
-    out = filter_geometry(result, LowPass(OMEGA / 2, width=OMEGA / 4))
+    out = filter_geometry(result, LowPass(cutoff=OMEGA / 2, width=OMEGA / 4))
     change = enclosed_volume(out) / enclosed_volume(surface) - 1
     assert abs(change) <= 0.01, change  # measured 1e-5 (the mean change is removed per component)
     assert sphere_distance(surface, out.vertices) < sphere_distance(surface, surface.vertices) / 3
 
 
-@pytest.mark.parametrize("gain", [HighBoost(OMEGA / 2, 2.0, width=OMEGA / 4),
-                                  BandBoost(OMEGA / 2, 2 * OMEGA, 2.0, width=OMEGA / 4)])
+@pytest.mark.parametrize("gain", [HighBoost(cutoff=OMEGA / 2, factor=2.0, width=OMEGA / 4),
+                                  BandBoost(low=OMEGA / 2, high=2 * OMEGA, factor=2.0, width=OMEGA / 4)])
 def test_enhancement_raises_bumps(bumps, gain):
     surface, _, pattern, result = bumps
     ratio = bump_amplitude(surface, filter_geometry(result, gain).vertices, pattern) / AMPLITUDE
@@ -307,7 +307,7 @@ def bump_classes(surface: Surface, vertices: np.ndarray, narrow: np.ndarray, wid
 # weights of Eq. 27: narrow 0.88).
 def test_low_pass_removes_narrow_bumps_of_a_mixed_field(mixed_bumps):
     surface, narrow, wide, result = mixed_bumps
-    out = filter_geometry(result, LowPass(6.0, width=2.0))
+    out = filter_geometry(result, LowPass(cutoff=6.0, width=2.0))
     kept_narrow, kept_wide = bump_classes(surface, out.vertices, narrow, wide)
     print(f"low-pass at 6 rad/unit on 60 mixed bumps: narrow {kept_narrow:.3f}, wide {kept_wide:.3f}")
     assert kept_narrow <= 0.3 and abs(kept_wide - 1) <= 0.15
@@ -321,7 +321,7 @@ def test_exact_curvature_change_removes_narrow_bumps(mixed_bumps):
     surface, narrow, wide, result = mixed_bumps
     clean = surface.vertices / np.linalg.norm(surface.vertices, axis=1, keepdims=True)
     without = Surface(clean * (1 + wide)[:, None], surface.faces)
-    weight = automatic_weight(surface, edit_frequency(result, LowPass(6.0, width=2.0)))
+    weight = automatic_weight(surface, edit_frequency(result, LowPass(cutoff=6.0, width=2.0)))
     out = reconstruct_from_change(surface, mean_curvature(without) - mean_curvature(surface),
                                   interior_weight=weight)
     kept_narrow, kept_wide = bump_classes(surface, out.vertices, narrow, wide)
@@ -347,7 +347,7 @@ def test_manifold_harmonics_filter():
                                      keep_remainder=False)
     assert np.abs(full.vertices - v).max() <= 1e-10
     assert np.array_equal(manifold_harmonics_filter(surface, Constant(1.0), eigenpairs=50).vertices, v)
-    out = manifold_harmonics_filter(surface, BandStop(omega / 1.5, 1.5 * omega), eigenpairs=150)
+    out = manifold_harmonics_filter(surface, BandStop(low=omega / 1.5, high=1.5 * omega), eigenpairs=150)
     factor = sphere_distance(surface, v) / sphere_distance(surface, out.vertices)
     assert factor >= 10, factor  # measured 17: the bumps are one eigenspace
     truncated = manifold_harmonics_filter(surface, Constant(1.0), eigenpairs=40, keep_remainder=False)
@@ -360,7 +360,7 @@ def test_output_is_an_open3d_mesh(bumps, tmp_path):
     import open3d as o3d
 
     surface, _, _, result = bumps
-    out = filter_geometry(result, LowPass(OMEGA / 2))
+    out = filter_geometry(result, LowPass(cutoff=OMEGA / 2))
     path = tmp_path / "filtered.ply"
     assert o3d.t.io.write_triangle_mesh(str(path), out.to_open3d())
     back = hht3d.load(path, clean=False)
@@ -370,11 +370,11 @@ def test_output_is_an_open3d_mesh(bumps, tmp_path):
 # -- bad parameters --------------------------------------------------------------------------
 
 @pytest.mark.parametrize("build", [
-    lambda: LowPass(-1.0), lambda: LowPass(float("nan")), lambda: LowPass(1.0, width=-1),
-    lambda: HighBoost(1.0, float("inf")), lambda: BandStop(5.0, 5.0), lambda: BandBoost(6.0, 2.0),
+    lambda: LowPass(cutoff=-1.0), lambda: LowPass(cutoff=float("nan")), lambda: LowPass(cutoff=1.0, width=-1),
+    lambda: HighBoost(cutoff=1.0, factor=float("inf")), lambda: BandStop(low=5.0, high=5.0), lambda: BandBoost(low=6.0, high=2.0),
     lambda: PiecewiseLinear([]), lambda: PiecewiseLinear([(2.0, 1.0), (1.0, 0.0)]),
     lambda: PiecewiseLinear([(0.0, 1.0, 2.0)]), lambda: PiecewiseLinear([(-1.0, 1.0)]),
-    lambda: LowPass("high"), lambda: make_gain("notch", low=1), lambda: make_gain("low_pass", cut=1),
+    lambda: LowPass(cutoff="high"), lambda: make_gain("notch", low=1), lambda: make_gain("low_pass", cut=1),
 ])
 def test_bad_gains(build):
     with pytest.raises(InputError):

@@ -78,16 +78,16 @@ def test_ring_rule_relaxes_strict_rule():
     s = Surface(*grid(12, 12, jitter=0.2, seed=3), name="grid")
     f = np.random.default_rng(0).standard_normal(s.n_vertices)
     strict_max, strict_min = local_extrema(s, f)
-    ring_max, ring_min = local_extrema(s, f, rule="ring", ring=1, ratio=0.8)
+    ring_max, ring_min = local_extrema(s, f, rule="relaxed", ring=1, ratio=0.8)
     assert set(strict_max) <= set(ring_max) and set(strict_min) <= set(ring_min)
     # ratio 1 on the 1-ring is the strict rule
-    one = local_extrema(s, f, rule="ring", ring=1, ratio=1.0)
+    one = local_extrema(s, f, rule="relaxed", ring=1, ratio=1.0)
     assert one[0].tolist() == strict_max.tolist() and one[1].tolist() == strict_min.tolist()
     # the paper's rule (Sec. 5.2) by brute force on the 2-ring
     ring2 = s.ring(2).toarray()
     expected = [i for i in range(s.n_vertices)
                 if np.sum(f[i] >= f[ring2[i]]) >= 0.8 * ring2[i].sum() and np.any(f[i] > f[ring2[i]])]
-    assert local_extrema(s, f, rule="ring")[0].tolist() == expected
+    assert local_extrema(s, f, rule="relaxed")[0].tolist() == expected
 
 
 # -- envelopes -----------------------------------------------------------------------------
@@ -242,7 +242,7 @@ def test_open_scan_mean_curvature(shared_model):
 
 @pytest.mark.parametrize("options", [dict(stopping="s_number"), dict(stopping="fixed", fixed_sifts=3,
                                                                     cancellation_tolerance=None),
-                                     dict(envelope="harmonic"), dict(extrema="ring")])
+                                     dict(envelope="harmonic"), dict(extrema="relaxed")])
 def test_options_sum_to_signal(small_sphere, options):
     rng = np.random.default_rng(3)
     f = real_sph_harm(9, rng.standard_normal(19), small_sphere.vertices) + 1e3
@@ -310,7 +310,7 @@ def test_bad_signal_is_input_error(small_sphere, signal, message):
 
 @pytest.mark.parametrize("options", [
     dict(stopping="bogus"), dict(envelope="cubic"), dict(extrema="any"), dict(max_sifts=0),
-    dict(sd_threshold=-1), dict(extrema="ring", ratio=0.3), dict(backend="nonexistent"), dict(max_imfs=2.5),
+    dict(sd_threshold=-1), dict(extrema="relaxed", ratio=0.3), dict(backend="nonexistent"), dict(max_imfs=2.5),
 ])
 def test_bad_options_are_input_errors(small_sphere, options):
     with pytest.raises(InputError):

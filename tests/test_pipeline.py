@@ -148,9 +148,9 @@ def test_filtering_example_moves_vertices_and_keeps_faces(tmp_path, mesh_file):
     # vertices by far less than 1e-9 of the model size
     surface = load(mesh_file)
     result = hht(surface, mean_curvature(surface), emd={"max_imfs": 6})
-    expected = filter_geometry(result, LowPass(1.0))
+    expected = filter_geometry(result, LowPass(cutoff=1.0))
     np.testing.assert_allclose(smooth.vertices, expected.vertices, rtol=0, atol=1e-9)
-    enhanced = filter_geometry(result, HighBoost(3.0, 2.0, width=1.0), interior_weight=0.01, boundary_weight=1.0)
+    enhanced = filter_geometry(result, HighBoost(cutoff=3.0, factor=2.0, width=1.0), interior_weight=0.01, boundary_weight=1.0)
     assert np.abs(enhanced.vertices - original.vertices).max() > 1e-4  # the boost acts: not an unchanged copy
     np.testing.assert_allclose(load(out / "bumpy_enhanced.ply", clean=False).vertices, enhanced.vertices,
                                rtol=0, atol=1e-9)
@@ -428,7 +428,7 @@ def test_every_operation_and_output_format_runs(tmp_path, mesh_file):
     expected_surfaces = {
         "rebuilt": reconstruct(surface, flat, interior_weight=0.1),
         "boosted": imf_enhancement(surface, ensemble),
-        "harmonics": manifold_harmonics_filter(surface, LowPass(3.0), eigenpairs=20),
+        "harmonics": manifold_harmonics_filter(surface, LowPass(cutoff=3.0), eigenpairs=20),
     }
     for name, expected in expected_surfaces.items():
         written = load(out / f"{name}.ply", clean=False)

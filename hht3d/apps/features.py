@@ -7,7 +7,7 @@ local maximum of ``f_k`` when
     |N⁺_{f_k}(v_i)| ≥ t |N_2(i)|,   N⁺_{f_k}(v_i) = {j ∈ N_2(i) : f_k(v_i) ≥ f_k(v_j)},
 
 with ``N_2(i)`` its two-ring and ``t = 0.8`` by default (minima likewise
-with ``≤``); :func:`hht3d.decomposition.decompose.local_extrema` with ``rule="ring"``.  Counting
+with ``≤``); :func:`hht3d.decomposition.decompose.local_extrema` with ``rule="relaxed"``.  Counting
 over the ``K`` IMFs how often each vertex is an extremum, the *prominent*
 features are the vertices counted at least ``⌈K/2⌉`` times (the paper's
 "half of the decomposition IMF number"; ``fraction`` changes it).
@@ -198,7 +198,7 @@ def prominent_features(surface: Surface, imfs, *, ratio: float = 0.8, ring: int 
     if not 0 < fraction <= 1:
         raise InputError(f"fraction must lie in (0, 1], got {fraction!r}")
     check_distance("merge_radius", merge_radius)
-    extrema = [local_extrema(surface, fk, rule="ring", ring=ring, ratio=ratio) for fk in f]
+    extrema = [local_extrema(surface, fk, rule="relaxed", ring=ring, ratio=ratio) for fk in f]
     min_count = max(1, math.ceil(fraction * len(f) - 1e-9))
     return features_from_counts(surface, [e[0] for e in extrema], [e[1] for e in extrema], min_count,
                                 merge_radius)

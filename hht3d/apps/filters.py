@@ -108,7 +108,7 @@ class Constant(Gain):
         return np.full(omega.shape, self.value)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class LowPass(Gain):
     """Keep frequencies up to ``cutoff``, multiply higher ones by ``stop`` (default 0).
 
@@ -135,7 +135,7 @@ class LowPass(Gain):
         return 1.0 + (self.stop - 1.0) * _rise(omega, self.cutoff, self.width)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class HighBoost(Gain):
     """High-frequency enhancement: multiply frequencies above ``cutoff`` by ``factor``.
 
@@ -174,7 +174,7 @@ def _band(omega: np.ndarray, low: float, high: float, width: float) -> np.ndarra
     return _rise(omega, low, width) * (1.0 - _rise(omega, high, width))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BandStop(Gain):
     """Multiply frequencies in the band ``(low, high]`` by ``stop`` (default 0), keep the rest.
 
@@ -204,7 +204,7 @@ class BandStop(Gain):
         return 1.0 + (self.stop - 1.0) * _band(omega, self.low, self.high, self.width)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BandBoost(Gain):
     """Band enhancement: multiply frequencies in ``(low, high]`` by ``factor``, keep the rest.
 

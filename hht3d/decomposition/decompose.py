@@ -147,11 +147,11 @@ def emd(surface: Surface, signal, options: EMDOptions | dict | None = None, *, b
         IMF slower than ``c`` times its extrema spacing moves to the
         residue; default 0.6, ``None`` off.  :data:`~hht3d.decomposition.options.PAPER_OPTIONS` is the
         paper's method.
-    extrema : {"strict", "ring"}
+    extrema : {"strict", "relaxed"}
         Extremum rule of :func:`local_extrema`: 1-ring (default) or the
         relaxed ``ring``-ring rule with fraction ``ratio`` (Sec. 5.2).
     ring, ratio : int, float
-        Used with ``extrema="ring"``; defaults 2 and 0.8 as in Sec. 5.2.
+        Used with ``extrema="relaxed"``; defaults 2 and 0.8 as in Sec. 5.2.
     energy_threshold : float
         Decomposition stops when the residue's fluctuation energy
         ``∫(r − r̄)² dA`` (``r̄`` its mean per component) falls below this

@@ -38,16 +38,16 @@ def local_extrema(surface: Surface, f, *, rule: str = "strict", ring: int | None
     ----------
     surface : Surface
     f : (n,) array_like
-    rule : {"strict", "ring"}
+    rule : {"strict", "relaxed"}
         ``"strict"``: ``f_i`` is ``≥`` every neighbour in its ``ring``-ring.
-        ``"ring"``: the relaxed rule of Sec. 5.2, ``f_i ≥ f_j`` for at least
+        ``"relaxed"``: the rule of Sec. 5.2, ``f_i ≥ f_j`` for at least
         a fraction ``ratio`` of its ``ring``-ring, ``|N⁺(i)| ≥ t |N_k(i)|``.
         Minima likewise with ``≤``.
     ring : int, optional
         Neighbourhood size in edges; default 1 for ``"strict"`` and 2 for
-        ``"ring"`` (the paper's two-ring).
+        ``"relaxed"`` (the paper's two-ring).
     ratio : float
-        The paper's ``t`` in ``(0.5, 1]``; used by ``"ring"`` only.
+        The paper's ``t`` in ``(0.5, 1]``; used by ``"relaxed"`` only.
     tie_rtol : float
         Values closer than ``tie_rtol · (max f − min f)`` count as equal.
 

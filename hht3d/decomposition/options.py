@@ -33,8 +33,9 @@ __all__ = ["EMDOptions", "EnsembleOptions", "EMD_DEFAULTS", "ENSEMBLE_DEFAULTS",
 STOPPING_RULES = ("sd", "rfg", "s_number", "fixed")
 #: Envelope interpolants: thin plate in tension (default), the paper's thin plate (Eq. 11), membrane.
 ENVELOPES = ("tension", "biharmonic", "harmonic")
-#: Extremum rules: all of the ring (``strict``) or a fraction ``ratio`` of it (``ring``, Sec. 5.2).
-EXTREMA_RULES = ("strict", "ring")
+#: Extremum rules: above all of the 1-ring (``strict``), or above a fraction ``ratio`` of the ``ring``-ring
+#: (``relaxed``, Sec. 5.2).
+EXTREMA_RULES = ("strict", "relaxed")
 #: Tensions the cancellation guard tries, in order, above the starting one; then the harmonic envelope.
 GUARD_TENSIONS = (3.0, 12.0, 48.0)
 
@@ -91,9 +92,9 @@ class EMDOptions(Record):
     mean_correction: float | None = option(
         0.6, "move each IMF's part slower than this many of its wavelengths to the residue (null: off)",
         minimum=0, maximum=10, nullable=True)
-    extrema: str = option("strict", "extremum rule: 1-ring, or ratio of the ring-ring", choices=EXTREMA_RULES)
-    ring: int = option(2, "neighbourhood of extrema: ring", minimum=1, maximum=MAX_RING)
-    ratio: float = option(0.8, "fraction of extrema: ring", minimum=0.5, maximum=1, open_minimum=True)
+    extrema: str = option("strict", "extremum rule: above the whole 1-ring, or above ratio of the ring-ring (Sec. 5.2)", choices=EXTREMA_RULES)
+    ring: int = option(2, "neighbourhood in edges of the relaxed extremum rule", minimum=1, maximum=MAX_RING)
+    ratio: float = option(0.8, "fraction of the neighbourhood a relaxed extremum exceeds", minimum=0.5, maximum=1, open_minimum=True)
     energy_threshold: float = option(1e-8, "stop when the residue keeps less of the energy", minimum=0,
                                      maximum=1)
 
