@@ -22,14 +22,15 @@ Examples
 from .decomposition import EMDResult, eemd, emd
 from .errors import HHT3DError, InputError, NumericalError, PipelineError
 from .geometry import Surface
-from .io.read import data_path, load
+from .io import data_path, load
+from .io.results import load_result
 from .spectral import HilbertSpectrum, MonogenicSignal, fractional_laplacian, monogenic, riesz
 from .transform import HHTResult, hht
 from .version import __version__
 
-
 __all__ = [
     "EMDResult", "HHTResult", "HilbertSpectrum", "MonogenicSignal", "Surface",
     "HHT3DError", "InputError", "NumericalError", "PipelineError",
-    "__version__", "data_path", "eemd", "emd", "fractional_laplacian", "hht", "load", "monogenic", "riesz",
+    "__version__", "data_path", "eemd", "emd", "fractional_laplacian", "hht", "load", "load_result", "monogenic",
+    "riesz",
 ]

@@ -98,8 +98,9 @@ class HHTResult:
 
         ``.ply``: the surface with :meth:`vertex_attributes` as float64
         vertex properties.  ``.npz``: arrays ``vertices``, ``faces`` (meshes),
-        ``signal``, ``imfs``, ``residue``, ``riesz``, ``amplitude``,
-        ``phase``, ``frequency`` and ``area`` (vertex areas).
+        ``normals``, ``laplacian``, ``n_neighbors``, ``signal``, ``imfs``,
+        ``residue``, ``riesz``, ``amplitude``, ``phase``, ``frequency`` and
+        ``area`` (vertex areas); :func:`hht3d.io.results.load_result` reads it back.
         """
         path = Path(path)
         suffix = path.suffix.lower()
@@ -107,9 +108,10 @@ class HHTResult:
             return io.write_ply(path, self.surface, self.vertex_attributes())
         if suffix == ".npz":
             mono = self.monogenic
-            arrays = {"vertices": self.surface.vertices, "signal": self.signal, "imfs": self.imfs,
-                      "residue": self.residue, "riesz": mono.riesz, "amplitude": mono.amplitude,
-                      "phase": mono.phase, "frequency": mono.frequency,
+            arrays = {"vertices": self.surface.vertices, "normals": self.surface.normals,
+                      "laplacian": np.array(self.surface.laplacian), "n_neighbors": np.array(self.surface.n_neighbors),
+                      "signal": self.signal, "imfs": self.imfs, "residue": self.residue, "riesz": mono.riesz,
+                      "amplitude": mono.amplitude, "phase": mono.phase, "frequency": mono.frequency,
                       "area": self.surface.mass_diagonal}
             if self.surface.is_mesh:
                 arrays["faces"] = self.surface.faces

@@ -15,7 +15,7 @@ import hht3d
 PACKAGE = Path(hht3d.__file__).parent
 LAYERS = [("hht3d.errors", "hht3d.version"), ("hht3d.records",), ("hht3d.linalg",), ("hht3d.geometry",),
           ("hht3d.io",), ("hht3d.decomposition",), ("hht3d.spectral",), ("hht3d.transform",),
-          ("hht3d.apps", "hht3d.viz"), ("hht3d.graph",), ("hht3d.pipeline",), ("hht3d.cli",), ("hht3d.__main__",)]
+          ("hht3d.io.results", "hht3d.apps", "hht3d.viz"), ("hht3d.graph",), ("hht3d.pipeline",), ("hht3d.cli",), ("hht3d.__main__",)]
 #: Upward imports inside a function: (importing module, imported module).
 DELEGATES = {("hht3d.transform", "hht3d.viz.viewer")}  # HHTResult.to_html
 MAX_LINES = 400
@@ -44,11 +44,13 @@ def _imports(name: str, path: Path, known) -> set[str]:
 
 
 def _rank(name: str) -> int:
-    return next(i for i, group in enumerate(LAYERS) for top in group if name == top or name.startswith(top + "."))
+    """The layer of the longest prefix of ``name`` that LAYERS lists."""
+    ranks = {top: i for i, group in enumerate(LAYERS) for top in group}
+    return ranks[max((top for top in ranks if name == top or name.startswith(top + ".")), key=len)]
 
 
 def _group(name: str) -> str:
-    return ".".join(name.split(".")[:2])
+    return "hht3d.io.results" if name.startswith("hht3d.io.results") else ".".join(name.split(".")[:2])
 
 
 GRAPH = {name: _imports(name, path, _modules()) for name, path in _modules().items() if name != "hht3d"}
