@@ -53,11 +53,10 @@ for the interior default ``μ = 0.01`` and 6 for the boundary default
 edits at finer scales are followed; coarser drift is damped.  That drift
 matters: EMD leaves some low-frequency content in every IMF (the sifting
 stops while the mean envelope is small, not zero), and the solve turns a
-curvature change of frequency ``ω`` into a displacement ``∝ 1/ω²``.  On the
-test sphere with a band of 20 bumps (10,242 vertices) a band-stop at the
-bumps' scale lowered the distance to the clean sphere 4.9× with
-``μ = 0.01``, 2.6× with 0.001 and 2.7× with 0.1, but made it worse (0.9×)
-with 0.0001 (the paper's 0.01 read as a row weight, ``Σ μ² |v' − v|²``).
+curvature change of frequency ``ω`` into a displacement ``∝ 1/ω²``.  The
+weights were chosen on a test sphere with a band of bumps
+(``benchmarks/results/design_notes.md``); the paper's 0.01 read as a row
+weight, ``Σ μ² |v' − v|²``, makes that surface worse.
 Point clouds have no boundary and use the interior weight everywhere.
 
 Scale
@@ -70,10 +69,8 @@ zero, so the mean of ``s' − s`` is an artifact of gains that differ between
 vertices; with ``preserve_scale=True`` (default) its area-weighted mean is
 removed on every connected component, which keeps each component's size
 (on an open component the same mode is a bulge of the patch, held by the
-boundary weights; its mean is removed too, for the same reason).  On
-a 2,562-vertex sphere with a band of 12 bumps, a band-stop changed the
-enclosed volume by −0.18% without and +0.02% with it at ``μ = 0.01``, and
-by −9.9% without it at ``μ = 0.0001``.
+boundary weights; its mean is removed too, for the same reason).  What it
+does to the enclosed volume: ``benchmarks/results/design_notes.md``.
 """
 from __future__ import annotations
 
