@@ -77,16 +77,10 @@ def _mean_edge(surface) -> float:
 
 
 def _load_result(name: str, scratch: Path):
-    """The model and its saved HHT as an :class:`~hht3d.transform.HHTResult`."""
-    from hht3d.transform import HHTResult
-    from hht3d.spectral.monogenic_signal import MonogenicSignal
+    """The model's HHT saved by the hht stage (:func:`hht3d.load_result`)."""
+    from hht3d import load_result
 
-    surface = _load(name)
-    with np.load(scratch / f"{name}.npz") as data:
-        arrays = {k: data[k] for k in data.files}
-    mono = MonogenicSignal(imfs=arrays["imfs"], riesz=arrays["riesz"], amplitude=arrays["amplitude"],
-                           phase=arrays["phase"], frequency=arrays["frequency"])
-    return HHTResult(surface, arrays["signal"], arrays["imfs"], arrays["residue"], mono)
+    return load_result(scratch / f"{name}.npz")
 
 
 def stage_hht(name: str, scratch: Path) -> dict:

@@ -10,8 +10,8 @@ gradients converge in a few iterations.
 This script replays the first ``--imfs`` IMFs of the mean-curvature signal
 with EMD's default rules (strict 1-ring extrema, biharmonic envelopes, SD 0.2)
 and the formulation of :mod:`hht3d.decomposition.decompose` (one pattern, constrained rows
-replaced by their diagonal), using only public API (:func:`hht3d.decomposition.decompose.envelope_operator`,
-:func:`hht3d.decomposition.decompose.local_extrema`, :class:`hht3d.linalg.backends.SymbolicFactorization`).
+replaced by their diagonal), using only public API (:func:`hht3d.decomposition.envelope_operator`,
+:func:`hht3d.decomposition.local_extrema`, :class:`hht3d.linalg.backends.SymbolicFactorization`).
 Every envelope is solved two ways and timed:
 
 ``refactor``  what EMD does today: one numeric factorization and one solve;

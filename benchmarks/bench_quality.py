@@ -1,7 +1,7 @@
 """Decomposition quality before and after the defaults of issue "Trustworthy decompositions".
 
 *Before* is the paper's method as hht3d ran it until then: thin-plate envelopes
-without guard or local-mean correction (``hht3d.decomposition.decompose.PAPER_OPTIONS``), the
+without guard or local-mean correction (``hht3d.decomposition.PAPER_OPTIONS``), the
 pointwise mean curvature of Eq. 24 (``min_area=0``) and the fixed Eq. 27
 weights 0.01 / 1.0.  *After* is today's defaults.  Both run in the same
 process, so time ratios compare like with like.

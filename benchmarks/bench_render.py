@@ -96,7 +96,8 @@ def synthetic_result(surface: Surface) -> HHTResult:
     amplitude = np.abs(imfs) + 0.1 / scales[:, None]
     frequency = scales[:, None] * (1.2 + np.cos(7 * v[:, 0]))[None, :] / surface.bounding_box_diagonal
     mono = MonogenicSignal(imfs=imfs, riesz=np.zeros(imfs.shape + (3,)), amplitude=amplitude,
-                           phase=np.arccos(np.clip(imfs / amplitude, -1, 1)), frequency=frequency)
+                           phase=np.arccos(np.clip(imfs / amplitude, -1, 1)), frequency=frequency,
+                           area=surface.mass_diagonal)
     return HHTResult(surface=surface, signal=imfs.sum(axis=0) + residue, imfs=imfs, residue=residue,
                      monogenic=mono)
 

@@ -17,7 +17,7 @@ transform + monogenic quantities of all 15 at once with ``quadrature``
 subprocess for its own peak memory; errors against ``quadrature`` at
 tol 1e-12.
 
-Timed: :func:`hht3d.spectral.riesz_transform.spectral_bounds` (quadrature) or
+Timed: :func:`hht3d.spectral.spectral_bounds` (quadrature) or
 :func:`hht3d.spectral.riesz_transform.smallest_eigenpairs` (spectral), then
 :func:`hht3d.spectral.monogenic_signal.monogenic`.  Not timed: loading, ``L``, ``M`` and the
 gradient operator (shared by both methods; reported apart), and

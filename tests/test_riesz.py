@@ -61,7 +61,7 @@ def jittered_grid():
 def generalized_eigh(surface):
     """Non-zero eigenpairs of ``L φ = λ M φ`` by ``scipy.linalg.eigh(L, M)``, written here.
 
-    Independent of ``hht3d.spectral.riesz_transform._dense_eigenpairs`` (which symmetrises with
+    Independent of ``hht3d.spectral.eigenpairs.dense_eigenpairs`` (which symmetrises with
     ``M^{-1/2}`` and calls the standard problem): LAPACK's generalized
     solver returns M-orthonormal eigenvectors directly.
     """

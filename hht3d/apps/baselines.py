@@ -174,7 +174,7 @@ def hks_features(surface: Surface, *, time: float | None = None, eigenpairs: int
 
     A vertex is a feature when its ``k_t(x, x)`` is at least that of every
     vertex in its ``ring``-ring and larger than one of them
-    (:func:`hht3d.decomposition.decompose.local_extrema`, ``rule="strict"``).
+    (:func:`hht3d.decomposition.local_extrema`, ``rule="strict"``).
 
     Parameters
     ----------

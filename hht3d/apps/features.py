@@ -7,7 +7,7 @@ local maximum of ``f_k`` when
     |N⁺_{f_k}(v_i)| ≥ t |N_2(i)|,   N⁺_{f_k}(v_i) = {j ∈ N_2(i) : f_k(v_i) ≥ f_k(v_j)},
 
 with ``N_2(i)`` its two-ring and ``t = 0.8`` by default (minima likewise
-with ``≤``); :func:`hht3d.decomposition.decompose.local_extrema` with ``rule="relaxed"``.  Counting
+with ``≤``); :func:`hht3d.decomposition.local_extrema` with ``rule="relaxed"``.  Counting
 over the ``K`` IMFs how often each vertex is an extremum, the *prominent*
 features are the vertices counted at least ``⌈K/2⌉`` times (the paper's
 "half of the decomposition IMF number"; ``fraction`` changes it).

@@ -124,7 +124,7 @@ class _OnWorker:
 
 
 class _SharedAnalysis:
-    """A surface's shift analysis (:func:`hht3d.spectral.riesz_transform.shift_analysis`), one task at a time.
+    """A surface's shift analysis (:func:`hht3d.spectral.shifts.shift_analysis`), one task at a time.
 
     PARDISO and CHOLMOD keep one numeric factor per analysis, so tasks sharing
     it in one process (threads) take turns.
@@ -147,13 +147,13 @@ class _SharedAnalysis:
 
 
 def _quadrature_plan(surface: Surface, tol: float, backend: str | None):
-    """:func:`hht3d.spectral.riesz_transform.quadrature_plan` with this process's shared shift analysis."""
+    """:func:`hht3d.spectral.quadrature_plan` with this process's shared shift analysis."""
     with _SharedAnalysis.of(surface, backend) as symbolic:
         return quadrature_plan(surface, tol, symbolic=symbolic)
 
 
 def _quadrature_part(surface: Surface, f, plan, group: int, groups: int, backend: str | None):
-    """:func:`hht3d.spectral.riesz_transform.quadrature_part` with this process's shared shift analysis."""
+    """:func:`hht3d.spectral.quadrature_part` with this process's shared shift analysis."""
     with _SharedAnalysis.of(surface, backend) as symbolic:
         return quadrature_part(surface, f, plan, group, groups, symbolic=symbolic)
 
@@ -178,7 +178,7 @@ def riesz_potential(surface, imfs, *, method: str = RIESZ_DEFAULTS.method, tol: 
     """Lazy ``L^{-1/2}`` of all IMFs, ``(k, n)``.
 
     ``method="quadrature"``: a bounds task, ``riesz_tasks`` shift-group tasks
-    (:func:`hht3d.spectral.riesz_transform.quadrature_part`; default one per worker of the
+    (:func:`hht3d.spectral.quadrature_part`; default one per worker of the
     scheduler, :func:`hht3d.graph.scheduling.worker_count`) and a summing task.
     Other methods: one task (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`).
     """

@@ -162,7 +162,7 @@ def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = 
     imfs : (k, n) or (n,) array_like
     potential : array_like, shape of ``imfs``
         ``L^{-1/2}`` of the IMFs, e.g. from
-        :func:`hht3d.spectral.riesz_transform.combine_quadrature_parts`.
+        :func:`hht3d.spectral.combine_quadrature_parts`.
     gradient : {"lsq", "fem"}
     frequency : {"phase", "gradient"}
         Estimator of Eq. 23; see :func:`monogenic`.
