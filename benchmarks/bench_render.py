@@ -57,7 +57,7 @@ if str(ROOT) not in sys.path:
 
 from hht3d.viz import figures, render  # noqa: E402
 from hht3d.transform import HHTResult  # noqa: E402
-from hht3d.io.read.read import load  # noqa: E402
+from hht3d.io import load  # noqa: E402
 from hht3d.spectral.monogenic_signal import MonogenicSignal  # noqa: E402
 from hht3d.geometry.surface import Surface  # noqa: E402
 

@@ -58,7 +58,7 @@ class HHTResult:
     def from_parts(cls, surface: Surface, signal, decomposition, mono: MonogenicSignal,
                    riesz_options: dict, seconds: dict | None = None) -> "HHTResult":
         """Assemble a result from an :class:`~hht3d.decomposition.decompose.EMDResult` and the monogenic signal
-        of its IMFs (as the lazy graph of :mod:`hht3d.graph.stages.stages` does)."""
+        of its IMFs (as the lazy graph of :mod:`hht3d.graph.stages` does)."""
         info = {"emd": decomposition.info, "riesz": dict(riesz_options)}
         if seconds is not None:
             info["seconds"] = seconds

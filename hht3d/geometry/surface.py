@@ -89,7 +89,7 @@ class Surface:
     # -- construction -----------------------------------------------------------------
     @classmethod
     def from_file(cls, path, **options) -> "Surface":
-        """Load a mesh or point cloud; see :func:`hht3d.io.read.read.load`."""
+        """Load a mesh or point cloud; see :func:`hht3d.io.read.load`."""
         from ..io.read import load
 
         return load(path, **options)

@@ -4,8 +4,8 @@ A pipeline file (schema in :mod:`hht3d.pipeline.schema`) names its inputs,
 a list of steps (operations of :data:`~hht3d.pipeline.registry.OPERATIONS`
 with parameters and references to earlier steps) and the files to write.
 :func:`load_pipeline` validates it into a typed :class:`Pipeline`;
-:func:`run_pipeline` compiles that to the lazy graph of :mod:`hht3d.graph.stages.stages`
-and runs it on any scheduler of :mod:`hht3d.graph.stages.scheduling`.
+:func:`run_pipeline` compiles that to the lazy graph of :mod:`hht3d.graph.stages`
+and runs it on any scheduler of :mod:`hht3d.graph.scheduling`.
 
 >>> from hht3d import data_path
 >>> from hht3d.pipeline import load_pipeline

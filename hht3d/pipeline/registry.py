@@ -21,7 +21,7 @@ defaults read from the function's signature by
 :func:`~hht3d.pipeline.params.with_defaults`).
 :meth:`Operation.tasks` makes the step's lazy task from that alone.  An
 operation whose work is several tasks (EEMD members, the HHT stages) names
-a ``build`` function of :mod:`hht3d.graph.stages.stages` instead.  ``hht3d ops`` prints
+a ``build`` function of :mod:`hht3d.graph.stages` instead.  ``hht3d ops`` prints
 this registry.
 
 Adding an operation
@@ -34,7 +34,7 @@ Write the core function (e.g. in :mod:`hht3d.apps`), then add one entry to
               func=smooth),
 
 Its lazy twin, if wanted outside pipelines, is one line in
-:mod:`hht3d.graph.stages.stages`: ``smooth = mirror(smooth)``.
+:mod:`hht3d.graph.stages`: ``smooth = mirror(smooth)``.
 """
 from __future__ import annotations
 
@@ -84,7 +84,7 @@ class Operation:
         The core function: the step is one task ``func(*inputs, **params)``.
     build : callable, optional
         Instead of ``func``: ``build(builder, *inputs, **params)`` makes the
-        step's tasks (:mod:`hht3d.graph.stages.stages`) and returns the result's task, or
+        step's tasks (:mod:`hht3d.graph.stages`) and returns the result's task, or
         the tasks by stage name with the result under ``"result"``.
     check : callable, optional
         ``check(params, where)`` raises :class:`PipelineError` for
@@ -300,7 +300,7 @@ def _eigenpair_vertices(params) -> tuple[str, int] | None:
 
 
 def _hht_tasks(builder, surface, signal, **params):
-    """The HHT's stages (:func:`hht3d.graph.stages.stages.transform`) from the step's flat parameters."""
+    """The HHT's stages (:func:`hht3d.graph.stages.transform`) from the step's flat parameters."""
     emd_names = {p.name for p in EMD} - {"backend"}
     emd_options = {k: v for k, v in params.items() if k in emd_names}
     ensemble = {k: params[k] for k in ("ensemble_size", "noise_std", "seed")}

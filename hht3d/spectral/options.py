@@ -2,7 +2,7 @@
 
 :class:`RieszOptions` is to :func:`hht3d.spectral.riesz_transform.riesz`,
 :func:`hht3d.spectral.monogenic_signal.monogenic`, :func:`hht3d.transform.hht` and their lazy
-mirrors in :mod:`hht3d.graph.stages.stages` what :class:`hht3d.decomposition.decompose.EMDOptions` is to
+mirrors in :mod:`hht3d.graph.stages` what :class:`hht3d.decomposition.decompose.EMDOptions` is to
 :func:`hht3d.decomposition.decompose.emd`: one frozen record of the settings, whose field
 defaults are the functions' keyword defaults (:data:`RIESZ_DEFAULTS`).  The
 functions keep their keyword arguments; a default changed here changes them

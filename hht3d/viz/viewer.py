@@ -460,7 +460,7 @@ def read_fields(path) -> tuple[Surface, dict, np.ndarray | None]:
     writes them (``vertices``, ``faces``, ``signal``, ``imfs``, ...): every
     ``(n,)`` array is a field and ``imfs``, ``amplitude``, ``phase`` and
     ``frequency`` (k, n) become ``imf_K``, ``amplitude_K``, ... Any surface
-    file of :func:`hht3d.io.read.read.load` (read without cleaning, so vertices keep
+    file of :func:`hht3d.io.read.load` (read without cleaning, so vertices keep
     their order): its numeric vertex properties are the fields.
 
     Returns
