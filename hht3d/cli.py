@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 
 from .errors import HHT3DError, PipelineError, one_line, shown
+from .redaction import redact
 from .io.read import data_path
 from .graph.scheduling import SCHEDULERS
 from .viz.render import UP_AXES, VIEWS
@@ -71,9 +72,9 @@ def _execute(plan, args) -> int:
     rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
                         progress=False if args.quiet else None, resume=args.resume, summary=False)
     for row in rows:
-        print("\n".join(_row_lines(row)), flush=True)
+        print(redact("\n".join(_row_lines(row))), flush=True)
     if plan.summary:
-        write_summary(rows, plan.folder)
+        write_summary(rows, plan.folder, plan.storage_options)
         print(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}")
     failed = failures(rows)
     if failed:
@@ -91,7 +92,7 @@ def _demo(args) -> int:
 
 def _validate(args) -> int:
     plan = _plan(args.pipeline, args.set)
-    print(plan.describe())
+    print(redact(plan.describe()))
     print("valid: parameters, inputs and output locations checked; nothing was run")
     return 0
 
