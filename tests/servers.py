@@ -67,17 +67,17 @@ def dask_cluster(workers: int = 2, *, env: dict | None = None, memory_limit: str
     """Yield ``(address, folders)``: a scheduler and ``workers`` single-threaded workers, each a separate
     process in its own empty temporary folder (``folders[i]``; the scheduler's is ``folders[-1]``).
 
-    The workers import hht3d from this checkout (``PYTHONPATH``) and get the
-    fake S3 credentials in their environment, nothing else of the client's.
+    The workers import hht3d from this checkout (``PYTHONPATH``) and have the
+    client's environment (the same BLAS settings, so the same rounding) with
+    the fake S3 credentials, one BLAS thread, and ``HOME``/``TMPDIR`` in their folder.
     """
     base = Path(tempfile.mkdtemp(prefix="hht3d-cluster-"))
     folders = [base / f"worker{i}" for i in range(workers)] + [base / "scheduler"]
     for folder in folders:
         folder.mkdir()
     scheduler_file = folders[-1] / "scheduler.json"
-    common = {k: os.environ[k] for k in ("PATH", "LANG") if k in os.environ}
-    common.update(FAKE_CREDENTIALS, PYTHONPATH=str(ROOT), OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
-                  OPENBLAS_NUM_THREADS="1", **(env or {}))
+    common = {**os.environ, **FAKE_CREDENTIALS, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1",
+              "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", **(env or {})}
     processes = []
     try:
         processes.append(_start([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",

@@ -29,7 +29,7 @@ from pathlib import Path, PurePosixPath
 from urllib.parse import urlsplit
 
 from ..errors import HHT3DError, InputError, OutputError, one_line
-from ..redaction import remember_secrets
+from ..redaction import redact, remember_secrets
 from .read import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS, atomic_path, check_output_paths, resolve_inputs
 
 __all__ = ["EXTRAS", "is_url", "filesystem", "name", "stem", "parent_name", "join", "resolve_locations",
@@ -69,10 +69,10 @@ def filesystem(url: str, storage_options: dict | None = None):
     except ImportError:
         extra = EXTRAS.get(protocol)
         how = f"pip install 'hht3d[{extra}]'" if extra else "install the fsspec back-end for it"
-        raise InputError(f"{url}: reading and writing {protocol}:// needs a back-end that is not installed; "
+        raise InputError(f"{redact(url)}: reading and writing {protocol}:// needs a back-end that is not installed; "
                          f"{how}") from None
     except (ValueError, TypeError) as exc:
-        raise InputError(f"{url}: cannot open {protocol}:// ({one_line(exc)}); check the URL and "
+        raise InputError(f"{redact(url)}: cannot open {protocol}:// ({one_line(exc)}); check the URL and "
                          "storage_options") from None
 
 
@@ -138,24 +138,24 @@ def _remote_inputs(url: str, storage_options) -> list[str]:
     usable = set(MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS)
     try:
         fs.invalidate_cache()
-        if any(ch in path for ch in _GLOB):
+        if any(ch in _key(url) for ch in _GLOB):  # not in a query string (signed URLs)
             paths = [p for p in fs.glob(path) if fs.isfile(p)]
         elif fs.isdir(path):
             paths = [p for p, info in fs.find(path, maxdepth=1, detail=True).items() if info["type"] == "file"]
         elif fs.isfile(path):
             if PurePosixPath(path).suffix.lower() not in usable:
-                raise InputError(f"{url}: unknown extension {PurePosixPath(path).suffix.lower() or '(none)'!r}; "
+                raise InputError(f"{redact(url)}: unknown extension {PurePosixPath(path).suffix.lower() or '(none)'!r}; "
                                  f"use one of {', '.join(sorted(usable))}")
             return [url]
         else:
-            raise InputError(f"{url}: no such object or folder; check the URL")
+            raise InputError(f"{redact(url)}: no such object or folder; check the URL")
     except HHT3DError:
         raise
     except Exception as exc:  # the back-ends raise many types (network, client errors)
-        raise InputError(f"{url}: cannot list ({_access_error(url, exc)})") from None
+        raise InputError(f"{redact(url)}: cannot list ({_access_error(url, exc)})") from None
     matches = sorted(fs.unstrip_protocol(p) for p in paths if PurePosixPath(p).suffix.lower() in usable)
     if not matches:
-        raise InputError(f"{url}: matches no mesh or point-cloud file ({', '.join(sorted(usable))})")
+        raise InputError(f"{redact(url)}: matches no mesh or point-cloud file ({', '.join(sorted(usable))})")
     return matches
 
 
@@ -194,7 +194,7 @@ def local_copy(location, storage_options: dict | None = None, *, head: int | Non
             else:
                 local.write_bytes(fs.cat_file(path, start=0, end=head))
         except Exception as exc:  # the back-ends raise many types (network, client errors)
-            raise InputError(f"{location}: cannot read ({_access_error(location, exc)})") from None
+            raise InputError(f"{redact(location)}: cannot read ({_access_error(location, exc)})") from None
         yield local
 
 
@@ -204,7 +204,7 @@ def load_url(load, url: str, storage_options: dict | None = None, **options):
         try:
             return load(local, **{**options, "name": options.get("name") or stem(url)})
         except InputError as exc:
-            raise InputError(str(exc).replace(str(local), url)) from None
+            raise InputError(str(exc).replace(str(local), redact(url))) from None
 
 
 @contextlib.contextmanager
@@ -245,7 +245,7 @@ def _upload(fs, local: str, path: str, location: str) -> None:
                     if fs.exists(partial):
                         fs.rm_file(partial)
     except Exception as exc:  # the back-ends raise many types (network, client errors)
-        raise OutputError(f"{location}: cannot write ({_access_error(location, exc)}); check the bucket and "
+        raise OutputError(f"{redact(location)}: cannot write ({_access_error(location, exc)}); check the bucket and "
                           "the credentials, or choose another output folder") from None
     finally:
         fs.invalidate_cache(str(PurePosixPath(path).parent))
@@ -289,7 +289,7 @@ def _check_remote_folder(folder: str, storage_options) -> None:
     protocol = _protocol(folder)
     try:
         if protocol in _ATOMIC_UPLOAD - {"memory"} and not fs.exists(bucket):
-            raise OutputError(f"{folder}: cannot write: the bucket {bucket!r} does not exist (or these credentials "
+            raise OutputError(f"{redact(folder)}: cannot write: the bucket {bucket!r} does not exist (or these credentials "
                               "cannot see it); create it or choose another output folder")
         probe = f"{path.rstrip('/')}/.hht3d-probe-{uuid.uuid4().hex}"
         fs.pipe_file(probe, b"")
@@ -297,5 +297,5 @@ def _check_remote_folder(folder: str, storage_options) -> None:
     except HHT3DError:
         raise
     except Exception as exc:  # the back-ends raise many types (network, client errors)
-        raise OutputError(f"{folder}: cannot write ({_access_error(folder, exc)}); choose another output "
+        raise OutputError(f"{redact(folder)}: cannot write ({_access_error(folder, exc)}); choose another output "
                           "folder or fix the permissions") from None
