@@ -230,3 +230,20 @@ def test_a_secret_never_appears_in_what_runs_print_or_write(store, cluster, tmp_
     written += [p.read_bytes() for folder in cluster[1] for p in folder.rglob("*.log")]
     assert all(SECRET not in text for text in printed)
     assert all(SECRET.encode() not in data for data in written)
+
+
+def test_a_failed_write_leaves_no_object_and_a_non_atomic_store_gets_a_moved_whole_file(tmp_path):
+    from hht3d.io.storage import write_via
+
+    def half_then_fail(data: bytes, path: Path) -> None:
+        path.write_bytes(data[: len(data) // 2])
+        raise RuntimeError("killed mid-write")
+
+    memory = fsspec.filesystem("memory")
+    with pytest.raises(RuntimeError):
+        write_via(half_then_fail, b"x" * 1000, "memory://atomic/out.bin")
+    assert not memory.exists("/atomic/out.bin")
+    url = f"file://{tmp_path}/out/result.bin"  # no atomic upload there: a temporary name, then a move
+    assert write_via(lambda data, path: path.write_bytes(data), b"y" * 1000, url) == url
+    assert [p.name for p in (tmp_path / "out").iterdir()] == ["result.bin"]
+    assert (tmp_path / "out" / "result.bin").read_bytes() == b"y" * 1000

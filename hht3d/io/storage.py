@@ -237,6 +237,7 @@ def _upload(fs, local: str, path: str, location: str) -> None:
             fs.put_file(local, path)
         else:
             partial = f"{PurePosixPath(path).parent}/.{PurePosixPath(path).name}.{uuid.uuid4().hex}.part"
+            fs.makedirs(str(PurePosixPath(path).parent), exist_ok=True)
             fs.put_file(local, partial)
             try:
                 fs.mv(partial, path)
