@@ -13,7 +13,8 @@ empty folder (``tests/servers.py``), in one run:
   temporary file and upload each output.
 
 The paths run alternately (local, s3, s3, local, ... with ``--repeats``), and
-each path's time is its fastest run.  Reported: the wall-time ratio s3/local
+each path's time is its fastest run.  Both get the files in the same order (by
+name, the order of the ``s3://`` glob), which sets the order Dask starts them in.  Reported: the wall-time ratio s3/local
 (target <= 1.10), the bytes each model moves (input downloaded + outputs
 uploaded) and each worker's peak memory per path (VmHWM, reset before each run
 through ``/proc/self/clear_refs``).  Results: ``benchmarks/results/storage.json``
@@ -60,7 +61,9 @@ def _timed(client, inputs, out, options) -> dict:
     rows = run_dataset(inputs, out, address=client.scheduler.address, progress=False, **options)
     seconds = time.perf_counter() - start
     peaks = client.run(_peak_mb)
-    return {"seconds": seconds, "rows": rows, "worker_peak_mb": sorted(round(v, 1) for v in peaks.values())}
+    return {"seconds": seconds, "rows": {Path(r.source).stem: r for r in rows},
+            "task_seconds": sum(r.seconds or 0.0 for r in rows),
+            "worker_peak_mb": sorted(round(v, 1) for v in peaks.values())}
 
 
 def main() -> None:
@@ -71,10 +74,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeats", type=int, default=2, help="runs of each path (alternating)")
     args = parser.parse_args()
-    paths = [model_path(name) for name in DATASET]
-    missing = [name for name, p in zip(DATASET, paths) if p is None]
+    missing = [name for name in DATASET if model_path(name) is None]
     if missing:
         sys.exit(f"missing models in ../shared/data: {missing}")
+    paths = sorted((model_path(name) for name in DATASET), key=lambda p: p.name)  # the s3 glob's order
     runs = {"local": [], "s3": []}
     with s3_server() as endpoint, dask_cluster(2) as (address, _), Client(address) as client, \
             tempfile.TemporaryDirectory() as local_out:
@@ -99,17 +102,21 @@ def main() -> None:
     best = {name: min(r["seconds"] for r in results) for name, results in runs.items()}
     ratio = best["s3"] / best["local"]
     models = []
-    for path, row in zip(paths, runs["s3"][0]["rows"]):
-        stem = path.stem
+    for path in paths:
+        stem, row = path.stem, runs["s3"][0]["rows"][path.stem]
         down, up = sizes[path.name], sizes.get(f"{stem}_hht.ply", 0) + sizes.get(f"{stem}_hht.npz", 0)
         models.append({"model": stem, "status": row.status, "vertices": row.vertices, "imfs": row.imfs,
-                       "downloaded_bytes": down, "uploaded_bytes": up})
+                       "downloaded_bytes": down, "uploaded_bytes": up,
+                       "task_seconds": {k: [round(r["rows"][stem].seconds or 0.0, 2) for r in v]
+                                        for k, v in runs.items()}})
     records = {"machine": machine(), "dataset": DATASET, "repeats": args.repeats, "order": order,
                "seconds": {k: [round(r["seconds"], 2) for r in v] for k, v in runs.items()},
                "best_seconds": best, "ratio_s3_over_local": ratio, "target": TARGET,
+               "task_seconds": {k: [round(r["task_seconds"], 2) for r in v] for k, v in runs.items()},
                "worker_peak_mb": {k: [r["worker_peak_mb"] for r in v] for k, v in runs.items()}, "models": models}
     rows = [[m["model"], m["status"], m["vertices"], m["imfs"], f"{m['downloaded_bytes'] / 1e6:.2f}",
-             f"{m['uploaded_bytes'] / 1e6:.2f}"] for m in models]
+             f"{m['uploaded_bytes'] / 1e6:.2f}", " / ".join(map(str, m["task_seconds"]["local"])),
+             " / ".join(map(str, m["task_seconds"]["s3"]))] for m in models]
     peaks = "; ".join(f"{k}: " + ", ".join(f"{p[0]:.0f} / {p[1]:.0f}" for p in v)
                       for k, v in records["worker_peak_mb"].items())
     markdown = "\n".join([
@@ -121,10 +128,15 @@ def main() -> None:
         "outputs) on a `dask.distributed` cluster of 2 single-threaded workers in empty folders of their own: "
         "local paths against `s3://` URLs on a moto S3 server on 127.0.0.1 (workers download and upload "
         "themselves).", "",
-        table(["model", "status", "#V", "#IMFs", "downloaded MB", "uploaded MB"], rows), "",
+        table(["model", "status", "#V", "#IMFs", "downloaded MB", "uploaded MB", "task s, local runs",
+               "task s, s3 runs"], rows), "",
+        "*task s*: the item's task run times summed (load, signal, EMD, Riesz, spectra, writes; with s3 the "
+        "download is in load and the upload in the writes).", "",
         f"Wall time (runs in order {', '.join(order)}): local {', '.join(f'{s:.1f}' for s in records['seconds']['local'])} s, "
         f"s3 {', '.join(f'{s:.1f}' for s in records['seconds']['s3'])} s; fastest s3 / fastest local = "
-        f"**{ratio:.3f}** (target <= {TARGET:.2f}).", "",
+        f"**{ratio:.3f}** (target <= {TARGET:.2f}).  Task seconds summed over the dataset: local "
+        f"{', '.join(map(str, records['task_seconds']['local']))}, s3 {', '.join(map(str, records['task_seconds']['s3']))}.",
+        "",
         f"Peak memory of the two workers per run (MB, VmHWM): {peaks}.", ""])
     for path in write_results("storage", records, markdown):
         print(path)
