@@ -14,10 +14,11 @@ empty folder (``tests/servers.py``), in one run:
 
 The paths run alternately (local, s3, s3, local, ... with ``--repeats``), and
 each path's time is its fastest run.  Both get the files in the same order (by
-name, the order of the ``s3://`` glob), which sets the order Dask starts them in.  Reported: the wall-time ratio s3/local
-(target <= 1.10), the bytes each model moves (input downloaded + outputs
-uploaded) and each worker's peak memory per path (VmHWM, reset before each run
-through ``/proc/self/clear_refs``).  Results: ``benchmarks/results/storage.json``
+name, the order of the ``s3://`` glob), which sets the order Dask starts them
+in.  Reported: the wall-time ratio s3/local (target <= 1.10), the bytes each
+model moves (input downloaded + outputs uploaded), the items' task seconds and
+each worker's peak memory per run (VmHWM, reset before each run through
+``/proc/self/clear_refs``).  Results: ``benchmarks/results/storage.json``
 and ``storage.md``.
 
 Usage::
@@ -64,6 +65,10 @@ def _timed(client, inputs, out, options) -> dict:
     return {"seconds": seconds, "rows": {Path(r.source).stem: r for r in rows},
             "task_seconds": sum(r.seconds or 0.0 for r in rows),
             "worker_peak_mb": sorted(round(v, 1) for v in peaks.values())}
+
+
+def _listed(values) -> str:
+    return ", ".join(f"{v:.1f}" for v in values)
 
 
 def main() -> None:
@@ -132,10 +137,10 @@ def main() -> None:
                "task s, s3 runs"], rows), "",
         "*task s*: the item's task run times summed (load, signal, EMD, Riesz, spectra, writes; with s3 the "
         "download is in load and the upload in the writes).", "",
-        f"Wall time (runs in order {', '.join(order)}): local {', '.join(f'{s:.1f}' for s in records['seconds']['local'])} s, "
-        f"s3 {', '.join(f'{s:.1f}' for s in records['seconds']['s3'])} s; fastest s3 / fastest local = "
-        f"**{ratio:.3f}** (target <= {TARGET:.2f}).  Task seconds summed over the dataset: local "
-        f"{', '.join(map(str, records['task_seconds']['local']))}, s3 {', '.join(map(str, records['task_seconds']['s3']))}.",
+        f"Wall time (runs in order {', '.join(order)}): local {_listed(records['seconds']['local'])} s, "
+        f"s3 {_listed(records['seconds']['s3'])} s; fastest s3 / fastest local = **{ratio:.3f}** "
+        f"(target <= {TARGET:.2f}).  Task seconds summed over the dataset: local "
+        f"{_listed(records['task_seconds']['local'])}, s3 {_listed(records['task_seconds']['s3'])}.",
         "",
         f"Peak memory of the two workers per run (MB, VmHWM): {peaks}.", ""])
     for path in write_results("storage", records, markdown):

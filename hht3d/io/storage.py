@@ -107,7 +107,7 @@ def join(folder, file_name: str):
     return Path(folder) / file_name
 
 
-def _access_error(url: str, exc: Exception) -> str:
+def _access_error(exc: Exception) -> str:
     if isinstance(exc, PermissionError):
         return "access denied; check the credentials (environment, config files or instance role)"
     if isinstance(exc, FileNotFoundError):
@@ -143,16 +143,17 @@ def _remote_inputs(url: str, storage_options) -> list[str]:
         elif fs.isdir(path):
             paths = [p for p, info in fs.find(path, maxdepth=1, detail=True).items() if info["type"] == "file"]
         elif fs.isfile(path):
-            if PurePosixPath(path).suffix.lower() not in usable:
-                raise InputError(f"{redact(url)}: unknown extension {PurePosixPath(path).suffix.lower() or '(none)'!r}; "
-                                 f"use one of {', '.join(sorted(usable))}")
+            suffix = PurePosixPath(path).suffix.lower()
+            if suffix not in usable:
+                raise InputError(f"{redact(url)}: unknown extension {suffix or '(none)'!r}; use one of "
+                                 f"{', '.join(sorted(usable))}")
             return [url]
         else:
             raise InputError(f"{redact(url)}: no such object or folder; check the URL")
     except HHT3DError:
         raise
     except Exception as exc:  # the back-ends raise many types (network, client errors)
-        raise InputError(f"{redact(url)}: cannot list ({_access_error(url, exc)})") from None
+        raise InputError(f"{redact(url)}: cannot list ({_access_error(exc)})") from None
     matches = sorted(fs.unstrip_protocol(p) for p in paths if PurePosixPath(p).suffix.lower() in usable)
     if not matches:
         raise InputError(f"{redact(url)}: matches no mesh or point-cloud file ({', '.join(sorted(usable))})")
@@ -194,7 +195,7 @@ def local_copy(location, storage_options: dict | None = None, *, head: int | Non
             else:
                 local.write_bytes(fs.cat_file(path, start=0, end=head))
         except Exception as exc:  # the back-ends raise many types (network, client errors)
-            raise InputError(f"{redact(location)}: cannot read ({_access_error(location, exc)})") from None
+            raise InputError(f"{redact(location)}: cannot read ({_access_error(exc)})") from None
         yield local
 
 
@@ -246,7 +247,7 @@ def _upload(fs, local: str, path: str, location: str) -> None:
                     if fs.exists(partial):
                         fs.rm_file(partial)
     except Exception as exc:  # the back-ends raise many types (network, client errors)
-        raise OutputError(f"{redact(location)}: cannot write ({_access_error(location, exc)}); check the bucket and "
+        raise OutputError(f"{redact(location)}: cannot write ({_access_error(exc)}); check the bucket and "
                           "the credentials, or choose another output folder") from None
     finally:
         fs.invalidate_cache(str(PurePosixPath(path).parent))
@@ -290,13 +291,13 @@ def _check_remote_folder(folder: str, storage_options) -> None:
     protocol = _protocol(folder)
     try:
         if protocol in _ATOMIC_UPLOAD - {"memory"} and not fs.exists(bucket):
-            raise OutputError(f"{redact(folder)}: cannot write: the bucket {bucket!r} does not exist (or these credentials "
-                              "cannot see it); create it or choose another output folder")
+            raise OutputError(f"{redact(folder)}: cannot write: the bucket {bucket!r} does not exist (or these "
+                              "credentials cannot see it); create it or choose another output folder")
         probe = f"{path.rstrip('/')}/.hht3d-probe-{uuid.uuid4().hex}"
         fs.pipe_file(probe, b"")
         fs.rm_file(probe)
     except HHT3DError:
         raise
     except Exception as exc:  # the back-ends raise many types (network, client errors)
-        raise OutputError(f"{redact(folder)}: cannot write ({_access_error(folder, exc)}); choose another output "
+        raise OutputError(f"{redact(folder)}: cannot write ({_access_error(exc)}); choose another output "
                           "folder or fix the permissions") from None
