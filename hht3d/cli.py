@@ -150,10 +150,14 @@ def _info(args) -> int:
 
 
 def _view(args) -> int:
+    from .io.storage import is_url, local_copy, stem, write_via
     from .viz.viewer import file_html
 
-    print(file_html(args.file, args.out, field=args.field, max_vertices=args.max_vertices, view=args.view,
-                    up=args.up))
+    out = args.out or (f"{stem(args.file)}.html" if is_url(args.file) else None)
+    with local_copy(args.file) as local:  # a URL is read through a temporary copy, a page URL uploaded
+        page = write_via(file_html, local, out, field=args.field, max_vertices=args.max_vertices, view=args.view,
+                         up=args.up)
+    print(redact(str(page)))
     return 0
 
 
@@ -218,7 +222,8 @@ def build_parser() -> argparse.ArgumentParser:
     view = sub.add_parser("view", help="write the interactive HTML page of a saved result (.npz or .ply) "
                                        "or surface file, and print its path")
     view.add_argument("file", help="a result saved by HHTResult.save or a pipeline, or any mesh or point cloud")
-    view.add_argument("--out", default=None, help="the page to write (default: FILE with the suffix .html)")
+    view.add_argument("--out", default=None, help="the page to write, a path or URL (default: FILE with the suffix "
+                      ".html; for a URL FILE, STEM.html here)")
     view.add_argument("--field", default=None, help="the field shown first (default: signal)")
     view.add_argument("--max-vertices", type=int, default=VERTEX_BUDGET,
                       help=f"show a decimated copy of larger surfaces (default: {VERTEX_BUDGET:,})")

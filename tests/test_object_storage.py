@@ -247,3 +247,13 @@ def test_a_failed_write_leaves_no_object_and_a_non_atomic_store_gets_a_moved_who
     assert write_via(lambda data, path: path.write_bytes(data), b"y" * 1000, url) == url
     assert [p.name for p in (tmp_path / "out").iterdir()] == ["result.bin"]
     assert (tmp_path / "out" / "result.bin").read_bytes() == b"y" * 1000
+
+
+def test_the_cli_reads_and_writes_urls(tmp_path, capsys):
+    memory = fsspec.filesystem("memory")
+    memory.put_file(str(shipped_model_path("spot.ply")), "/cli/scans/spot.ply")
+    assert main(["info", "memory://cli/scans/spot.ply", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["vertices"] == 2930
+    assert main(["view", "memory://cli/scans/spot.ply", "--out", "memory://cli/pages/spot.html"]) == 0
+    assert capsys.readouterr().out.strip() == "memory://cli/pages/spot.html"
+    assert memory.cat_file("/cli/pages/spot.html").lstrip().lower().startswith(b"<!doctype html")
