@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 
 from .errors import HHT3DError, PipelineError, one_line, shown
+from .redaction import redact
 from .io.read import data_path
 from .graph.scheduling import SCHEDULERS
 from .viz.render import UP_AXES, VIEWS
@@ -71,9 +72,9 @@ def _execute(plan, args) -> int:
     rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
                         progress=False if args.quiet else None, resume=args.resume, summary=False)
     for row in rows:
-        print("\n".join(_row_lines(row)), flush=True)
+        print(redact("\n".join(_row_lines(row))), flush=True)
     if plan.summary:
-        write_summary(rows, plan.folder)
+        write_summary(rows, plan.folder, plan.storage_options)
         print(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}")
     failed = failures(rows)
     if failed:
@@ -91,7 +92,7 @@ def _demo(args) -> int:
 
 def _validate(args) -> int:
     plan = _plan(args.pipeline, args.set)
-    print(plan.describe())
+    print(redact(plan.describe()))
     print("valid: parameters, inputs and output locations checked; nothing was run")
     return 0
 
@@ -149,10 +150,14 @@ def _info(args) -> int:
 
 
 def _view(args) -> int:
+    from .io.storage import is_url, local_copy, stem, write_via
     from .viz.viewer import file_html
 
-    print(file_html(args.file, args.out, field=args.field, max_vertices=args.max_vertices, view=args.view,
-                    up=args.up))
+    out = args.out or (f"{stem(args.file)}.html" if is_url(args.file) else None)
+    with local_copy(args.file) as local:  # a URL is read through a temporary copy, a page URL uploaded
+        page = write_via(file_html, local, out, field=args.field, max_vertices=args.max_vertices, view=args.view,
+                         up=args.up)
+    print(redact(str(page)))
     return 0
 
 
@@ -217,7 +222,8 @@ def build_parser() -> argparse.ArgumentParser:
     view = sub.add_parser("view", help="write the interactive HTML page of a saved result (.npz or .ply) "
                                        "or surface file, and print its path")
     view.add_argument("file", help="a result saved by HHTResult.save or a pipeline, or any mesh or point cloud")
-    view.add_argument("--out", default=None, help="the page to write (default: FILE with the suffix .html)")
+    view.add_argument("--out", default=None, help="the page to write, a path or URL (default: FILE with the suffix "
+                      ".html; for a URL FILE, STEM.html here)")
     view.add_argument("--field", default=None, help="the field shown first (default: signal)")
     view.add_argument("--max-vertices", type=int, default=VERTEX_BUDGET,
                       help=f"show a decimated copy of larger surfaces (default: {VERTEX_BUDGET:,})")

@@ -5,10 +5,13 @@ Every error raised for bad user input is an :class:`HHT3DError`, so callers
 message, which names the file or parameter at fault and what to change.
 Messages echo user values through :func:`shown` and exception texts through
 :func:`one_line`, so a huge value (a YAML alias bomb, a megabyte string)
-never floods the terminal and every message stays on one line.
+never floods the terminal, every message stays on one line and no credential
+is shown.
 """
 import difflib
 import reprlib
+
+from .redaction import redact
 
 __all__ = ["HHT3DError", "InputError", "NumericalError", "PipelineError", "OutputError", "shown", "one_line",
            "MAX_SHOWN", "did_you_mean"]
@@ -66,8 +69,9 @@ def shown(value, limit: int = MAX_SHOWN) -> str:
 
 
 def one_line(text, limit: int = 4 * MAX_SHOWN) -> str:
-    """``text`` with its whitespace runs (newlines included) made single spaces, cut to ``limit``."""
-    return _cut(" ".join(str(text).split()), limit)
+    """``text`` with its whitespace runs (newlines included) made single spaces, secrets redacted
+    (:func:`hht3d.redaction.redact`), cut to ``limit``."""
+    return _cut(" ".join(redact(text).split()), limit)
 
 
 def did_you_mean(word, known, *, listing: bool = True) -> str:

@@ -93,7 +93,7 @@ class HHTResult:
                            f"phase_{i + 1}": mono.phase[i], f"frequency_{i + 1}": mono.frequency[i]})
         return fields
 
-    def save(self, path) -> Path:
+    def save(self, path, *, storage_options: dict | None = None) -> Path:
         """Write the result atomically.
 
         ``.ply``: the surface with :meth:`vertex_attributes` as float64
@@ -101,7 +101,10 @@ class HHTResult:
         ``normals``, ``laplacian``, ``n_neighbors``, ``signal``, ``imfs``,
         ``residue``, ``riesz``, ``amplitude``, ``phase``, ``frequency`` and
         ``area`` (vertex areas); :func:`hht3d.io.results.load_result` reads it back.
+        ``path`` may be an fsspec URL, with ``storage_options`` (:mod:`hht3d.io.storage`).
         """
+        if io.storage.is_url(path):  # object storage: written locally, then uploaded
+            return io.storage.write_via(self.save, path, storage_options=storage_options)
         path = Path(path)
         suffix = path.suffix.lower()
         if suffix == ".ply":
@@ -118,13 +121,14 @@ class HHTResult:
             return io.write_npz(path, arrays)
         raise InputError(f"cannot save an HHT result as {path.name!r}: use a .ply or .npz file name")
 
-    def to_html(self, path, **options) -> Path:
+    def to_html(self, path, *, storage_options: dict | None = None, **options) -> Path:
         """Write an interactive page of every field, the marginal spectrum and the quality
         figures as one self-contained HTML file (:func:`hht3d.viz.viewer.result_html`, whose
-        keyword arguments ``options`` takes: ``beside``, ``field``, ``max_vertices``, ...)."""
+        keyword arguments ``options`` takes: ``beside``, ``field``, ``max_vertices``, ...);
+        ``path`` may be an fsspec URL, with ``storage_options``."""
         from .viz.viewer import result_html
 
-        return result_html(self, path, **options)
+        return io.storage.write_via(result_html, self, path, storage_options=storage_options, **options)
 
     def to_open3d(self):
         """An Open3D tensor ``TriangleMesh`` (or ``PointCloud``) carrying

@@ -33,7 +33,7 @@ from plyfile import PlyData, PlyElement
 
 from hht3d.cli import main
 from hht3d.errors import HHT3DError
-from hht3d.io.read import load
+from hht3d.io import load
 from hht3d.pipeline import OPERATIONS, parse_pipeline
 from hht3d.pipeline.schema import EXECUTION
 from hht3d.graph.scheduling import compute

@@ -10,7 +10,7 @@ from hht3d import Surface, load
 from hht3d.graph.dataset import run_dataset
 from hht3d.errors import OutputError
 from hht3d.transform import hht
-from hht3d.io.read import write_ply
+from hht3d.io import write_ply
 from hht3d.geometry.signals import mean_curvature
 from helpers.meshes import icosphere
 

@@ -30,7 +30,9 @@ from dask.base import tokenize
 from . import stages as graph
 from ..errors import InputError, one_line
 from ..transform import HHTResult
-from ..io.read import atomic_path, check_output_paths, read_npz_shapes, read_ply_header, resolve_inputs
+from ..io.read import _MAX_HEADER, read_npz_shapes, read_ply_header
+from ..io.storage import atomic_location, check_outputs, exists, join, local_copy, name, resolve_locations, stem
+from ..redaction import redact
 from ..decomposition.quality import QualityWarning, decomposition_quality
 from .scheduling import compute
 
@@ -127,14 +129,14 @@ class ItemSummary:
 
 
 def output_paths(source: Path, out_dir: Path, formats=FORMATS, pattern: str = "{stem}_hht") -> list[Path]:
-    """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format."""
-    stem = pattern.format(stem=source.stem)
-    return [Path(out_dir) / f"{stem}{suffix}" for suffix in formats]
+    """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format (paths or URLs)."""
+    base = pattern.format(stem=stem(source))
+    return [join(out_dir, f"{base}{suffix}") for suffix in formats]
 
 
 def summary_paths(out_dir) -> list[Path]:
     """``summary.json`` and ``summary.csv`` in ``out_dir``."""
-    return [Path(out_dir) / name for name in SUMMARY_FILES]
+    return [join(out_dir, file_name) for file_name in SUMMARY_FILES]
 
 
 def quality_fields(decomposition, surface) -> dict:
@@ -167,12 +169,14 @@ def item_summary(source: str, paths, surface, decomposition, quality, parts, wri
                        outputs=written, **fields)
 
 
-def skipped_summary(source, paths) -> ItemSummary:
+def skipped_summary(source, paths, storage_options: dict | None = None) -> ItemSummary:
     """The row of an item whose outputs all exist (``resume``): its size read from those outputs."""
     vertices = imfs = None
-    for path in map(Path, paths):
+    for path in paths:
+        head = _MAX_HEADER if name(path).lower().endswith(".ply") else None
         try:
-            found = _stored_size(path)
+            with local_copy(path, storage_options, head=head) as local:  # a URL: its header, or the npz
+                found = _stored_size(local)
         except InputError:
             continue
         vertices = vertices if vertices is not None else found[0]
@@ -197,20 +201,21 @@ def _stored_size(path: Path) -> tuple[int | None, int | None]:
     return None, None
 
 
-def _save(result, path):
-    return result.save(path)
+def _save(result, path, storage_options=None):
+    return result.save(path, storage_options=storage_options)
 
 
 def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=FORMATS,
                   pattern: str = "{stem}_hht", resume: bool = False, load_options: dict | None = None,
-                  **hht_options):
+                  storage_options: dict | None = None, **hht_options):
     """Lazy HHT of every input file; returns a delayed list of :class:`ItemSummary`.
 
     Parameters
     ----------
     inputs : path, glob, folder or list of them
-        Resolved by :func:`hht3d.io.read.resolve_inputs`.
-    out_dir : path
+        Local or fsspec URLs (``s3://bucket/scans/*.ply``), resolved by
+        :func:`hht3d.io.storage.resolve_locations`.
+    out_dir : path or URL
         Where the per-item outputs go (see :func:`output_paths`).
     signal : str
         Signal name of :func:`hht3d.geometry.signals.signal`.
@@ -220,6 +225,9 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=FO
         file is complete).
     load_options : dict, optional
         Passed to :func:`hht3d.io.read.load`.
+    storage_options : dict, optional
+        Options of the fsspec back-end of URL inputs and outputs; the workers
+        receive them with the URLs and read and write the files themselves.
     **hht_options
         Passed to :func:`hht3d.graph.stages.transform` (EMD and Riesz options).
 
@@ -228,25 +236,27 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=FO
     OutputError
         An output cannot be written there (checked before any task is made).
     """
-    sources = resolve_inputs(inputs)
-    items = {source: output_paths(source, Path(out_dir), formats, pattern) for source in sources}
-    check_output_paths([p for paths in items.values() for p in paths] + summary_paths(out_dir))
+    sources = resolve_locations(inputs, storage_options)
+    items = {source: output_paths(source, out_dir, formats, pattern) for source in sources}
+    check_outputs([p for paths in items.values() for p in paths] + summary_paths(out_dir), storage_options)
+    load_options = {**(load_options or {}), **({"storage_options": storage_options} if storage_options else {})}
     rows = []
     for source, paths in items.items():
-        if resume and all(p.is_file() for p in paths):
-            rows.append(skipped_summary(source, paths))
+        if resume and all(exists(p, storage_options) for p in paths):
+            rows.append(skipped_summary(source, paths, storage_options))
             continue
         tasks = graph.Builder(guard=lambda step, func, src=str(source): Guarded(step, func, src))
-        stages = graph.transform_file(tasks, source, signal, load_options or {}, **hht_options)
+        stages = graph.transform_file(tasks, source, signal, load_options, **hht_options)
         quality = tasks.task("quality", quality_fields)(stages["hht"], stages["load"])
-        writes = [tasks.task(f"write {p.name}", _save)(stages["hht"], str(p)) for p in paths]
+        writes = [tasks.task(f"write {name(p)}", _save)(stages["hht"], str(p), storage_options) for p in paths]
         rows.append(delayed(item_summary, pure=True, name=f"summary-{tokenize(str(source), paths)}")(
             str(source), paths, stages["load"], stages["hht"], quality, [*stages.values(), quality], writes))
     return delayed(list, pure=True)(rows)
 
 
-def write_summary(rows: list[ItemSummary], out_dir) -> list[Path]:
-    """Write the summary table as ``summary.json`` and ``summary.csv`` (atomically).
+def write_summary(rows: list[ItemSummary], out_dir, storage_options: dict | None = None) -> list[Path]:
+    """Write the summary table as ``summary.json`` and ``summary.csv`` (atomically; ``out_dir`` may
+    be a URL), secrets redacted (:func:`hht3d.redaction.redact`).
 
     In the CSV, ``outputs`` are joined with ``;`` and ``warnings`` with `` | ``.
 
@@ -257,15 +267,15 @@ def write_summary(rows: list[ItemSummary], out_dir) -> list[Path]:
     """
     json_path, csv_path = summary_paths(out_dir)
     records = [asdict(r) | {"outputs": list(r.outputs), "warnings": list(r.warnings)} for r in rows]
-    with atomic_path(json_path) as tmp:
-        tmp.write_text(json.dumps(records, indent=2), encoding="utf-8")
+    with atomic_location(json_path, storage_options) as tmp:
+        tmp.write_text(redact(json.dumps(records, indent=2)), encoding="utf-8")
     buffer = _stdio.StringIO()
     writer = csv.DictWriter(buffer, fieldnames=[f.name for f in fields(ItemSummary)])
     writer.writeheader()
     for r in records:
         writer.writerow(r | {"outputs": ";".join(r["outputs"]), "warnings": " | ".join(r["warnings"])})
-    with atomic_path(csv_path) as tmp:
-        tmp.write_text(buffer.getvalue(), encoding="utf-8")
+    with atomic_location(csv_path, storage_options) as tmp:
+        tmp.write_text(redact(buffer.getvalue()), encoding="utf-8")
     return [json_path, csv_path]
 
 
@@ -276,12 +286,12 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     Parameters
     ----------
     inputs, out_dir
-        As for :func:`dataset_graph`.
+        As for :func:`dataset_graph`: paths or fsspec URLs.
     scheduler, workers, address, progress
         As for :func:`hht3d.graph.scheduling.compute`.
     **options
         Those of :func:`dataset_graph` (``signal``, ``formats``, ``resume``,
-        ``load_options``) and the HHT options of :func:`hht3d.graph.stages.transform`.
+        ``load_options``, ``storage_options``) and the HHT options of :func:`hht3d.graph.stages.transform`.
 
     Returns
     -------
@@ -304,5 +314,5 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     """
     (rows,) = compute(dataset_graph(inputs, out_dir, **options), scheduler=scheduler, workers=workers,
                       address=address, progress=progress)
-    write_summary(rows, out_dir)
+    write_summary(rows, out_dir, options.get("storage_options"))
     return rows

@@ -217,13 +217,14 @@ def hht(surface: Surface, signal, *, emd: EMDOptions | dict | None = None, riesz
                      riesz_tasks=riesz_tasks)["hht"]
 
 
-def _save(result, path) -> Path:
-    return result.save(path)
+def _save(result, path, storage_options=None) -> Path:
+    return result.save(path, storage_options=storage_options)
 
 
-def save(result, path):
-    """Lazy ``result.save(path)`` (atomic PLY or npz write); returns the path."""
-    return _PLAIN.task("save", _save)(result, str(path))
+def save(result, path, *, storage_options: dict | None = None):
+    """Lazy ``result.save(path)`` (atomic PLY or npz write; ``path`` may be an fsspec URL, written by
+    the worker with ``storage_options``); returns the path."""
+    return _PLAIN.task("save", _save)(result, str(path), storage_options)
 
 
 # -- applications (Sec. 5, hht3d.apps): one task each ----------------------------------------

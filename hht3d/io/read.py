@@ -70,13 +70,14 @@ def data_path(name: str) -> Path:
 
 
 def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int = 30,
-         name: str | None = None) -> Surface:
+         name: str | None = None, storage_options: dict | None = None) -> Surface:
     """Load a triangle mesh or point cloud as a :class:`~hht3d.geometry.surface.Surface`.
 
     Parameters
     ----------
     path : str or Path
-        PLY, OBJ, OFF, STL, GLB, GLTF (meshes); PLY, PCD, XYZ, XYZN, PTS (points).
+        PLY, OBJ, OFF, STL, GLB, GLTF (meshes); PLY, PCD, XYZ, XYZN, PTS (points);
+        a local path or an fsspec URL (``s3://bucket/scan.ply``, :mod:`hht3d.io.storage`).
     clean : bool
         Weld duplicate vertices and drop degenerate/duplicate faces and
         unreferenced vertices (:mod:`hht3d.geometry.cleaning`); the report is in
@@ -85,6 +86,8 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
         Passed to :class:`~hht3d.geometry.surface.Surface`.
     name : str, optional
         Defaults to the file stem.
+    storage_options : dict, optional
+        For a URL: options of its fsspec back-end (endpoint, region, ...).
 
     Raises
     ------
@@ -98,6 +101,10 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
     >>> surface.n_vertices, len(surface.faces), surface.is_mesh
     (2930, 5856, True)
     """
+    from .storage import is_url, load_url
+    if is_url(path):  # object storage: through a temporary local copy
+        return load_url(load, path, storage_options, clean=clean, laplacian=laplacian, n_neighbors=n_neighbors,
+                        name=name)
     path = Path(path)
     try:
         is_dir, is_file = path.is_dir(), path.is_file()

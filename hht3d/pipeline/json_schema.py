@@ -143,6 +143,8 @@ def pipeline_schema() -> dict:
             "version": {"const": VERSION, "description": "the schema version"},
             "name": {"type": "string", "minLength": 1, "description": "default: the file's stem"},
             "execution": _object(EXECUTION, description="how the graph runs"),
+            "storage_options": {"type": "object", "description": "options of the fsspec back-end of URL inputs and "
+                                "outputs (endpoint, region...); never credentials"},
             "inputs": {"description": "a file, a folder, a glob, a list of them, or {builtin: NAME}",
                        "anyOf": [{"type": "string", "minLength": 1}, inputs_list,
                                  {"type": "object", "properties": {"builtin": {"enum": sorted(builtin_models())}},

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..graph.dataset import summary_paths
+from ..io.storage import join, parent_name, stem
 from .outputs import Format
 from .params import yaml_text
 from .registry import Operation
@@ -68,9 +69,9 @@ class Output:
     options: dict = field(default_factory=dict)
     given: tuple[str, ...] = ()
 
-    def resolve(self, folder: Path, source: Path, name: str) -> Path:
-        """The file for one input: placeholders ``{stem}``, ``{parent}``, ``{name}`` filled in."""
-        return folder / self.path.format(stem=source.stem, parent=source.parent.name, name=name)
+    def resolve(self, folder: Path | str, source: Path | str, name: str) -> Path | str:
+        """The file (or URL) for one input: placeholders ``{stem}``, ``{parent}``, ``{name}`` filled in."""
+        return join(folder, self.path.format(stem=stem(source), parent=parent_name(source), name=name))
 
 
 @dataclass(frozen=True)
@@ -83,15 +84,17 @@ class Pipeline:
     source : str
         The YAML file it came from (for messages).
     execution : Execution
-    inputs : tuple of Path
-        The input files, resolved.
+    inputs : tuple of Path or str
+        The input files, resolved (URLs stay strings).
     steps : tuple of Step
         In an order where every step follows the steps it uses.
     outputs : tuple of Output
-    folder : Path
-        Output folder; output paths are relative to it.
+    folder : Path or str
+        Output folder (a path or URL); output paths are relative to it.
     summary : bool
         Write ``summary.json`` and ``summary.csv`` in ``folder``.
+    storage_options : dict
+        Options of the fsspec back-end of URL inputs and outputs (:mod:`hht3d.io.storage`).
     """
 
     name: str
@@ -100,8 +103,9 @@ class Pipeline:
     inputs: tuple[Path, ...]
     steps: tuple[Step, ...]
     outputs: tuple[Output, ...]
-    folder: Path
+    folder: Path | str
     summary: bool = True
+    storage_options: dict = field(default_factory=dict)
 
     def step(self, step_id: str) -> Step:
         return next(s for s in self.steps if s.id == step_id)

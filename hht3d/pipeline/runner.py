@@ -19,7 +19,8 @@ from dask.base import tokenize
 
 from ..graph.dataset import Guarded, ItemSummary, item_summary, quality_fields, skipped_summary, write_summary
 from ..graph.stages import Builder
-from ..io.read import check_output_paths
+from ..io.storage import check_outputs, exists, write_via
+from ..io.storage import name as file_name
 from ..graph.scheduling import compute
 from .plan import FILE, Pipeline
 from .schema import EXECUTION
@@ -38,14 +39,18 @@ def _item(plan: Pipeline, source: Path, paths: list[Path]):
     for step in plan.steps:
         builder = _guarded(source, lambda task, s=step: s.id if task in (s.op.name, s.id) else f"{s.id} ({task})")
         inputs = {slot: str(source) if ref == FILE else results[ref] for slot, ref in step.refs.items()}
-        tasks = step.op.tasks(builder, inputs, dict(step.params))
+        params = dict(step.params)
+        if step.op.name == "load" and plan.storage_options:  # the worker reads the URL itself
+            params["storage_options"] = plan.storage_options
+        tasks = step.op.tasks(builder, inputs, params)
         results[step.id] = tasks["result"]
         parts.update({t.key: t for t in tasks.values()})
     writes = []
     for output, path in zip(plan.outputs, paths):
-        write = _guarded(source, lambda task, label=f"write {path.name}": label)
-        writes.append(write.task("write", output.format.write)(
-            results[output.step], results[plan.origin_of(output.step)], str(path), **output.options))
+        write = _guarded(source, lambda task, label=f"write {file_name(path)}": label)
+        writes.append(write.task("write", write_via)(  # a URL: written locally by the worker, then uploaded
+            output.format.write, results[output.step], results[plan.origin_of(output.step)], str(path),
+            storage_options=plan.storage_options or None, **output.options))
     surface = results[next(s.id for s in plan.steps if s.op.name == "load")]
     last = next((s.id for s in reversed(plan.steps) if s.kind in ("emd", "hht")), None)
     decomposition = quality = None
@@ -72,8 +77,8 @@ def pipeline_graph(plan: Pipeline, *, resume: bool = False):
     rows = []
     for source in plan.inputs:
         paths = plan.output_paths(source)
-        if resume and all(p.is_file() for p in paths):
-            rows.append(skipped_summary(source, paths))
+        if resume and all(exists(p, plan.storage_options) for p in paths):
+            rows.append(skipped_summary(source, paths, plan.storage_options))
         else:
             rows.append(_item(plan, source, paths))
     return delayed(list, pure=True)(rows)
@@ -118,11 +123,11 @@ def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int |
     checked = {p.name: p.check(given[p.name], f"{p.name}={given[p.name]}") for p in EXECUTION
                if given.get(p.name) is not None}
     execution = dataclasses.replace(plan.execution, **checked)
-    check_output_paths(plan.written_paths())
+    check_outputs(plan.written_paths(), plan.storage_options)
     (rows,) = compute(pipeline_graph(plan, resume=resume), scheduler=execution.scheduler,
                       workers=execution.workers, address=execution.address, progress=execution.progress)
     if summary and plan.summary:
-        write_summary(rows, plan.folder)
+        write_summary(rows, plan.folder, plan.storage_options)
     return rows
 
 

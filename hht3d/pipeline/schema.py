@@ -11,7 +11,10 @@
       progress: true
       seed: 0                       # default seed of every randomised step (EEMD)
     inputs: scans/                  # a file, a folder, a glob, a list of them,
-                                    # or {builtin: spot} (a model shipped in the package)
+                                    # or {builtin: spot} (a model shipped in the package);
+                                    # fsspec URLs too: s3://bucket/scans/*.ply
+    storage_options:                # optional: of the fsspec back-end of URLs (never credentials:
+      client_kwargs: {endpoint_url: https://s3.example.org}  # those come from the environment)
     steps:                          # run per input file
       - id: curvature               # optional; default the op name
         op: signal                  # one of `hht3d ops`
@@ -21,7 +24,7 @@
         from: {signal: curvature}   # optional: a step id, or {slot: step id}
         params: {max_imfs: 6}
     outputs:
-      folder: out/demo              # default "out"
+      folder: out/demo              # default "out"; or a URL: s3://bucket/results
       summary: true                 # summary.json / summary.csv (default true)
       files:
         - {from: hht, path: "{stem}_hht.ply"}
@@ -54,13 +57,15 @@ import string
 from pathlib import Path
 
 from ..errors import InputError, OutputError, PipelineError, shown
-from ..io.read import check_output_paths, data_path, read_ply_header, resolve_inputs
+from ..io.read import data_path, read_ply_header
+from ..io.storage import check_outputs, is_url, resolve_locations
 from ..graph.scheduling import MAX_WORKERS, SCHEDULERS
 from .document import YAMLMapping, add_implicit_load, apply_overrides, at, read_yaml
 from .outputs import FORMATS, SUFFIXES, check_options, field_imf
 from .params import Param, did_you_mean
 from .plan import FILE, PLACEHOLDERS, Execution, Output, Pipeline, Step
 from .registry import MAX_SEED, OPERATIONS, operation
+from .storage_options import storage_options
 
 __all__ = ["VERSION", "EXECUTION", "TOP_KEYS", "STEP_KEYS", "OUTPUTS_KEYS", "FILE_KEYS", "load_pipeline",
            "parse_pipeline", "builtin_models", "Validator"]
@@ -69,7 +74,7 @@ __all__ = ["VERSION", "EXECUTION", "TOP_KEYS", "STEP_KEYS", "OUTPUTS_KEYS", "FIL
 VERSION = 1
 
 #: The keys of a pipeline, of a step, of the outputs block and of an output file.
-TOP_KEYS = ("version", "name", "execution", "inputs", "steps", "outputs")
+TOP_KEYS = ("version", "name", "execution", "storage_options", "inputs", "steps", "outputs")
 STEP_KEYS = ("id", "op", "from", "params")
 OUTPUTS_KEYS = ("folder", "summary", "files")
 FILE_KEYS = ("from", "path", "format")
@@ -190,15 +195,16 @@ class Validator:
         if not isinstance(name, str) or not name:
             raise PipelineError(f"{at(doc, 'name')}: name must be a non-empty string, got {shown(name)}")
         execution = self._execution(doc.get("execution") or YAMLMapping(at(doc, "execution")))
+        self.storage_options = storage_options(doc)
         inputs = self.inputs = self._inputs(doc)
         steps = self._steps(doc, execution)
         folder, summary, outputs = self._outputs(doc, steps)
         plan = Pipeline(name=name, source=self.source, execution=execution, inputs=inputs, steps=steps,
-                        outputs=outputs, folder=folder, summary=summary)
+                        outputs=outputs, folder=folder, summary=summary, storage_options=self.storage_options)
         self._distinct_paths(plan, doc)
         try:
-            check_output_paths(plan.written_paths())
-        except OutputError as exc:
+            check_outputs(plan.written_paths(), self.storage_options)
+        except (OutputError, InputError) as exc:
             block = doc.get("outputs")
             raise PipelineError(f"{at(block, 'folder')}: outputs: {exc}") from None
         return plan
@@ -217,7 +223,7 @@ class Validator:
                   else p.default for p in EXECUTION}
         return Execution(**values)
 
-    def _inputs(self, doc) -> tuple[Path, ...]:
+    def _inputs(self, doc) -> tuple[Path | str, ...]:
         if "inputs" not in doc or doc["inputs"] in (None, [], ""):
             raise PipelineError(f"{self.source}: missing inputs: give a file, a folder, a glob, a list of "
                                 "them, or {builtin: spot}")
@@ -235,7 +241,7 @@ class Validator:
             raise PipelineError(f"{where}: inputs must be a path, a glob, a folder or a list of them, "
                                 f"got {shown(spec)}")
         try:
-            return tuple(resolve_inputs(items))
+            return tuple(resolve_locations(items, self.storage_options))
         except InputError as exc:
             raise PipelineError(f"{where}: inputs: {exc}") from None
 
@@ -304,7 +310,7 @@ class Validator:
         if self._vertex_counts is None:
             self._vertex_counts = {}
             for source in self.inputs:
-                if source.suffix.lower() == ".ply":
+                if not is_url(source) and source.suffix.lower() == ".ply":  # URLs: the load step reports
                     try:
                         self._vertex_counts[source] = read_ply_header(source).counts.get("vertex", 0)
                     except InputError:
@@ -385,7 +391,7 @@ class Validator:
         last = next(s.id for s in reversed(steps))
         files = tuple(self._output(_mapping(e, at(block, "files"), "an output"), by_id, last)
                       for e in block["files"])
-        return Path(folder), summary, files
+        return folder if is_url(folder) else Path(folder), summary, files
 
     def _output(self, entry, steps: dict, last: str) -> Output:
         step_id = entry.get("from", last)

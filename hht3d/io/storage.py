@@ -1,0 +1,303 @@
+"""Files where users keep them: fsspec URLs (``s3://``, ``gs://``, ``az://``, ``https://``, ``memory://``).
+
+Every place hht3d reads or writes takes either a local path or a URL with
+``storage_options`` (passed to :func:`fsspec.core.url_to_fs`; credentials come
+from the back-end's usual places: environment, config files, instance roles).
+This module holds all of the URL handling; local paths go to
+:mod:`hht3d.io.read` unchanged.
+
+* Reading: a URL is downloaded to a temporary local file (Open3D reads only
+  from paths), read, and the file is removed.  Messages name the URL.
+* Writing: the writer writes a temporary local file, which is then uploaded.
+  On object stores (S3, GCS, Azure) one upload is atomic: an object appears
+  under its name only once complete, so a killed run leaves no partial object
+  under a final name.  Elsewhere the upload goes to a temporary name and is
+  moved over the final one.
+* Output locations are checked before computing (the bucket exists, a probe
+  object can be written and removed).
+* Secrets in ``storage_options`` are remembered for :func:`hht3d.redaction.redact`.
+
+The back-ends are extras: ``pip install 'hht3d[s3]'`` (s3fs), ``[gcs]``
+(gcsfs), ``[azure]`` (adlfs); a missing one is named with its pip command.
+"""
+from __future__ import annotations
+
+import contextlib
+import tempfile
+import uuid
+from pathlib import Path, PurePosixPath
+from urllib.parse import urlsplit
+
+from ..errors import HHT3DError, InputError, OutputError, one_line
+from ..redaction import redact, remember_secrets
+from .read import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS, atomic_path, check_output_paths, resolve_inputs
+
+__all__ = ["EXTRAS", "is_url", "filesystem", "name", "stem", "parent_name", "join", "resolve_locations",
+           "exists", "local_copy", "load_url", "atomic_location", "write_via", "check_outputs"]
+
+#: The hht3d extra that installs each protocol's back-end.
+EXTRAS = {"s3": "s3", "s3a": "s3", "gs": "gcs", "gcs": "gcs", "az": "azure", "abfs": "azure", "abfss": "azure",
+          "adl": "azure"}
+#: Protocols on which one upload is atomic (an object is visible only once complete).
+_ATOMIC_UPLOAD = {"s3", "s3a", "gs", "gcs", "az", "abfs", "abfss", "memory"}
+_GLOB = "*?["
+
+
+def is_url(location) -> bool:
+    """Whether ``location`` is an fsspec URL (``protocol://...``) rather than a local path."""
+    return isinstance(location, str) and "://" in location
+
+
+def _protocol(url: str) -> str:
+    return url.split("::")[-1].split("://", 1)[0].lower()
+
+
+def filesystem(url: str, storage_options: dict | None = None):
+    """``(fs, path)`` of a URL; a missing back-end names the pip command that installs it.
+
+    Raises
+    ------
+    InputError
+        Unknown protocol, missing back-end or bad ``storage_options``.
+    """
+    import fsspec.core
+
+    remember_secrets(storage_options)
+    protocol = _protocol(url)
+    try:
+        return fsspec.core.url_to_fs(url, **(storage_options or {}))
+    except ImportError:
+        extra = EXTRAS.get(protocol)
+        how = f"pip install 'hht3d[{extra}]'" if extra else "install the fsspec back-end for it"
+        raise InputError(f"{redact(url)}: reading and writing {protocol}:// needs a back-end that is not installed; "
+                         f"{how}") from None
+    except (ValueError, TypeError) as exc:
+        raise InputError(f"{redact(url)}: cannot open {protocol}:// ({one_line(exc)}); check the URL and "
+                         "storage_options") from None
+
+
+def _key(url: str) -> str:
+    """The path part of a URL (no query string)."""
+    return urlsplit(url.split("::")[-1]).path
+
+
+def name(location) -> str:
+    """File name of a path or URL (a URL's query string left out)."""
+    return PurePosixPath(_key(location)).name if is_url(location) else Path(location).name
+
+
+def stem(location) -> str:
+    """File name without its suffix."""
+    return PurePosixPath(name(location)).stem
+
+
+def parent_name(location) -> str:
+    """Name of the folder holding a path or URL (a bucket's name for a top-level object)."""
+    if not is_url(location):
+        return Path(location).parent.name
+    url = urlsplit(location.split("::")[-1])
+    parent = PurePosixPath(url.path).parent.name
+    return parent or url.netloc
+
+
+def join(folder, file_name: str):
+    """``folder / file_name``: a Path for a local folder, a URL string for a URL."""
+    if is_url(folder):
+        return f"{folder.rstrip('/')}/{file_name}"
+    return Path(folder) / file_name
+
+
+def _access_error(exc: Exception) -> str:
+    if isinstance(exc, PermissionError):
+        return "access denied; check the credentials (environment, config files or instance role)"
+    if isinstance(exc, FileNotFoundError):
+        return "no such object or bucket"
+    return one_line(f"{type(exc).__name__}: {exc}")
+
+
+def resolve_locations(spec, storage_options: dict | None = None) -> list:
+    """:func:`hht3d.io.read.resolve_inputs` for paths and URLs: files, folders, globs, lists.
+
+    URLs come back as URLs (``s3://bucket/scans/a.ply``), local files as Paths.
+
+    Raises
+    ------
+    InputError
+        A named object is missing, a folder or glob matches no usable file, or
+        the store cannot be listed.
+    """
+    specs = [spec] if isinstance(spec, (str, Path)) else list(spec)
+    found = []
+    for item in specs:
+        found.extend(_remote_inputs(item, storage_options) if is_url(item) else resolve_inputs(item))
+    return list(dict.fromkeys(found))
+
+
+def _remote_inputs(url: str, storage_options) -> list[str]:
+    fs, path = filesystem(url, storage_options)
+    usable = set(MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS)
+    try:
+        fs.invalidate_cache()
+        if any(ch in _key(url) for ch in _GLOB):  # not in a query string (signed URLs)
+            paths = [p for p in fs.glob(path) if fs.isfile(p)]
+        elif fs.isdir(path):
+            paths = [p for p, info in fs.find(path, maxdepth=1, detail=True).items() if info["type"] == "file"]
+        elif fs.isfile(path):
+            suffix = PurePosixPath(path).suffix.lower()
+            if suffix not in usable:
+                raise InputError(f"{redact(url)}: unknown extension {suffix or '(none)'!r}; use one of "
+                                 f"{', '.join(sorted(usable))}")
+            return [url]
+        else:
+            raise InputError(f"{redact(url)}: no such object or folder; check the URL")
+    except HHT3DError:
+        raise
+    except Exception as exc:  # the back-ends raise many types (network, client errors)
+        raise InputError(f"{redact(url)}: cannot list ({_access_error(exc)})") from None
+    matches = sorted(fs.unstrip_protocol(p) for p in paths if PurePosixPath(p).suffix.lower() in usable)
+    if not matches:
+        raise InputError(f"{redact(url)}: matches no mesh or point-cloud file ({', '.join(sorted(usable))})")
+    return matches
+
+
+def exists(location, storage_options: dict | None = None) -> bool:
+    """Whether a file or object exists at ``location`` (a fresh listing, not a cached one)."""
+    if not is_url(location):
+        return Path(location).is_file()
+    fs, path = filesystem(location, storage_options)
+    fs.invalidate_cache(str(PurePosixPath(path).parent))
+    try:
+        return fs.isfile(path)
+    except Exception:  # unreadable counts as absent: the item is computed again
+        return False
+
+
+@contextlib.contextmanager
+def local_copy(location, storage_options: dict | None = None, *, head: int | None = None):
+    """A local path holding ``location``'s bytes (the first ``head`` only if given); removed afterwards.
+
+    A local path is yielded as it is.
+
+    Raises
+    ------
+    InputError
+        The object cannot be read (missing, access denied, network).
+    """
+    if not is_url(location):
+        yield Path(location)
+        return
+    fs, path = filesystem(location, storage_options)
+    with tempfile.TemporaryDirectory(prefix="hht3d-") as folder:
+        local = Path(folder) / (name(location) or "object")
+        try:
+            if head is None:
+                fs.get_file(path, str(local))
+            else:
+                local.write_bytes(fs.cat_file(path, start=0, end=head))
+        except Exception as exc:  # the back-ends raise many types (network, client errors)
+            raise InputError(f"{redact(location)}: cannot read ({_access_error(exc)})") from None
+        yield local
+
+
+def load_url(load, url: str, storage_options: dict | None = None, **options):
+    """``load`` (:func:`hht3d.io.read.load`) of a URL through a temporary local copy; messages name the URL."""
+    with local_copy(url, storage_options) as local:
+        try:
+            return load(local, **{**options, "name": options.get("name") or stem(url)})
+        except InputError as exc:
+            raise InputError(str(exc).replace(str(local), redact(url))) from None
+
+
+@contextlib.contextmanager
+def atomic_location(location, storage_options: dict | None = None):
+    """Like :func:`hht3d.io.read.atomic_path`, for a path or URL: yield a temporary local path.
+
+    For a URL, the file is uploaded once the block succeeds; on an exception
+    nothing is uploaded and the temporary file is removed.
+
+    Raises
+    ------
+    OutputError
+        The upload failed (names the URL and the reason).
+    """
+    if not is_url(location):
+        with atomic_path(location) as tmp:
+            yield tmp
+        return
+    fs, path = filesystem(location, storage_options)
+    with tempfile.TemporaryDirectory(prefix="hht3d-") as folder:
+        local = Path(folder) / name(location)
+        yield local
+        _upload(fs, str(local), path, location)
+
+
+def _upload(fs, local: str, path: str, location: str) -> None:
+    """Put ``local`` at ``path``, so that no object appears under ``path`` before it is complete."""
+    try:
+        if _protocol(location) in _ATOMIC_UPLOAD:
+            fs.put_file(local, path)
+        else:
+            partial = f"{PurePosixPath(path).parent}/.{PurePosixPath(path).name}.{uuid.uuid4().hex}.part"
+            fs.makedirs(str(PurePosixPath(path).parent), exist_ok=True)
+            fs.put_file(local, partial)
+            try:
+                fs.mv(partial, path)
+            finally:
+                with contextlib.suppress(OSError):
+                    if fs.exists(partial):
+                        fs.rm_file(partial)
+    except Exception as exc:  # the back-ends raise many types (network, client errors)
+        raise OutputError(f"{redact(location)}: cannot write ({_access_error(exc)}); check the bucket and "
+                          "the credentials, or choose another output folder") from None
+    finally:
+        fs.invalidate_cache(str(PurePosixPath(path).parent))
+
+
+def write_via(write, *args, storage_options: dict | None = None, **options):
+    """``write(*args, **options)`` whose last positional argument is a path or URL; returns it.
+
+    A URL is written by ``write`` to a temporary local file, then uploaded
+    (:func:`atomic_location`).
+    """
+    *values, location = args
+    if not is_url(location):
+        return write(*values, location, **options)
+    with atomic_location(location, storage_options) as local:
+        write(*values, local, **options)
+    return location
+
+
+def check_outputs(locations, storage_options: dict | None = None) -> None:
+    """:func:`hht3d.io.read.check_output_paths` for paths and URLs, creating nothing that stays.
+
+    For URLs: the bucket (or container) exists and a probe object can be
+    written and removed in each output folder.
+
+    Raises
+    ------
+    OutputError
+        One line naming the location and what to change.
+    """
+    locations = list(locations)
+    check_output_paths([p for p in locations if not is_url(p)])
+    folders = dict.fromkeys(str(p).rsplit("/", 1)[0] for p in locations if is_url(p))
+    for folder in folders:
+        _check_remote_folder(folder, storage_options)
+
+
+def _check_remote_folder(folder: str, storage_options) -> None:
+    fs, path = filesystem(folder + "/", storage_options)
+    bucket = path.strip("/").split("/", 1)[0]
+    protocol = _protocol(folder)
+    try:
+        if protocol in _ATOMIC_UPLOAD - {"memory"} and not fs.exists(bucket):
+            raise OutputError(f"{redact(folder)}: cannot write: the bucket {bucket!r} does not exist (or these "
+                              "credentials cannot see it); create it or choose another output folder")
+        probe = f"{path.rstrip('/')}/.hht3d-probe-{uuid.uuid4().hex}"
+        fs.pipe_file(probe, b"")
+        fs.rm_file(probe)
+    except HHT3DError:
+        raise
+    except Exception as exc:  # the back-ends raise many types (network, client errors)
+        raise OutputError(f"{redact(folder)}: cannot write ({_access_error(exc)}); choose another output "
+                          "folder or fix the permissions") from None
