@@ -175,3 +175,24 @@ def test_cylinder_mean_frequency_has_no_fold_bias(cylinder, cylinder_waves, freq
     ratio = result.frequency[:, inner] / expected
     assert np.allclose(ratio.mean(axis=1), 1.0, rtol=0.05)
     assert ratio.min() > 0.9
+
+
+@pytest.mark.parametrize("scale", [1e-200, 1e200])
+def test_monogenic_quantities_scale_with_the_signal(scale):
+    """Amplitude is linear in the signal, phase and frequency do not change: at 1e±200 as at 1
+    (squares of the signal would overflow or vanish in float64)."""
+    from hht3d import data_path, load
+
+    sphere = load(data_path("sphere_oct4098.ply"))
+    x, y, z = sphere.vertices.T
+    signals = np.stack([z, x * y])
+    base, scaled = monogenic(sphere, signals), monogenic(sphere, scale * signals)
+    # linear up to the round-off of the solves, 1e-12 of the largest amplitude
+    np.testing.assert_allclose(scaled.amplitude / scale, base.amplitude, rtol=1e-10, atol=1e-12 * base.amplitude.max())
+    np.testing.assert_allclose(scaled.phase, base.phase, rtol=0, atol=1e-10)
+    # the frequency at a fold of the phase (an extremum of f, where Rf vanishes) depends on round-off: the
+    # fold's orientation is chosen among near-equal directions; everywhere else it is the same number
+    same = np.isclose(scaled.frequency, base.frequency, rtol=1e-8, atol=1e-8 * base.frequency.max())
+    assert same.mean() > 0.999
+    weight = base.amplitude ** 2 * sphere.mass_diagonal
+    np.testing.assert_allclose((weight * scaled.frequency).sum(1), (weight * base.frequency).sum(1), rtol=1e-6)

@@ -134,12 +134,24 @@ def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = R
     if f.ndim != 2 or r.shape != (*f.shape, 3) or f.shape[1] != surface.n_vertices:
         raise InputError(f"signals must have shape (k, {surface.n_vertices}) and their Riesz transforms "
                          f"(k, {surface.n_vertices}, 3), got {f.shape} and {r.shape}")
+    f, r = _unit_scale(f, r)
     if method == "gradient":
         return _gradient_frequency(surface, f, r, gradient)
     stencil = _stencil(surface, gradient)
     with ThreadPoolExecutor(_threads(len(f), len(stencil.rows))) as pool:  # NumPy and SciPy's sparse products release the GIL
         rows = list(pool.map(lambda fi, ri: _phase_frequency(stencil, fi, ri), f, r))
     return np.array(rows).reshape(f.shape)
+
+
+def _unit_scale(f: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each signal and its Riesz transform divided by their largest magnitude.
+
+    The phase, and so ``ω``, does not change with the signal's scale; products of
+    signals of magnitude 1e200 would overflow (the fold tensor of :func:`_orientation`).
+    """
+    scale = np.maximum(np.abs(f).max(axis=1, initial=0.0), np.abs(r).max(axis=(1, 2), initial=0.0))
+    scale = np.where(scale > 0, scale, 1.0)
+    return f / scale[:, None], r / scale[:, None, None]
 
 
 def _threads(count: int, edges: int) -> int:

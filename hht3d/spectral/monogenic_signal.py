@@ -178,7 +178,7 @@ def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = 
     check_choice(gradient, GRADIENTS, "gradient")
     check_choice(frequency, FREQUENCY_METHODS, "frequency")
     rf = vertex_gradient(surface, u, gradient)
-    q = np.linalg.norm(rf, axis=-1)
+    q = np.hypot(np.hypot(rf[..., 0], rf[..., 1]), rf[..., 2])  # no overflow at 1e200, no underflow at 1e-200
     omega = instantaneous_frequency(surface, f, rf, method=frequency, gradient=gradient)
-    return MonogenicSignal(imfs=f, riesz=rf, amplitude=np.sqrt(f ** 2 + q ** 2), phase=np.arctan2(q, f),
+    return MonogenicSignal(imfs=f, riesz=rf, amplitude=np.hypot(f, q), phase=np.arctan2(q, f),
                            frequency=omega, area=surface.mass_diagonal.copy())
