@@ -196,3 +196,7 @@ def test_monogenic_quantities_scale_with_the_signal(scale):
     assert same.mean() > 0.999
     weight = base.amplitude ** 2 * sphere.mass_diagonal
     np.testing.assert_allclose((weight * scaled.frequency).sum(1), (weight * base.frequency).sum(1), rtol=1e-6)
+    from hht3d.spectral import HilbertSpectrum  # its energy proportions stay finite too
+
+    np.testing.assert_allclose(HilbertSpectrum.from_monogenic(sphere, scaled).mean_frequency(),
+                               HilbertSpectrum.from_monogenic(sphere, base).mean_frequency(), rtol=1e-6)

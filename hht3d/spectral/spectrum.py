@@ -81,12 +81,17 @@ class HilbertSpectrum:
     def resolution(self) -> ResolutionReport:
         """Vertex–IMF pairs whose frequency exceeds their vertex's limit, and their share of
         the energy ``a² A_v``: frequencies the surface cannot resolve, reported, not dropped."""
-        return resolution_report(self.frequency, self.resolvable, self.energy * self.area)
+        return resolution_report(self.frequency, self.resolvable, self._relative_energy() * self.area)
 
     @property
     def energy(self) -> np.ndarray:
         """``a_k(v)²`` (k, n)."""
         return self.amplitude ** 2
+
+    def _relative_energy(self) -> np.ndarray:
+        """``(a / max a)²``: the energy's proportions, finite for amplitudes of any magnitude."""
+        top = float(np.max(self.amplitude, initial=0.0))
+        return (self.amplitude / top) ** 2 if top > 0 else self.energy
 
     def imf_energy(self) -> np.ndarray:
         """``∫ a_k² dA`` per IMF (k,)."""
@@ -97,8 +102,9 @@ class HilbertSpectrum:
 
         ``nan`` for an IMF without energy.
         """
-        total = self.imf_energy()
-        weighted = (self.energy * self.frequency) @ self.area
+        relative = self._relative_energy()
+        total = relative @ self.area
+        weighted = (relative * self.frequency) @ self.area
         return np.divide(weighted, total, out=np.full_like(total, np.nan), where=total > 0)
 
     def frequency_limits(self, scale: str = "linear", tail: float = 1e-3) -> tuple[float, float]:
@@ -108,7 +114,7 @@ class HilbertSpectrum:
         the figures and the viewer's marginal spectrum.
         """
         frequency = self.frequency.ravel()
-        weight = (self.energy * self.area).ravel()
+        weight = (self._relative_energy() * self.area).ravel()
         keep = (frequency > 0) if scale == "log" else np.isfinite(frequency)
         frequency, weight = frequency[keep], weight[keep]
         order = np.argsort(frequency)
