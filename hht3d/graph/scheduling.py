@@ -1,6 +1,6 @@
 """Running hht3d task graphs on a Dask scheduler, with progress reporting.
 
-Graph construction (:mod:`hht3d.graph.stages.stages`) and execution are separate: any
+Graph construction (:mod:`hht3d.graph.stages`) and execution are separate: any
 graph runs unchanged on
 
 * ``"synchronous"``: one thread, for debugging (pdb works inside tasks);

@@ -5,7 +5,7 @@ here with the same name, signature and docstring (as dask-image mirrors
 SciPy's ndimage): ``graph.emd(surface, signal, max_imfs=3)`` takes what
 :func:`hht3d.decomposition.decompose.emd` takes, Delayed values included, and returns a
 ``Delayed``.  :func:`mirror` makes such a twin from any core function.
-Stages compose freely and run on any scheduler of :mod:`hht3d.graph.stages.scheduling`.
+Stages compose freely and run on any scheduler of :mod:`hht3d.graph.scheduling`.
 
 Examples
 --------
@@ -24,12 +24,12 @@ Parallelism follows the method:
 * the Riesz transform of all IMFs is a sum over quadrature shifts
   (:mod:`hht3d.spectral.riesz_transform`): one task finds the spectral bounds and shifts, then
   ``riesz_tasks`` independent *shift-group* tasks (default: one per worker,
-  :func:`hht3d.graph.stages.scheduling.worker_count`) each factorize their shifts once and
+  :func:`hht3d.graph.scheduling.worker_count`) each factorize their shifts once and
   solve all IMFs as one multi-column right-hand side; they depend only on the
   EMD task and the surface, and factorizations never leave a task.  (One task
   per IMF would repeat every factorization once per IMF.)  :func:`monogenic`
   and :func:`hht` take ``riesz_tasks`` beyond the eager signature;
-* the files of a dataset are independent subgraphs (:mod:`hht3d.graph.stages.dataset`).
+* the files of a dataset are independent subgraphs (:mod:`hht3d.graph.dataset`).
 
 A surface or array enters a graph once, as one key, and is shared by
 reference between the tasks that use it.
@@ -112,7 +112,7 @@ class Builder:
     guard : callable, optional
         ``guard(step, func) -> callable`` wrapping every task's function; the
         dataset runner uses it to isolate failures per file
-        (:class:`hht3d.graph.stages.dataset.Failure`).  Default: tasks raise normally.
+        (:class:`hht3d.graph.dataset.Failure`).  Default: tasks raise normally.
     """
 
     def __init__(self, guard=None):
@@ -173,7 +173,7 @@ class _OnWorker:
         return self.func(*map(local, args), **{k: local(v) for k, v in kwargs.items()})
 
     def __dask_tokenize__(self):
-        return "hht3d.graph.stages.stages._OnWorker", tokenize(self.func)
+        return "hht3d.graph.stages._OnWorker", tokenize(self.func)
 
 
 class _SharedAnalysis:
@@ -318,7 +318,7 @@ def riesz_potential(surface, imfs, *, method: str = RIESZ_DEFAULTS.method, tol: 
 
     ``method="quadrature"``: a bounds task, ``riesz_tasks`` shift-group tasks
     (:func:`hht3d.spectral.riesz_transform.quadrature_part`; default one per worker of the
-    scheduler, :func:`hht3d.graph.stages.scheduling.worker_count`) and a summing task.
+    scheduler, :func:`hht3d.graph.scheduling.worker_count`) and a summing task.
     Other methods: one task (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`).
     """
     if method != "quadrature":
