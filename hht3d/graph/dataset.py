@@ -32,6 +32,7 @@ from ..errors import InputError, one_line
 from ..transform import HHTResult
 from ..io.read import atomic_path, check_output_paths, read_npz_shapes, read_ply_header, resolve_inputs
 from ..decomposition.quality import QualityWarning, decomposition_quality
+from ..linalg.estimate import slow_fallback
 from .scheduling import compute
 
 __all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary",
@@ -111,6 +112,8 @@ class ItemSummary:
     outputs; ``seconds`` and the quality are empty, since nothing ran).
     ``energy_ratio``, ``orthogonality_index`` and ``warnings`` are the
     quality of the item's last decomposition (:mod:`hht3d.decomposition.quality`).
+    ``solver_advice`` says which extra to install when a slow sparse solver ran on a
+    large mesh (:func:`hht3d.linalg.estimate.slow_fallback`).
     """
 
     source: str
@@ -124,6 +127,7 @@ class ItemSummary:
     outputs: tuple[str, ...] = ()
     step: str | None = None
     error: str | None = None
+    solver_advice: str | None = None
 
 
 def output_paths(source: Path, out_dir: Path, formats=FORMATS, pattern: str = "{stem}_hht") -> list[Path]:
@@ -163,8 +167,16 @@ def item_summary(source: str, paths, surface, decomposition, quality, parts, wri
     seconds = round(sum(v.seconds for v in [*parts, *writes]), 3)
     imfs = None if decomposition is None else decomposition.value.n_imfs
     fields = {} if quality is None else quality.value
-    return ItemSummary(source, "ok", vertices=surface.value.n_vertices, imfs=imfs, seconds=seconds,
-                       outputs=written, **fields)
+    vertices = surface.value.n_vertices
+    advice = None if decomposition is None else slow_fallback(vertices, _backend_of(decomposition.value))
+    return ItemSummary(source, "ok", vertices=vertices, imfs=imfs, seconds=seconds,
+                       outputs=written, solver_advice=advice, **fields)
+
+
+def _backend_of(decomposition) -> str | None:
+    """The sparse solver an EMD or HHT result was computed with."""
+    info = decomposition.info
+    return info.get("emd", info).get("backend")
 
 
 def skipped_summary(source, paths) -> ItemSummary:

@@ -9,5 +9,5 @@ from .backends import (BACKEND_VARIABLE, SOLVER_BACKENDS, Backend, register_back
                        default_backend, BackendStatus, backend_report, check_backend, BACKENDS)
 from .factor import Factor
 from .symbolic import SymbolicFactorization, factorize
-from .estimate import (Estimate, estimate, backend_estimates, available_memory, check_memory, estimate_lines,
+from .estimate import (Estimate, estimate_hht, backend_estimates, available_memory, check_memory, estimate_lines,
                        SLOW_FALLBACK_VERTICES, SlowSolverWarning, slow_fallback, warn_slow_fallback)

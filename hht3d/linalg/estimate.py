@@ -4,9 +4,10 @@ Each backend's cost of the whole HHT of a mesh (EMD with the default options,
 Riesz transform, monogenic quantities) is a model fitted to measurements on
 real meshes by ``benchmarks/bench_backends.py``:
 
-* peak resident memory ``n (a + b log₂ n)`` bytes for ``n`` vertices: the
-  arrays of the transform grow like ``n`` and a nested-dissection or
-  minimum-degree factor of a surface's matrix like ``n log n``;
+* peak resident memory ``BASELINE + n (a + b log₂ n)`` bytes for ``n``
+  vertices: the arrays of the transform grow like ``n`` and a
+  nested-dissection or minimum-degree factor of a surface's matrix like
+  ``n log n`` (``b >= 0``, so extrapolation never falls below linear);
 * wall time ``t₅₀ₖ (n / 50,000)^e`` seconds.
 
 :func:`check_memory` refuses, with one line, a computation whose estimate
@@ -27,8 +28,8 @@ from ..errors import InputError
 from . import backends
 from .backends import available_backends, check_backend
 
-__all__ = ["Cost", "COSTS", "Estimate", "estimate", "backend_estimates", "available_memory",
-           "check_memory", "estimate_lines", "SLOW_FALLBACK_VERTICES", "SlowSolverWarning", "slow_fallback",
+__all__ = ["Cost", "COSTS", "Estimate", "estimate_hht", "backend_estimates", "available_memory",
+           "check_memory", "estimate_lines", "BASELINE", "SLOW_FALLBACK_VERTICES", "SlowSolverWarning", "slow_fallback",
            "warn_slow_fallback"]
 
 #: Meshes above this many vertices get the slow-fallback advice (:func:`slow_fallback`).
@@ -67,18 +68,26 @@ COSTS: dict[str, Cost] = {
 
 @dataclass(frozen=True)
 class Estimate:
-    """Estimated peak memory and time of the whole HHT of ``vertices`` on ``backend``."""
+    """Estimated peak memory and time of the whole HHT of ``vertices`` on ``backend``.
+
+    ``peak_bytes`` is the whole process's peak, :data:`BASELINE` included;
+    ``added_bytes`` what the computation adds to a process that already runs.
+    """
 
     backend: str
     vertices: int
     peak_bytes: int
     seconds: float
 
+    @property
+    def added_bytes(self) -> int:
+        return max(self.peak_bytes - BASELINE, 0)
+
     def describe(self) -> str:
         return f"~{_size(self.peak_bytes)} and ~{_duration(self.seconds)} on {self.backend}"
 
 
-def estimate(vertices: int, backend: str | None = None) -> Estimate | None:
+def estimate_hht(vertices: int, backend: str | None = None) -> Estimate | None:
     """The whole HHT's :class:`Estimate` for a surface of ``vertices``; ``None`` for an uncalibrated backend.
 
     Parameters
@@ -93,17 +102,17 @@ def estimate(vertices: int, backend: str | None = None) -> Estimate | None:
     if cost is None:
         return None
     n = max(int(vertices), 2)
-    peak = max(n * (cost.a + cost.b * math.log2(n)), 0.0) + _BASELINE
-    return Estimate(backend, int(vertices), int(peak), cost.seconds_50k * (n / 50_000) ** cost.exponent)
+    grows = max(n * (cost.a + cost.b * math.log2(n)), 0.0)
+    return Estimate(backend, int(vertices), int(BASELINE + grows), cost.seconds_50k * (n / 50_000) ** cost.exponent)
 
 
-#: Resident memory of a Python process with hht3d's dependencies imported (bytes).
-_BASELINE = 250 * 2 ** 20
+#: Resident memory of a Python process that has imported hht3d (bytes, measured: 66-100 MB); part of every estimate.
+BASELINE = 100 * 2 ** 20
 
 
 def backend_estimates(vertices: int) -> list[Estimate]:
-    """:func:`estimate` for every installed, calibrated backend, fastest first."""
-    return [e for e in (estimate(vertices, name) for name in available_backends()) if e is not None]
+    """:func:`estimate_hht` for every installed, calibrated backend, fastest first."""
+    return [e for e in (estimate_hht(vertices, name) for name in available_backends()) if e is not None]
 
 
 def estimate_lines(vertices: int) -> list[str]:
@@ -112,19 +121,19 @@ def estimate_lines(vertices: int) -> list[str]:
     lines = [f"estimated whole HHT of {vertices:,} vertices (memory available: "
              f"{'unknown' if available is None else _size(available)}):"]
     for found in backend_estimates(vertices):
-        fits = "" if available is None or found.peak_bytes <= available else "  (does not fit)"
+        fits = "" if available is None or found.added_bytes <= available else "  (does not fit)"
         lines.append(f"    {found.backend:<8} ~{_duration(found.seconds):>7}  peak ~{_size(found.peak_bytes)}{fits}")
     return lines
 
 
 def available_memory() -> int | None:
-    """Bytes this process may hold at its peak: what it holds now plus the smallest of
-    free memory, the address-space limit (``ulimit -v``) and the cgroup limit; ``None`` if unknown."""
-    limits, rss, vms = [], 0, None
+    """Bytes this process may still allocate: the smallest of free memory, what the
+    address-space limit (``ulimit -v``) leaves and what the cgroup limit leaves; ``None`` if unknown."""
+    limits, vms = [], None
     try:
         import psutil
         limits.append(psutil.virtual_memory().available)
-        rss, vms = psutil.Process().memory_info()[:2]
+        vms = psutil.Process().memory_info().vms
     except (ImportError, OSError):  # depends on the platform
         pass
     try:
@@ -141,11 +150,11 @@ def available_memory() -> int | None:
             limits.append(int(limit) - int((cgroup / "memory.current").read_text()))
     except (OSError, ValueError):
         pass
-    return rss + max(min(limits), 0) if limits else None
+    return max(min(limits), 0) if limits else None
 
 
 def check_memory(vertices: int, backend: str | None = None, available: int | None = None) -> Estimate | None:
-    """Refuse with one line a computation whose estimated peak exceeds ``available`` bytes.
+    """Refuse with one line a computation that would add more than ``available`` bytes.
 
     ``available`` defaults to :func:`available_memory`; returns the estimate.
 
@@ -154,11 +163,12 @@ def check_memory(vertices: int, backend: str | None = None, available: int | Non
     InputError
         With the estimate, the memory available and the ways out.
     """
-    found = estimate(vertices, backend)
+    found = estimate_hht(vertices, backend)
     available = available_memory() if available is None else int(available)
-    if found is not None and available is not None and found.peak_bytes > available:
-        raise InputError(f"a surface of {vertices:,} vertices needs {found.describe()} but only "
-                         f"{_size(available)} is available; {_FIX}")
+    if found is not None and available is not None and found.added_bytes > available:
+        raise InputError(f"a surface of {vertices:,} vertices needs {found.describe()} "
+                         f"({_size(found.added_bytes)} more than now) but only {_size(available)} is "
+                         f"available; {_FIX}")
     return found
 
 
@@ -173,9 +183,9 @@ def slow_fallback(vertices: int, backend: str | None = None) -> str | None:
     if cost is None or not cost.slow or vertices <= SLOW_FALLBACK_VERTICES:
         return None
     faster = [name for name, c in COSTS.items() if not c.slow and name in backends.SOLVER_BACKENDS]
-    found = estimate(vertices, backend)
-    return (f"the sparse solver is {backend} (no faster one is installed): the HHT of {vertices:,} vertices "
-            f"takes {found.describe()}; pip install 'hht3d[fast]' for {' or '.join(faster)}")
+    found = estimate_hht(vertices, backend)
+    return (f"{backend} is a slow sparse solver for {vertices:,} vertices (the HHT needs {found.describe()}); "
+            f"pip install 'hht3d[fast]' for {' or '.join(faster)}")
 
 
 _WARNED: set[str] = set()
