@@ -198,8 +198,9 @@ def whole_part(name: str, backends: list[str], timeout: float) -> list[dict]:
 def fit_costs(rows: list[dict]) -> dict:
     """``COSTS`` constants from two models per backend: peak BASELINE + n(a + b log2 n), time t50k (n/50k)^e.
 
-    ``b`` is kept >= 0 (else ``a`` is the larger bytes per vertex), so that the model never
-    shrinks below linear growth when extrapolated to larger meshes.
+    ``a, b >= 0``, so that the model never falls below linear growth when extrapolated: the
+    line through both points when it has them; else the coefficient left alone is the largest
+    that any model needs (the other 0), so that no measured peak is underestimated.
     """
     from hht3d.linalg.estimate import BASELINE
 
@@ -210,8 +211,12 @@ def fit_costs(rows: list[dict]) -> dict:
         if len(pts) < 2:
             continue
         (n1, p1, t1), (n2, p2, t2) = pts[0], pts[-1]
-        b = max((p2 / n2 - p1 / n1) / (math.log2(n2) - math.log2(n1)), 0.0)
-        a = max(p1 / n1, p2 / n2) if b == 0 else p1 / n1 - b * math.log2(n1)
+        b = (p2 / n2 - p1 / n1) / (math.log2(n2) - math.log2(n1))
+        a = p1 / n1 - b * math.log2(n1)
+        if b < 0:
+            a, b = max(p1 / n1, p2 / n2), 0.0
+        elif a < 0:
+            a, b = 0.0, max(p1 / (n1 * math.log2(n1)), p2 / (n2 * math.log2(n2)))
         e = math.log(t2 / t1) / math.log(n2 / n1)
         fits[backend] = {"a": round(a, 1), "b": round(b, 1), "seconds_50k": round(t1 * (50_000 / n1) ** e, 2),
                          "exponent": round(e, 3)}

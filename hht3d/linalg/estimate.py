@@ -58,11 +58,12 @@ class Cost:
     slow: bool = False
 
 
-#: Fitted costs by backend name (``benchmarks/bench_backends.py`` prints them after each run).
+#: Fitted costs by backend name (``benchmarks/bench_backends.py`` prints them after each run;
+#: these from results/backends.json: nefertiti and igea, 2026-12-02).
 COSTS: dict[str, Cost] = {
-    "pardiso": Cost(a=-2.0e3, b=6.0e2, seconds_50k=10.0, exponent=1.2),
-    "cholmod": Cost(a=-2.0e3, b=6.0e2, seconds_50k=12.0, exponent=1.2),
-    "superlu": Cost(a=-2.0e3, b=8.0e2, seconds_50k=40.0, exponent=1.4, slow=True),
+    "pardiso": Cost(a=5725.4, b=0.0, seconds_50k=32.18, exponent=0.85),
+    "cholmod": Cost(a=5356.3, b=0.0, seconds_50k=30.54, exponent=0.684),
+    "superlu": Cost(a=0.0, b=445.2, seconds_50k=106.27, exponent=1.41, slow=True),
 }
 
 
@@ -166,9 +167,8 @@ def check_memory(vertices: int, backend: str | None = None, available: int | Non
     found = estimate_hht(vertices, backend)
     available = available_memory() if available is None else int(available)
     if found is not None and available is not None and found.added_bytes > available:
-        raise InputError(f"a surface of {vertices:,} vertices needs {found.describe()} "
-                         f"({_size(found.added_bytes)} more than now) but only {_size(available)} is "
-                         f"available; {_FIX}")
+        raise InputError(f"a surface of {vertices:,} vertices needs {found.describe()} but only "
+                         f"{_size(available)} is available; {_FIX}")
     return found
 
 
