@@ -12,7 +12,7 @@ Examples
 >>> import hht3d
 >>> from hht3d.geometry import mean_curvature
 >>> surface = hht3d.load(hht3d.data_path("spot.ply"))
->>> decomposition = hht3d.decomposition.decompose(surface, mean_curvature(surface), max_imfs=2)
+>>> decomposition = hht3d.emd(surface, mean_curvature(surface), max_imfs=2)
 >>> decomposition.n_imfs
 2
 >>> from hht3d.decomposition import envelope_operator
