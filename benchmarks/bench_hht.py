@@ -22,7 +22,7 @@ separately here to time and measure them apart.  *Total* = all five stages,
 from the file to the spectra (the paper's total also exceeds its EMD + RT).
 
 Instrumentation (benchmark only, no effect on the numerics): the PARDISO
-phases of :mod:`hht3d.linalg.backends` (analysis 11, numeric factorization 22, solve 33)
+phases of :mod:`hht3d.linalg` (analysis 11, numeric factorization 22, solve 33)
 are timed and PARDISO's own memory report is read after phases 11 and 22
 (``iparm`` 15-18: peak symbolic, permanent, factor + solve memory in KB, nnz
 of the factor; peak = max(iparm15, iparm16 + iparm17)); ``spectral_bounds``,
@@ -69,7 +69,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from common import (DATA, PAPER_TABLE1, RESULTS, machine, mkl_environment, model_path,  # noqa: E402
                     peak_rss_mb, status_mb, table, write_results)
 
-from hht3d.linalg.backends import BACKEND_VARIABLE  # noqa: E402
+from hht3d.linalg import BACKEND_VARIABLE  # noqa: E402
 
 SCRATCH = RESULTS / "scratch"
 LADDER = ["spot", "sphere_oct4098", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti",
@@ -181,7 +181,10 @@ class Recorder:
             start, cpu_start = time.perf_counter(), time.process_time()
             factor = factorize(pattern, a)
             recorder._count("factorization", start, cpu_start)
-            solve = factor.solve
+            # wrap the solver, not the bound method factor.solve: a closure over that would make
+            # factor -> closure -> factor a cycle, freed only by the cyclic collector, and kept
+            # every SuperLU factor of a run alive at once (the 20.8 GB peak of nefertiti)
+            solve = factor._solve
 
             def timed_solve(b):
                 start, cpu_start = time.perf_counter(), time.process_time()
@@ -190,7 +193,7 @@ class Recorder:
                 recorder._entry()["solve_columns"] += 1 if b.ndim == 1 else b.shape[1]
                 return out
 
-            factor.solve = timed_solve
+            factor._solve = timed_solve
             return factor
 
         impl.__init__, impl.factorize = timed_init, timed_factorize
@@ -758,7 +761,7 @@ def main(argv=None) -> int:
             _log(f"  {r['vertices']:,} V, {r['imfs']} IMFs, EMD {r['seconds']['emd']:.1f} s, RT "
                  f"{r['seconds']['rt']:.1f} s, total {r['seconds']['total']:.1f} s, peak {r['peak_rss_mb']:.0f} MB")
     if "backends" in args.parts:
-        from hht3d.linalg.backends import available_backends
+        from hht3d.linalg import available_backends
 
         backends = [b for b in available_backends() if b != "superlu" or args.with_superlu]
         for name in [m for m in args.models or BACKEND_MODELS if model_path(m) is not None]:

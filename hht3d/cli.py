@@ -73,6 +73,9 @@ def _execute(plan, args) -> int:
                         progress=False if args.quiet else None, resume=args.resume, summary=False)
     for row in rows:
         print(redact("\n".join(_row_lines(row))), flush=True)
+    slow = [row for row in rows if row.solver_advice]
+    if slow:  # once per run, for its largest input
+        print(f"hht3d: warning: {max(slow, key=lambda row: row.vertices).solver_advice}", file=sys.stderr)
     if plan.summary:
         write_summary(rows, plan.folder, plan.storage_options)
         print(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}")
@@ -121,25 +124,27 @@ def _ops(args) -> int:
     return 0
 
 
-def _backends() -> None:
-    from .linalg.backends import backend_report
+def _backends(vertices: int) -> None:
+    from .linalg import backend_report, estimate_lines
 
     statuses, reason = backend_report()
     chosen = next(s.name for s in statuses if s.default)
     print(f"sparse solver: {chosen} ({reason})")
     for s in statuses:
         print(f"  {'*' if s.default else ' '} {s.name:<8} {'available' if s.available else 'missing  '}  {s.detail}")
+    print("\n".join(estimate_lines(vertices)))
 
 
 def _info(args) -> int:
     from .io.read import load
     from .geometry.topology import describe
 
+    surface = None if args.file is None else load(args.file, clean=not args.no_clean)
     if args.backends:
-        _backends()
-    if args.file is None:
+        _backends(args.vertices if surface is None else surface.n_vertices)
+    if surface is None:
         return 0
-    info = describe(load(args.file, clean=not args.no_clean))
+    info = describe(surface)
     if args.json:
         print(json.dumps(info, indent=2))
     else:
@@ -214,7 +219,10 @@ def build_parser() -> argparse.ArgumentParser:
     info = sub.add_parser("info", help="vertices, faces, components, boundary, manifoldness, bounding box; "
                                        "--backends: the sparse solver that will run and why")
     info.add_argument("file", nargs="?")
-    info.add_argument("--backends", action="store_true", help="list the sparse solver backends")
+    info.add_argument("--backends", action="store_true",
+                      help="list the sparse solver backends with their estimated time and memory")
+    info.add_argument("--vertices", type=int, default=50_000,
+                      help="mesh size of the --backends estimates without FILE (default: 50,000)")
     info.add_argument("--json", action="store_true", help="print JSON")
     info.add_argument("--no-clean", action="store_true", help="describe the file as stored, before cleaning")
     info.set_defaults(run=_info)

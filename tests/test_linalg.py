@@ -1,4 +1,4 @@
-"""Sparse SPD solver backends (hht3d.linalg.backends) against SciPy's dense and sparse solvers.
+"""Sparse SPD solver backends (hht3d.linalg) against SciPy's dense and sparse solvers.
 
 The systems are the two kinds hht3d factorizes, built on the shipped model
 spot (2,930 vertices): the constrained biharmonic envelope system of EMD and
@@ -23,7 +23,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import hht3d
-from hht3d.linalg import backends as linalg
+from hht3d import linalg
+from hht3d.linalg import backends
 from hht3d.errors import InputError, NumericalError
 
 from hht3d.decomposition import envelope_operator
@@ -174,7 +175,7 @@ def test_default_backend_and_override(monkeypatch):
 
 
 def test_missing_backend_is_explained(monkeypatch):
-    monkeypatch.setitem(linalg._MODULES, "cholmod", None)
+    monkeypatch.setitem(backends._MODULES, "cholmod", None)
     monkeypatch.delenv(linalg.BACKEND_VARIABLE, raising=False)
     assert "cholmod" not in linalg.available_backends()
     with pytest.raises(InputError, match="cvxopt is not installed"):
@@ -205,13 +206,13 @@ class _DenseCholesky:
 
 
 def test_a_new_backend_is_one_registry_entry(monkeypatch):
-    monkeypatch.setattr(linalg, "SOLVER_BACKENDS", dict(linalg.SOLVER_BACKENDS))
+    monkeypatch.setattr(backends, "SOLVER_BACKENDS", dict(backends.SOLVER_BACKENDS))
     monkeypatch.delenv(linalg.BACKEND_VARIABLE, raising=False)
     linalg.register_backend(linalg.Backend("dense", "scipy", ("scipy.linalg",), "dense Cholesky",
                                            "never missing", _DenseCholesky), before="superlu")
     linalg.register_backend(linalg.Backend("absent", "absent", ("hht3d_no_such_module",), "nothing",
                                            "pip install absent", _DenseCholesky))
-    assert list(linalg.SOLVER_BACKENDS)[-2:] == ["superlu", "absent"]
+    assert list(backends.SOLVER_BACKENDS)[-2:] == ["superlu", "absent"]
     assert "dense" in linalg.available_backends() and "absent" not in linalg.available_backends()
     a = sp.csr_matrix(np.array([[4.0, 1.0], [1.0, 3.0]]))
     np.testing.assert_allclose(a @ linalg.factorize(a, "dense").solve(np.ones(2)), np.ones(2))

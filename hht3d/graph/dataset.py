@@ -34,6 +34,7 @@ from ..io.read import _MAX_HEADER, read_npz_shapes, read_ply_header
 from ..io.storage import atomic_location, check_outputs, exists, join, local_copy, name, resolve_locations, stem
 from ..redaction import redact
 from ..decomposition.quality import QualityWarning, decomposition_quality
+from ..linalg.estimate import slow_fallback
 from .scheduling import compute
 
 __all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary",
@@ -113,6 +114,8 @@ class ItemSummary:
     outputs; ``seconds`` and the quality are empty, since nothing ran).
     ``energy_ratio``, ``orthogonality_index`` and ``warnings`` are the
     quality of the item's last decomposition (:mod:`hht3d.decomposition.quality`).
+    ``solver_advice`` says which extra to install when a slow sparse solver ran on a
+    large mesh (:func:`hht3d.linalg.estimate.slow_fallback`).
     """
 
     source: str
@@ -126,6 +129,7 @@ class ItemSummary:
     outputs: tuple[str, ...] = ()
     step: str | None = None
     error: str | None = None
+    solver_advice: str | None = None
 
 
 def output_paths(source: Path, out_dir: Path, formats=FORMATS, pattern: str = "{stem}_hht") -> list[Path]:
@@ -165,8 +169,16 @@ def item_summary(source: str, paths, surface, decomposition, quality, parts, wri
     seconds = round(sum(v.seconds for v in [*parts, *writes]), 3)
     imfs = None if decomposition is None else decomposition.value.n_imfs
     fields = {} if quality is None else quality.value
-    return ItemSummary(source, "ok", vertices=surface.value.n_vertices, imfs=imfs, seconds=seconds,
-                       outputs=written, **fields)
+    vertices = surface.value.n_vertices
+    advice = None if decomposition is None else slow_fallback(vertices, _backend_of(decomposition.value))
+    return ItemSummary(source, "ok", vertices=vertices, imfs=imfs, seconds=seconds,
+                       outputs=written, solver_advice=advice, **fields)
+
+
+def _backend_of(decomposition) -> str | None:
+    """The sparse solver an EMD or HHT result was computed with."""
+    info = decomposition.info
+    return info.get("emd", info).get("backend")
 
 
 def skipped_summary(source, paths, storage_options: dict | None = None) -> ItemSummary:

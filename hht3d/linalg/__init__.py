@@ -1,4 +1,13 @@
-"""Sparse symmetric positive-definite factorization backends."""
-from .backends import (BACKEND_VARIABLE, SOLVER_BACKENDS, Backend, register_backend, available_backends, default_backend,
-                       BackendStatus, backend_report, check_backend, Factor, BACKENDS, SymbolicFactorization,
-                       factorize)
+"""Sparse symmetric positive-definite factorization backends.
+
+* :mod:`~hht3d.linalg.backends` — the registry: which backends exist, which one runs and why;
+* :mod:`~hht3d.linalg.symbolic` — :class:`SymbolicFactorization` (one analysis, many factorizations);
+* :mod:`~hht3d.linalg.estimate` — time and memory known before factorizing, and the advice that follows;
+* :mod:`~hht3d.linalg.pardiso`, :mod:`~hht3d.linalg.cholmod`, :mod:`~hht3d.linalg.superlu` — the backends.
+"""
+from .backends import (BACKEND_VARIABLE, SOLVER_BACKENDS, Backend, register_backend, available_backends,
+                       default_backend, BackendStatus, backend_report, check_backend, BACKENDS)
+from .factor import Factor
+from .symbolic import SymbolicFactorization, factorize
+from .estimate import (Estimate, estimate_hht, backend_estimates, available_memory, check_memory, estimate_lines,
+                       SLOW_FALLBACK_VERTICES, SlowSolverWarning, slow_fallback, warn_slow_fallback)

@@ -1,0 +1,65 @@
+"""Analyse a sparsity pattern once, factorize many matrices on it, on any registered backend."""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import InputError
+from . import backends
+from .estimate import check_memory, warn_slow_fallback
+from .factor import Factor
+
+__all__ = ["SymbolicFactorization", "factorize"]
+
+
+class SymbolicFactorization:
+    """Analyse a sparsity pattern once, then factorize matrices sharing it.
+
+    Before the analysis the whole HHT's memory on this backend is estimated
+    for a surface of the matrix's order (:func:`~hht3d.linalg.estimate.check_memory`):
+    one line refuses it when it cannot fit, and a slow backend on a large
+    mesh is reported once (:func:`~hht3d.linalg.estimate.warn_slow_fallback`).
+
+    Parameters
+    ----------
+    pattern : sparse matrix
+        Symmetric matrix whose stored entries (explicit zeros included)
+        define the pattern.
+    backend : {"pardiso", "cholmod", "superlu"}, optional
+        Defaults to :func:`~hht3d.linalg.backends.default_backend`.
+
+    Notes
+    -----
+    With the ``pardiso`` and ``cholmod`` backends only the most recent
+    :class:`Factor` of one ``SymbolicFactorization`` is valid (both keep one
+    factor per analysis); create one ``SymbolicFactorization`` per factor
+    that must stay alive.
+    """
+
+    def __init__(self, pattern, backend: str | None = None):
+        pattern = _as_square_csr(pattern)
+        self.backend = backends.check_backend(backend)
+        check_memory(pattern.shape[0], self.backend)
+        warn_slow_fallback(pattern.shape[0], self.backend)
+        entry = backends.SOLVER_BACKENDS[self.backend]
+        self._impl = entry.pattern(pattern, entry.module())
+        self.n_factorizations = 0
+
+    def factorize(self, a) -> Factor:
+        """Numerically factorize ``a`` (same pattern as analysed)."""
+        factor = self._impl.factorize(_as_square_csr(a))
+        self.n_factorizations += 1
+        return factor
+
+
+def factorize(a, backend: str | None = None) -> Factor:
+    """Factorize one SPD sparse matrix (analysis and numeric phase)."""
+    return SymbolicFactorization(a, backend).factorize(a)
+
+
+def _as_square_csr(a) -> sp.csr_matrix:
+    a = sp.csr_matrix(a, dtype=np.float64)
+    if a.shape[0] != a.shape[1]:
+        raise InputError(f"matrix must be square, got shape {a.shape}")
+    a.sort_indices()
+    return a
