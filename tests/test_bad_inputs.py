@@ -33,10 +33,10 @@ from plyfile import PlyData, PlyElement
 
 from hht3d.cli import main
 from hht3d.errors import HHT3DError
-from hht3d.io.read.read import load
+from hht3d.io import load
 from hht3d.pipeline import OPERATIONS, parse_pipeline
 from hht3d.pipeline.schema import EXECUTION
-from hht3d.graph.stages.scheduling import compute
+from hht3d.graph.scheduling import compute
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -338,7 +338,7 @@ def _no_graph(monkeypatch) -> None:
         raise AssertionError("validate built the task graph")
 
     monkeypatch.setattr("hht3d.pipeline.runner.pipeline_graph", refuse)
-    monkeypatch.setattr("hht3d.graph.stages.stages.Builder.task", refuse)
+    monkeypatch.setattr("hht3d.graph.stages.Builder.task", refuse)
 
 
 def _failing_write(name: str, error: int):
@@ -572,7 +572,7 @@ def test_every_numeric_parameter_has_an_upper_bound():
 
 def test_progress_into_a_log_is_a_few_plain_lines(monkeypatch, capfd):
     """A long run into a log (stderr not a terminal): a line per interval, not a bar redrawn 10 times a second."""
-    monkeypatch.setattr("hht3d.graph.stages.scheduling.PROGRESS_INTERVAL", 0.1)
+    monkeypatch.setattr("hht3d.graph.scheduling.PROGRESS_INTERVAL", 0.1)
     tasks = [delayed(time.sleep, pure=False)(0.02) for _ in range(40)]
     compute(*tasks, scheduler="synchronous", progress=True)
     lines = capfd.readouterr().err.splitlines()

@@ -12,7 +12,7 @@ from conftest import assert_same_hht
 from hht3d import Surface
 from hht3d.cli import demo_model_path, demo_pipeline_path, main
 from hht3d.transform import hht
-from hht3d.io.read.read import load, write_ply
+from hht3d.io import load, write_ply
 from hht3d.geometry.signals import mean_curvature
 from hht3d.pipeline import OPERATIONS
 

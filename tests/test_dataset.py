@@ -7,10 +7,10 @@ import pytest
 from conftest import assert_same_hht, hht_arrays_from_ply
 
 from hht3d import Surface, load
-from hht3d.graph.stages.dataset import run_dataset
+from hht3d.graph.dataset import run_dataset
 from hht3d.errors import OutputError
 from hht3d.transform import hht
-from hht3d.io.read.read import write_ply
+from hht3d.io import write_ply
 from hht3d.geometry.signals import mean_curvature
 from meshes import icosphere
 
@@ -77,6 +77,6 @@ def test_summary_rows_carry_the_quality(tmp_path):
 
 def test_unwritable_output_folder_fails_before_computing(tmp_path, monkeypatch):
     inputs = _make_inputs(tmp_path / "in")
-    monkeypatch.setattr("hht3d.graph.stages.stages.transform_file", lambda *a, **k: pytest.fail("computed anyway"))
+    monkeypatch.setattr("hht3d.graph.stages.transform_file", lambda *a, **k: pytest.fail("computed anyway"))
     with pytest.raises(OutputError, match="good0.ply is not a folder"):
         run_dataset(inputs, inputs / "good0.ply", scheduler="synchronous", progress=False)

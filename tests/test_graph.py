@@ -130,7 +130,7 @@ def test_lazy_twins_have_the_eager_signatures_and_docstrings():
 
     from hht3d import apps
     from hht3d.decomposition.decompose import eemd, emd
-    from hht3d.io.read.read import load
+    from hht3d.io import load
     from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
     from hht3d.geometry.signals import signal
 

@@ -6,7 +6,7 @@ from scipy.spatial import cKDTree
 
 from hht3d import InputError, Surface, load
 from hht3d.errors import OutputError
-from hht3d.io.read.read import (atomic_path, check_output_paths, read_npz_shapes, read_ply_header, write_colored_ply, write_npz,
+from hht3d.io import (atomic_path, check_output_paths, read_npz_shapes, read_ply_header, write_colored_ply, write_npz,
                       write_ply)
 from meshes import gltf_to_glb, icosphere
 

@@ -24,7 +24,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import hht3d
-from hht3d.linalg.backends import backends as linalg
+from hht3d.linalg import backends as linalg
 from hht3d.errors import InputError, NumericalError
 
 emd_module = importlib.import_module("hht3d.decomposition.decompose")

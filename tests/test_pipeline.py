@@ -14,7 +14,7 @@ from hht3d.apps import (HighBoost, LowPass, PiecewiseLinear, filter_geometry, fi
 from hht3d.cli import main
 from hht3d.decomposition.decompose import eemd, emd
 from hht3d.transform import HHTResult, hht
-from hht3d.io.read.read import load, write_ply
+from hht3d.io import load, write_ply
 from hht3d.spectral.monogenic_signal import monogenic
 from hht3d.geometry.signals import mean_curvature
 from hht3d.pipeline import OPERATIONS, load_pipeline, parse_pipeline, run_pipeline

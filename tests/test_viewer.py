@@ -284,7 +284,7 @@ def test_filtered_surface_beside_the_original(result, tmp_path):
 def test_file_html_of_a_plain_surface_shows_its_properties(tmp_path):
     v, f = icosphere(2)
     path = tmp_path / "ball.ply"
-    hht3d.io.read.read.write_ply(path, Surface(v, f, name="ball"), {"height": v[:, 2]})
+    hht3d.io.write_ply(path, Surface(v, f, name="ball"), {"height": v[:, 2]})
     data = page_data(file_html(path))
     assert [e["name"] for e in data["fields"]] == ["height"]
     assert data["spectrum"] is None and data["quality"] is None

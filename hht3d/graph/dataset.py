@@ -10,7 +10,7 @@ half-written, and its summary row lists the outputs it did write.  Output
 locations are checked before anything is computed.
 
 :func:`run_dataset` computes that graph on any scheduler of
-:mod:`hht3d.graph.stages.scheduling` and writes ``summary.json`` and ``summary.csv``: one
+:mod:`hht3d.graph.scheduling` and writes ``summary.json`` and ``summary.csv``: one
 row per file with its status, size, run time and decomposition quality
 (:mod:`hht3d.decomposition.quality`: energy ratio, index of orthogonality, warnings).
 """
@@ -221,7 +221,7 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=FO
     load_options : dict, optional
         Passed to :func:`hht3d.io.read.read.load`.
     **hht_options
-        Passed to :func:`hht3d.graph.stages.stages.transform` (EMD and Riesz options).
+        Passed to :func:`hht3d.graph.stages.transform` (EMD and Riesz options).
 
     Raises
     ------
@@ -278,10 +278,10 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     inputs, out_dir
         As for :func:`dataset_graph`.
     scheduler, workers, address, progress
-        As for :func:`hht3d.graph.stages.scheduling.compute`.
+        As for :func:`hht3d.graph.scheduling.compute`.
     **options
         Those of :func:`dataset_graph` (``signal``, ``formats``, ``resume``,
-        ``load_options``) and the HHT options of :func:`hht3d.graph.stages.stages.transform`.
+        ``load_options``) and the HHT options of :func:`hht3d.graph.stages.transform`.
 
     Returns
     -------
@@ -293,7 +293,7 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     >>> import tempfile
     >>> from pathlib import Path
     >>> from hht3d import data_path
-    >>> from hht3d.graph.stages.dataset import run_dataset
+    >>> from hht3d.graph.dataset import run_dataset
     >>> out = Path(tempfile.mkdtemp())
     >>> rows = run_dataset([data_path("spot.ply")], out, scheduler="synchronous", progress=False,
     ...                    emd_options={"max_imfs": 2})

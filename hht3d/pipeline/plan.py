@@ -25,7 +25,7 @@ PLACEHOLDERS = ("stem", "parent", "name")
 
 @dataclass(frozen=True)
 class Execution:
-    """Where and how the graph runs (:func:`hht3d.graph.stages.scheduling.compute`)."""
+    """Where and how the graph runs (:func:`hht3d.graph.scheduling.compute`)."""
 
     scheduler: str = "threads"
     workers: int | None = None

@@ -1,8 +1,8 @@
 """Compiling a validated :class:`~.plan.Pipeline` to a Dask graph and running it.
 
 Every input file becomes an independent subgraph of its steps' tasks
-(:mod:`hht3d.graph.stages.stages`) and output writes.  Every task is guarded as in
-:mod:`hht3d.graph.stages.dataset`: an exception becomes a record of the step and the
+(:mod:`hht3d.graph.stages`) and output writes.  Every task is guarded as in
+:mod:`hht3d.graph.dataset`: an exception becomes a record of the step and the
 input file that the item's later tasks pass along, so one bad file is
 reported while the others finish.  An output is written once the step it
 comes from is done, atomically: a failed item may have the outputs of its
@@ -33,7 +33,7 @@ def _guarded(source: Path, label):
 
 
 def _item(plan: Pipeline, source: Path, paths: list[Path]):
-    """The lazy :class:`~hht3d.graph.stages.dataset.ItemSummary` of one input file."""
+    """The lazy :class:`~hht3d.graph.dataset.ItemSummary` of one input file."""
     results, parts = {}, {}
     for step in plan.steps:
         builder = _guarded(source, lambda task, s=step: s.id if task in (s.op.name, s.id) else f"{s.id} ({task})")
@@ -60,7 +60,7 @@ def _item(plan: Pipeline, source: Path, paths: list[Path]):
 
 
 def pipeline_graph(plan: Pipeline, *, resume: bool = False):
-    """The pipeline as one lazy list of :class:`~hht3d.graph.stages.dataset.ItemSummary`, one per input file.
+    """The pipeline as one lazy list of :class:`~hht3d.graph.dataset.ItemSummary`, one per input file.
 
     Parameters
     ----------
@@ -82,7 +82,7 @@ def pipeline_graph(plan: Pipeline, *, resume: bool = False):
 def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int | None = None,
                  address: str | None = None, progress: bool | None = None,
                  resume: bool = False, summary: bool = True) -> list[ItemSummary]:
-    """Run a pipeline; return one :class:`~hht3d.graph.stages.dataset.ItemSummary` per input file.
+    """Run a pipeline; return one :class:`~hht3d.graph.dataset.ItemSummary` per input file.
 
     Arguments left as ``None`` take the pipeline's ``execution`` block and
     are checked like it.  The output locations are checked first, so a run
