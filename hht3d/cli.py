@@ -9,12 +9,15 @@
 ``hht3d demo``                    run the demo pipeline shipped in the package.
 
 Exit codes: 0 on success; 1 with a one-line ``hht3d: error: ...`` reason for
-an invalid pipeline, bad input or a failed step; 2 for bad command-line usage.
+an invalid pipeline, bad input or a failed step; 2 for bad command-line usage;
+130 on SIGINT (Ctrl-C) and 143 on SIGTERM, after a clean stop
+(:mod:`hht3d.stopping`).
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -56,7 +59,7 @@ def _row_lines(row) -> list[str]:
         quality = f", energy ratio {row.energy_ratio:.3g}" if row.energy_ratio is not None else ""
         lines = [f"{row.source}: ok{size}, {row.seconds:.1f} s{quality}"]
     elif row.status == "skipped":
-        lines = [f"{row.source}: skipped (outputs exist){size}; not re-run"]
+        lines = [f"{row.source}: skipped (outputs complete){size}; not re-run"]
     else:
         lines = [f"{row.source}: FAILED in step {row.step}: {row.error}"]
     lines += [f"  warning: {w}" for w in row.warnings]
@@ -64,17 +67,40 @@ def _row_lines(row) -> list[str]:
     return lines + [f"  {verb} {path}" for path in row.outputs]
 
 
+def _not_done(plan) -> str:
+    """The inputs whose outputs are not all complete, for a message."""
+    from .io import is_recorded
+
+    left = [str(s) for s in plan.inputs if not all(is_recorded(p, plan.folder) for p in plan.output_paths(s))]
+    return f"{len(left)} of {len(plan.inputs)} inputs not done" + (f" ({shown(left)})" if left else "")
+
+
 def _execute(plan, args) -> int:
     from .graph.dataset import summary_paths, write_summary
+    from .graph.scheduling import ClusterLost
+    from .io import new_run_id
     from .pipeline import failures, run_pipeline
+    from .stopping import Stopped, clean_stop, stop_on_signals
 
-    rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
-                        progress=False if args.quiet else None, resume=args.resume, summary=False)
-    for row in rows:
-        print("\n".join(_row_lines(row)), flush=True)
-    if plan.summary:
-        write_summary(rows, plan.folder)
-        print(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}")
+    run = new_run_id()
+    try:
+        with stop_on_signals():
+            rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
+                                progress=False if args.quiet else None, resume=args.resume,
+                                overwrite=args.overwrite, summary=False, run=run)
+            for row in rows:
+                print("\n".join(_row_lines(row)), flush=True)
+            if plan.summary:
+                write_summary(rows, plan.folder, run)
+                print(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}")
+    except Stopped as stop:
+        clean_stop({plan.folder, *(p.parent for p in plan.written_paths())})
+        print(f"hht3d: stopped by {stop}: {_not_done(plan)}; temporary files removed; run again with --resume "
+              "to finish", file=sys.stderr, flush=True)
+        sys.stdout.flush()
+        os._exit(stop.exit_code)  # worker threads of the stopped run are not waited for
+    except ClusterLost as exc:
+        raise ClusterLost(f"{exc}; {_not_done(plan)}; run again with --resume to finish") from None
     failed = failures(rows)
     if failed:
         raise PipelineError(f"{len(failed)} of {len(rows)} inputs failed; first: {failed[0]}")
@@ -157,7 +183,7 @@ def _view(args) -> int:
 
 
 def _schema(args) -> int:
-    from .io.read import atomic_path
+    from .io.atomic import atomic_path
     from .pipeline.json_schema import schema_text
 
     if args.output is None:
@@ -179,7 +205,10 @@ def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -
                         help="Dask scheduler (default: the pipeline's execution.scheduler)")
     parser.add_argument("--workers", type=int, default=None, help="threads, processes or cluster workers")
     parser.add_argument("--address", default=None, help="address of a running dask.distributed scheduler")
-    parser.add_argument("--resume", action="store_true", help="skip inputs whose outputs all exist")
+    parser.add_argument("--resume", action="store_true",
+                        help="skip inputs whose outputs the output folder's manifest records as complete")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace existing output files that hht3d did not write (kept otherwise)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 

@@ -119,3 +119,10 @@ def decoded(spec) -> np.ndarray:
 
 def field_values(data: dict, name: str, copy: int = 0) -> np.ndarray:
     return decoded(next(f for f in data["fields"] if f["name"] == name)["values"][copy])
+
+
+def produced_names(folder) -> list[str]:
+    """Names in ``folder`` except the manifest and lock hht3d keeps in every output folder (temporaries stay)."""
+    from hht3d.io.manifest import LOCK, MANIFEST
+
+    return sorted(p.name for p in Path(folder).iterdir() if p.name not in (MANIFEST, LOCK))

@@ -275,7 +275,7 @@ def _warned(ran: Ran) -> None:
 def _resumed(ran: Ran) -> None:
     (row,) = json.loads((ran.out / "summary.json").read_text())
     assert (row["status"], row["vertices"], row["imfs"], row["seconds"]) == ("skipped", 162, 2, None)
-    assert "skipped (outputs exist), 162 vertices, 2 IMFs; not re-run" in ran.stdout
+    assert "skipped (outputs complete), 162 vertices, 2 IMFs; not re-run" in ran.stdout
 
 
 def _partial(ran: Ran) -> None:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from meshes import fibonacci_sphere, icosphere
 
-from conftest import assert_same_hht, field_values, hht_arrays_from_ply, page_data
+from conftest import assert_same_hht, field_values, hht_arrays_from_ply, page_data, produced_names
 from hht3d import Surface, graph
 from hht3d.apps import (HighBoost, LowPass, PiecewiseLinear, filter_geometry, filter_signal, hks_features,
                         imf_enhancement, manifold_harmonics_filter, prominent_features, reconstruct)
@@ -276,7 +276,7 @@ def test_failed_file_is_reported_with_step_and_file_while_others_finish(tmp_path
     captured = capsys.readouterr()
     assert captured.err.count("\n") == 1
     assert f"1 of 3 inputs failed; first: step load failed on {folder / 'broken.ply'}: InputError" in captured.err
-    produced = sorted(p.name for p in (tmp_path / "out").iterdir())
+    produced = produced_names(tmp_path / "out")
     assert produced == ["part0_imfs.npz", "part1_imfs.npz", "summary.csv", "summary.json"]
     rows = {Path(r["source"]).name: r for r in json.loads((tmp_path / "out" / "summary.json").read_text())}
     assert rows["broken.ply"]["status"] == "failed" and rows["broken.ply"]["step"] == "load"

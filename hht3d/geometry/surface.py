@@ -89,15 +89,15 @@ class Surface:
     # -- construction -----------------------------------------------------------------
     @classmethod
     def from_file(cls, path, **options) -> "Surface":
-        """Load a mesh or point cloud; see :func:`hht3d.io.read.read.load`."""
-        from ..io.read import load
+        """Load a mesh or point cloud; see :func:`hht3d.io.load`."""
+        from ..io import load
 
         return load(path, **options)
 
     @classmethod
     def from_open3d(cls, geometry, *, clean: bool = True, name: str | None = None, **options) -> "Surface":
         """Build from an Open3D legacy or tensor ``TriangleMesh`` / ``PointCloud``."""
-        from ..io.read import surface_from_open3d
+        from ..io import surface_from_open3d
 
         return surface_from_open3d(geometry, clean=clean, name=name, **options)
 
@@ -163,7 +163,7 @@ class Surface:
     def _build_normals(self) -> np.ndarray:
         if self.is_mesh:
             return ops.vertex_normals(self.vertices, self.faces)
-        from ..io.read import estimate_point_normals
+        from .normals import estimate_point_normals
 
         return estimate_point_normals(self.vertices)
 
@@ -263,7 +263,7 @@ class Surface:
     # -- export -----------------------------------------------------------------------
     def to_open3d(self, attributes: dict | None = None):
         """An Open3D tensor ``TriangleMesh``/``PointCloud`` with named float vertex attributes."""
-        from ..io.read import surface_to_open3d
+        from ..io import surface_to_open3d
 
         return surface_to_open3d(self, attributes or {})
 

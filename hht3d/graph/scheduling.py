@@ -19,16 +19,18 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import sys
 import time
 
 import dask
 from dask.callbacks import Callback
 
-from ..errors import InputError
+from ..errors import InputError, one_line
+from .cluster import ClusterLost, gather_bounded
 
 __all__ = ["SCHEDULERS", "MAX_WORKERS", "PROGRESS_INTERVAL", "ProgressLines", "compute", "open_client",
-           "worker_count"]
+           "worker_count", "ClusterLost"]
 
 SCHEDULERS = ("synchronous", "threads", "processes", "distributed")
 #: The most workers a run may ask for: threads, processes or local-cluster workers.
@@ -56,8 +58,14 @@ def worker_count() -> int:
 
 
 def _limit_blas_threads() -> None:
-    """Process-pool initializer: runs before numpy is imported in a spawned worker."""
+    """Process-pool initializer: runs before numpy is imported in a spawned worker.
+
+    Workers also ignore SIGINT: Ctrl-C reaches the whole process group, and
+    the main process stops them (:mod:`hht3d.stopping`), without a traceback
+    from each.
+    """
     os.environ.update(SINGLE_THREAD_ENV)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 @contextlib.contextmanager
@@ -73,12 +81,13 @@ def open_client(workers: int | None = None, address: str | None = None, *, log=s
     if address:
         try:
             client = Client(address, timeout="10s")
-        except (OSError, TimeoutError) as exc:
-            raise InputError(f"cannot reach the Dask scheduler at {address!r}: {exc}") from None
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            raise InputError(f"cannot reach the Dask scheduler at {address!r}: {one_line(exc)}") from None
         cluster = None
     else:
-        cluster = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1,
-                               processes=True, dashboard_address=":0", silence_logs=40)
+        with _sigint_ignored_by_children():
+            cluster = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1,
+                                   processes=True, dashboard_address=":0", silence_logs=40)
         client = Client(cluster)
     try:
         if log is not None:
@@ -88,6 +97,22 @@ def open_client(workers: int | None = None, address: str | None = None, *, log=s
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+@contextlib.contextmanager
+def _sigint_ignored_by_children():
+    """Worker processes started inside ignore SIGINT (an ignored signal stays ignored in a new
+    interpreter), so Ctrl-C reaches the main process only, which stops them (:mod:`hht3d.stopping`)."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def compute(*graphs, scheduler: str = "threads", workers: int | None = None, address: str | None = None,
@@ -118,7 +143,7 @@ def compute(*graphs, scheduler: str = "threads", workers: int | None = None, add
         if client is not None:
             return _compute_distributed(client, graphs, progress)
         with open_client(workers, address) as opened:
-            return _compute_distributed(opened, graphs, progress)
+            return _compute_distributed(opened, graphs, progress, address or "a local cluster")
     options = {"scheduler": scheduler}
     if scheduler != "synchronous" and workers:
         options["num_workers"] = workers
@@ -180,11 +205,11 @@ class ProgressLines(Callback):
               file=self.out, flush=True)
 
 
-def _compute_distributed(client, graphs, progress: bool):
+def _compute_distributed(client, graphs, progress: bool, where: str = "the given client"):
     from distributed import progress as show_progress
 
     futures = client.compute(list(graphs))
     if progress and _is_terminal(sys.stderr):
         show_progress(futures, notebook=False)
         print(file=sys.stderr)
-    return tuple(client.gather(futures))
+    return tuple(gather_bounded(client, futures, where))

@@ -92,6 +92,9 @@ class Pipeline:
         Output folder; output paths are relative to it.
     summary : bool
         Write ``summary.json`` and ``summary.csv`` in ``folder``.
+    allow_outside : bool
+        Outputs may resolve outside ``folder`` (``outputs.allow_outside``;
+        refused by validation otherwise).
     """
 
     name: str
@@ -102,6 +105,7 @@ class Pipeline:
     outputs: tuple[Output, ...]
     folder: Path
     summary: bool = True
+    allow_outside: bool = False
 
     def step(self, step_id: str) -> Step:
         return next(s for s in self.steps if s.id == step_id)

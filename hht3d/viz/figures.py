@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..transform import HHTResult
-from ..io.read import atomic_path
+from ..io.atomic import atomic_path
 from .render import ColorScale, Rendering, color_scale, model_aspect, renderer
 from .render.image import check_field, check_size
 from ..spectral.spectrum import SCALES, HilbertSpectrum

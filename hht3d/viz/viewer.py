@@ -55,7 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..io.read import atomic_path
+from ..io.atomic import atomic_path
 from ..io.read import load as load_surface
 from ..decomposition.quality import ENERGY_RATIO_LIMIT, ORTHOGONALITY_LIMIT, SPIKE_LIMIT, Quality, decomposition_quality
 from .render import camera, color_scale
