@@ -182,9 +182,13 @@ class Surface:
             else:
                 lap = ops.cotan_laplacian(self.vertices, self.faces)
                 mass = ops.mixed_voronoi_mass(self.vertices, self.faces)
+            if not np.all(np.isfinite(mass)) or not np.isfinite(lap.data).all():
+                raise InputError(f"{self.name}: vertex areas or the Laplacian overflow float64 (coordinates up to "
+                                 f"{np.abs(self.vertices).max():.3g}); scale the surface down")
             if not np.all(mass > 0):
-                raise InputError(f"{self.name}: {int(np.sum(mass <= 0))} vertices have zero area; "
-                                 "load with clean=True to remove unreferenced vertices")
+                hint = ("load with clean=True to remove unreferenced vertices" if self.clean_report is None
+                        else "they are isolated or on zero-area faces only")
+                raise InputError(f"{self.name}: {int(np.sum(mass <= 0))} vertices have zero area; {hint}")
             return _Operators(sp.csr_matrix(lap, dtype=np.float64), mass)
 
         return self._cached("operators", build)

@@ -67,8 +67,9 @@ def read_yaml(text: str, source: str):
     """Parse YAML, keeping ``source:line`` of every mapping key; duplicate keys are errors.
 
     Floats are read as YAML 1.2 does (``1e-8`` is a number, not text).
-    Documents that aliases expand past :data:`MAX_YAML_VALUES` values are
-    refused before anything is built from them.  A one-line ``text`` (a
+    A document of more than :data:`MAX_YAML_VALUES` values is refused as
+    soon as the parser reaches that many, and one that aliases expand past
+    that many before anything is built from it.  A one-line ``text`` (a
     ``--set`` value) is located by ``source`` alone.
 
     Raises
@@ -81,6 +82,16 @@ def read_yaml(text: str, source: str):
         return f"{source}:{node.start_mark.line + 1}" if "\n" in text.strip() else source
 
     class Loader(yaml.SafeLoader):
+        nodes = 0
+
+        def compose_node(self, parent, index):
+            self.nodes += 1
+            if self.nodes > MAX_YAML_VALUES:
+                raise PipelineError(f"{source}:{self.peek_event().start_mark.line + 1}: the YAML holds more than "
+                                    f"{MAX_YAML_VALUES} values; list input files with a folder or a glob, and "
+                                    "outputs with path placeholders")
+            return super().compose_node(parent, index)
+
         def get_single_node(self):
             node = super().get_single_node()
             if node is not None:

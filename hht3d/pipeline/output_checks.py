@@ -120,11 +120,16 @@ def _output(entry, steps: dict, last: str) -> Output:
     return Output(step_id, path, fmt, options, tuple(k for k in entry if k in known))
 
 def _imf_exists(options: dict, step: Step, where: str) -> None:
-    """Refuse a field ``imf_K`` (or amplitude_K, ...) of an IMF the step cannot make."""
+    """Refuse a field ``imf_K`` (or amplitude_K, ...) of an IMF the step cannot make, and a spectrum
+    figure of a step that makes no IMF."""
     number, most = field_imf(options.get("field")), step.params.get("max_imfs")
     if number is not None and most is not None and number > most:
         raise PipelineError(f"{where}: field {options['field']} needs {number} IMFs, but step {step.id!r} makes "
                             f"at most max_imfs: {most}; use K <= {most} or raise max_imfs")
+    if options.get("figure") == "spectrum" and most == 0:
+        raise PipelineError(f"{where}: a spectrum figure needs IMFs, but step {step.id!r} has max_imfs: 0; "
+                            "raise max_imfs or choose another figure")
+
 
 def _format_from(path: str, entry, formats: dict) -> str:
     suffix = Path(path).suffix.lower()

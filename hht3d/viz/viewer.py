@@ -48,6 +48,7 @@ import base64
 import html
 import json
 import re
+import zipfile
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -56,6 +57,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..io.atomic import atomic_path
+from ..io.formats import check_regular_file
 from ..io.read import load as load_surface
 from ..decomposition.quality import ENERGY_RATIO_LIMIT, ORTHOGONALITY_LIMIT, SPIKE_LIMIT, Quality, decomposition_quality
 from .render import camera, color_scale
@@ -387,10 +389,8 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
             "config": {"displaylogo": False, "responsive": True}}
     figure = _figure_json(shown, labels, view, up)
     data = _json_script(json.dumps(meta, allow_nan=False)[:-1] + ', "figure": ' + figure + "}")
-    page = _template().replace("{{TITLE}}", html.escape(title))
-    for key, text in (("{{PLOTLY}}", _plotly_js()), ("{{SCRIPT}}", _asset("viewer.js")), ("{{DATA}}", data)):
-        before, after = page.split(key)
-        page = before + text + after
+    page = _fill(_asset("viewer.html"), {"VERSION": _version(), "TITLE": html.escape(title),
+                                         "PLOTLY": _plotly_js(), "SCRIPT": _asset("viewer.js"), "DATA": data})
     with atomic_path(path) as tmp:
         tmp.write_text(page, encoding="utf-8")
     return path
@@ -400,10 +400,20 @@ def _asset(name: str) -> str:
     return (resources.files("hht3d") / "viz" / "web" / name).read_text(encoding="utf-8")
 
 
-def _template() -> str:
+#: A marker of the page template: ``{{NAME}}``.
+_MARKER = re.compile(r"\{\{([A-Z]+)\}\}")
+
+
+def _fill(template: str, values: dict) -> str:
+    """The template with each ``{{NAME}}`` replaced by ``values[NAME]``, in one pass over the template
+    only: a title, a field name or a script that holds a marker is never substituted into."""
+    return _MARKER.sub(lambda match: values[match.group(1)], template)
+
+
+def _version() -> str:
     from .. import __version__
 
-    return _asset("viewer.html").replace("{{VERSION}}", __version__)
+    return __version__
 
 
 def _plotly_js() -> str:
@@ -472,12 +482,11 @@ def read_fields(path) -> tuple[Surface, dict, np.ndarray | None]:
     if path.suffix.lower() != ".npz":
         surface = load_surface(path, clean=False)
         return surface, dict(surface.attributes), None
-    if not path.is_file():
-        raise InputError(f"{path}: no such file; check the path")
+    check_regular_file(path, "an .npz file")
     try:
         with np.load(path, allow_pickle=False) as stored:
             arrays = {k: stored[k] for k in stored.files}
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
         raise InputError(f"{path}: not a readable .npz file ({exc})") from None
     if "vertices" not in arrays:
         raise InputError(f"{path}: no 'vertices' array; expected a file written by HHTResult.save")
