@@ -16,7 +16,8 @@ import yaml
 from ..errors import MAX_SHOWN, PipelineError, one_line, shown
 from ..geometry.validation import did_you_mean
 
-__all__ = ["YAMLMapping", "MAX_YAML_VALUES", "read_yaml", "at", "apply_overrides", "add_implicit_load"]
+__all__ = ["YAMLMapping", "MAX_YAML_VALUES", "read_yaml", "at", "known_keys", "as_mapping", "apply_overrides",
+           "add_implicit_load"]
 
 
 # -- YAML with line numbers ------------------------------------------------------------------------
@@ -187,6 +188,20 @@ def at(mapping, key=None) -> str:
     if isinstance(mapping, YAMLMapping):
         return mapping.at(key) if key is not None else mapping.where
     return "--set"
+
+
+def known_keys(mapping, known, what: str) -> None:
+    """Refuse a key of ``mapping`` not among ``known`` (``what`` names the mapping), with a "did you mean"."""
+    for key in mapping:
+        if key not in known:
+            raise PipelineError(f"{at(mapping, key)}: unknown key {shown(key)} in {what}{did_you_mean(key, known)}")
+
+
+def as_mapping(value, where: str, what: str) -> dict:
+    """``value`` if it is a mapping, else an error naming ``where`` and ``what``."""
+    if not isinstance(value, dict):
+        raise PipelineError(f"{where}: {what} must be a mapping (key: value lines), got {shown(value)}")
+    return value
 
 
 def add_implicit_load(document) -> None:

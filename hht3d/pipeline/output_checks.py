@@ -15,7 +15,7 @@ from pathlib import Path
 from ..errors import OutputError, PipelineError, shown
 from ..graph.dataset import check_outputs
 from ..io import check_output_paths
-from .document import at
+from .document import as_mapping, at, known_keys
 from .outputs import FORMATS, SUFFIXES, check_options, field_imf
 from .params import Param, did_you_mean
 from .plan import PLACEHOLDERS, Output, Pipeline, Step
@@ -25,18 +25,6 @@ __all__ = ["OUTPUTS_KEYS", "FILE_KEYS", "read_outputs", "check_plan_outputs"]
 #: The keys of the outputs block and of an output file.
 OUTPUTS_KEYS = ("folder", "summary", "allow_outside", "files")
 FILE_KEYS = ("from", "path", "format")
-
-
-def _known_keys(mapping, known, what: str) -> None:
-    for key in mapping:
-        if key not in known:
-            raise PipelineError(f"{at(mapping, key)}: unknown key {shown(key)} in {what}{did_you_mean(key, known)}")
-
-
-def _mapping(value, where: str, what: str) -> dict:
-    if not isinstance(value, dict):
-        raise PipelineError(f"{where}: {what} must be a mapping (key: value lines), got {shown(value)}")
-    return value
 
 
 def check_plan_outputs(plan: Pipeline, doc) -> None:
@@ -73,7 +61,7 @@ def read_outputs(doc, steps: tuple[Step, ...], source: str):
     if not isinstance(block, dict) or not block.get("files"):
         raise PipelineError(f"{at(doc, 'outputs') if 'outputs' in doc else source}: outputs must be a "
                             "mapping with files: a list of {from: STEP, path: PATTERN} entries")
-    _known_keys(block, OUTPUTS_KEYS, "outputs")
+    known_keys(block, OUTPUTS_KEYS, "outputs")
     folder = block.get("folder", "out")
     if not isinstance(folder, str) or not folder:
         raise PipelineError(f"{at(block, 'folder')}: outputs.folder must be a path, got {shown(folder)}")
@@ -84,7 +72,7 @@ def read_outputs(doc, steps: tuple[Step, ...], source: str):
         raise PipelineError(f"{at(block, 'files')}: outputs.files must be a list of {{from, path}} entries")
     by_id = {s.id: s for s in steps}
     last = next(s.id for s in reversed(steps))
-    files = tuple(_output(_mapping(e, at(block, "files"), "an output"), by_id, last)
+    files = tuple(_output(as_mapping(e, at(block, "files"), "an output"), by_id, last)
                   for e in block["files"])
     return Path(folder), summary, outside, files
 

@@ -58,7 +58,7 @@ from pathlib import Path
 from ..errors import InputError, PipelineError, shown
 from ..io import data_path, read_ply_header, resolve_inputs
 from ..graph.scheduling import MAX_WORKERS, SCHEDULERS
-from .document import YAMLMapping, add_implicit_load, apply_overrides, at, read_yaml
+from .document import YAMLMapping, add_implicit_load, apply_overrides, as_mapping, at, known_keys, read_yaml
 from .output_checks import FILE_KEYS, OUTPUTS_KEYS, check_plan_outputs, read_outputs
 from .params import Param, did_you_mean
 from .plan import FILE, Execution, Pipeline, Step
@@ -131,18 +131,6 @@ def builtin_models() -> dict[str, Path]:
     return {p.stem: p for p in folder.iterdir() if p.suffix == ".ply"}
 
 
-def _known_keys(mapping, known, what: str) -> None:
-    for key in mapping:
-        if key not in known:
-            raise PipelineError(f"{at(mapping, key)}: unknown key {shown(key)} in {what}{did_you_mean(key, known)}")
-
-
-def _mapping(value, where: str, what: str) -> dict:
-    if not isinstance(value, dict):
-        raise PipelineError(f"{where}: {what} must be a mapping (key: value lines), got {shown(value)}")
-    return value
-
-
 class Validator:
     """Checks a read pipeline document and builds the typed :class:`~hht3d.pipeline.plan.Pipeline`.
 
@@ -184,7 +172,7 @@ class Validator:
         self._vertex_counts: dict[Path, int] | None = None
 
     def pipeline(self, doc) -> Pipeline:
-        _known_keys(doc, TOP_KEYS, "the pipeline")
+        known_keys(doc, TOP_KEYS, "the pipeline")
         self._version(doc)
         name = doc.get("name", Path(self.source).stem)
         if not isinstance(name, str) or not name:
@@ -206,8 +194,8 @@ class Validator:
                                 f"this hht3d reads version {VERSION}")
 
     def _execution(self, block) -> Execution:
-        block = _mapping(block, at(block), "execution")
-        _known_keys(block, [p.name for p in EXECUTION], "execution")
+        block = as_mapping(block, at(block), "execution")
+        known_keys(block, [p.name for p in EXECUTION], "execution")
         values = {p.name: p.check(block[p.name], f"{at(block, p.name)}: execution") if p.name in block
                   else p.default for p in EXECUTION}
         return Execution(**values)
@@ -218,7 +206,7 @@ class Validator:
                                 "them, or {builtin: spot}")
         spec, where = doc["inputs"], at(doc, "inputs")
         if isinstance(spec, dict):
-            _known_keys(spec, ["builtin"], "inputs")
+            known_keys(spec, ["builtin"], "inputs")
             models = builtin_models()
             name = spec.get("builtin")
             if name not in models:
@@ -240,7 +228,7 @@ class Validator:
         if not isinstance(raw, list) or not raw:
             raise PipelineError(f"{at(doc, 'steps') if 'steps' in doc else self.source}: steps must be a "
                                 "non-empty list of {id, op, params} entries")
-        entries = [_mapping(e, at(doc, "steps"), f"step {i + 1}") for i, e in enumerate(raw)]
+        entries = [as_mapping(e, at(doc, "steps"), f"step {i + 1}") for i, e in enumerate(raw)]
         parsed = [self._step(entry, execution) for entry in entries]
         ids = [p[0] for p in parsed]
         for i, step_id in enumerate(ids):
@@ -252,7 +240,7 @@ class Validator:
         return _ordered(steps, entries)
 
     def _step(self, entry, execution: Execution):
-        _known_keys(entry, STEP_KEYS, "a step")
+        known_keys(entry, STEP_KEYS, "a step")
         where = at(entry, "op")
         if "op" not in entry:
             raise PipelineError(f"{at(entry)}: a step needs an op (`hht3d ops` lists them)")
@@ -262,7 +250,7 @@ class Validator:
             raise PipelineError(f"{at(entry, 'id')}: step id must be 1 to {MAX_ID} letters, digits, '_' or '-', "
                                 f"got {shown(step_id)}")
         context = f"step {shown(step_id)} (op {op.name})"
-        raw = _mapping(entry.get("params") or YAMLMapping(at(entry)), at(entry, "params"), f"{context} params")
+        raw = as_mapping(entry.get("params") or YAMLMapping(at(entry)), at(entry, "params"), f"{context} params")
         for key in raw:
             if op.param(key) is None:
                 known = [p.name for p in op.params]
