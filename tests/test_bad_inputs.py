@@ -862,3 +862,12 @@ def test_run_dataset_refuses_bad_options_before_building_the_graph(options, mess
     with pytest.raises(InputError, match=re.escape(message)):
         run_dataset([inputs / "good.ply"], tmp_path / "out", scheduler="synchronous", progress=False, **options)
     assert not (tmp_path / "out").exists()
+
+
+def test_riesz_tasks_zero_is_named(inputs):
+    from hht3d import graph
+    from hht3d.errors import InputError
+
+    surface = load(inputs / "good.ply")
+    with pytest.raises(InputError, match="riesz_tasks must be a whole number >= 1, got 0"):
+        graph.hht(surface, surface.vertices[:, 0], riesz_tasks=0)

@@ -238,3 +238,20 @@ def test_a_lost_scheduler_is_one_line_within_a_bounded_time(job, cluster):
     assert proc.returncode == 1
     line = _one_error_line(stderr)
     assert "lost the connection to the Dask scheduler" in line and "inputs not done" in line, line
+
+
+def test_two_runs_into_one_folder_at_once_keep_each_others_summary_rows(job):
+    """Different pipelines writing one folder at the same time: summary.json ends with every input's row."""
+    out = job / "out"
+    for k in range(2):
+        (job / f"p{k}.yaml").write_text(PIPELINE.format(inputs=job / "scans" / f"s{k}.ply", out=out)
+                                        .replace('    - {path: "{stem}_hht.png"}\n', ""))
+    runs = [subprocess.Popen([sys.executable, "-m", "hht3d", "run", str(job / f"p{k}.yaml"), "--quiet",
+                              "--scheduler", "synchronous"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True, cwd=job, env=_env()) for k in range(2)]
+    for proc in runs:
+        _, stderr = proc.communicate(timeout=120)
+        assert proc.returncode == 0, stderr
+    rows = json.loads((out / "summary.json").read_text())
+    assert sorted(Path(r["source"]).name for r in rows) == ["s0.ply", "s1.ply"]
+    assert sorted(_recorded(out)) == ["s0_hht.npz", "s1_hht.npz", "summary.csv", "summary.json"]

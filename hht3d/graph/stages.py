@@ -58,6 +58,7 @@ from dask import delayed
 from dask.base import tokenize
 
 from .. import apps
+from ..errors import InputError
 from ..decomposition.decompose import combine_eemd, eemd_member
 from ..decomposition.decompose import eemd as _eemd
 from ..decomposition.decompose import emd as _emd
@@ -325,6 +326,8 @@ def riesz_potential(surface, imfs, *, method: str = RIESZ_DEFAULTS.method, tol: 
         return builder.task("riesz", fractional_laplacian)(
             surface, imfs, -0.5, method, tol, eigenpairs, backend)
     riesz_tasks = worker_count() if riesz_tasks is None else riesz_tasks
+    if isinstance(riesz_tasks, bool) or not isinstance(riesz_tasks, int) or riesz_tasks < 1:
+        raise InputError(f"riesz_tasks must be a whole number >= 1, got {riesz_tasks!r}")
     plan = builder.task("riesz_bounds", _quadrature_plan)(surface, tol, backend)
     part = builder.task("riesz_shifts", _quadrature_part)
     parts = [part(surface, imfs, plan, group, riesz_tasks, backend) for group in range(riesz_tasks)]
