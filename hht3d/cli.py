@@ -80,19 +80,18 @@ def _execute(plan, args) -> int:
     from .graph.scheduling import ClusterLost
     from .io import new_run_id
     from .pipeline import failures, run_pipeline
-    from .stopping import Stopped, clean_stop, stop_on_signals
+    from .stopping import Stopped, clean_stop
 
     run = new_run_id()
     try:
-        with stop_on_signals():
-            rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
-                                progress=False if args.quiet else None, resume=args.resume,
-                                overwrite=args.overwrite, summary=False, run=run)
-            for row in rows:
-                print("\n".join(_row_lines(row)), flush=True)
-            if plan.summary:
-                write_summary(rows, plan.folder, run)
-                print(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}")
+        rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
+                            progress=False if args.quiet else None, resume=args.resume,
+                            overwrite=args.overwrite, summary=False, run=run)
+        for row in rows:
+            print("\n".join(_row_lines(row)), flush=True)
+        if plan.summary:
+            write_summary(rows, plan.folder, run)
+            print(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}")
     except Stopped as stop:
         clean_stop({plan.folder, *(p.parent for p in plan.written_paths())})
         print(f"hht3d: stopped by {stop}: {_not_done(plan)}; temporary files removed; run again with --resume "
@@ -282,14 +281,17 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.command == "info" and args.file is None and not args.backends:
         parser.error("hht3d info needs a FILE, or --backends")
+    from .stopping import Stopped, stop_on_signals
+
     try:
-        return args.run(args)
+        with stop_on_signals():
+            return args.run(args)
     except HHT3DError as exc:
         print(f"hht3d: error: {one_line(exc, MAX_MESSAGE)}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print("hht3d: interrupted", file=sys.stderr)
-        return 130
+    except Stopped as stop:  # before a run started: nothing to clean (a run cleans itself, see _execute)
+        print(f"hht3d: stopped by {stop}", file=sys.stderr)
+        return stop.exit_code
 
 
 if __name__ == "__main__":

@@ -16,6 +16,7 @@ import contextlib
 import multiprocessing
 import os
 import signal
+import threading
 
 from .io import remove_stale_parts
 from .io.atomic import stop_writes
@@ -47,7 +48,13 @@ def _raise(signum, frame):
 
 @contextlib.contextmanager
 def stop_on_signals():
-    """Raise :class:`Stopped` in the main thread on the first SIGTERM or SIGINT; handlers restored after."""
+    """Raise :class:`Stopped` in the main thread on the first SIGTERM or SIGINT; handlers restored after.
+
+    Outside the main thread (where Python cannot set handlers) it changes nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
     previous = {sig: signal.signal(sig, _raise) for sig in SIGNALS}
     try:
         yield

@@ -472,6 +472,14 @@ def _written(name: str, folder: str = "out"):
     return check
 
 
+def _embedded(ran: Ran) -> None:
+    """The data URI's vertices are the bumpy sphere's (as float32), every one of them (in Open3D's order)."""
+    def rows(a):
+        return a[np.lexsort(np.round(a, 5).T)]
+
+    np.testing.assert_allclose(rows(_npz(ran, "embedded")["vertices"]), rows(_bumpy()[0]), atol=1e-6)
+
+
 def _renamed_property(ran: Ran) -> None:
     header = PlyData.read(str(ran.out / "0bad_hht.ply"))["vertex"].data.dtype.names
     assert "_0bad" in header and "0bad" not in header
@@ -485,7 +493,7 @@ SAFETY_CASES = {
                                                            "outside the file's folder"),
     "glTF buffer /etc/passwd": refused("absolute.gltf", "refers to '/etc/passwd', outside the file's folder"),
     "OBJ mtllib outside": refused("mtl_outside.obj", "outside the file's folder"),
-    "glTF with an embedded buffer": accepted("embedded.gltf", check=lambda ran: None),
+    "glTF with an embedded buffer": accepted("embedded.gltf", check=_embedded),
     "output replaces the input": Case(run("outputs.folder=<in>", "outputs.files=[{path: '{stem}.ply'}]"),
                                       "is the input", absent=()),
     "output path ../../": Case(validate("outputs.files=[{path: '../../x_{stem}.npz'}]"),
