@@ -61,7 +61,7 @@ class _References(HTMLParser):
 def result():
     """The HHT of the shipped demo model's mean curvature, two IMFs."""
     surface = hht3d.load(demo_model_path())
-    return hht3d.transform(surface, signals.mean_curvature(surface), emd_options={"max_imfs": 2})
+    return hht3d.hht(surface, signals.mean_curvature(surface), emd_options={"max_imfs": 2})
 
 
 @pytest.fixture(scope="module")
