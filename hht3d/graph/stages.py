@@ -51,7 +51,6 @@ import functools
 import inspect
 import threading
 from collections import OrderedDict
-from pathlib import Path
 
 import numpy as np
 from dask import delayed
@@ -417,13 +416,9 @@ hht = mirror(_hht, _hht_tasks, extras=(_ENSEMBLE, _RIESZ_TASKS),
     """)
 
 
-def _save(result, path) -> Path:
-    return result.save(path)
-
-
 def save(result, path):
-    """Lazy ``result.save(path)`` (atomic PLY or npz write); returns the path."""
-    return _PLAIN.task("save", _save)(result, str(path))
+    """Lazy :meth:`HHTResult.save <hht3d.transform.HHTResult.save>` (atomic PLY or npz write); returns the path."""
+    return _PLAIN.task("save", HHTResult.save)(result, str(path))
 
 
 # -- applications (Sec. 5, hht3d.apps): one task each ----------------------------------------
