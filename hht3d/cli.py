@@ -115,8 +115,15 @@ def _demo(args) -> int:
 
 
 def _validate(args) -> int:
+    from .errors import OutputError
+    from .io import check_overwrites
+
     plan = _plan(args.pipeline, args.set)
     print(plan.describe())
+    try:
+        check_overwrites(plan.written_paths(), plan.folder, overwrite=False)
+    except OutputError as exc:
+        print(f"note: {exc}")
     print("valid: parameters, inputs and output locations checked; nothing was run")
     return 0
 

@@ -422,6 +422,12 @@ def _replaced(relative: str):
     return check
 
 
+def _noted(fragment: str):
+    def check(ran: Ran) -> None:
+        assert any(line.startswith("note: ") and fragment in line for line in ran.stdout.splitlines()), ran.stdout
+    return check
+
+
 def _truncate(relative: str):
     def setup(tmp: Path, inputs: Path) -> None:
         (tmp / relative).write_bytes(b"")
@@ -509,6 +515,9 @@ SAFETY_CASES = {
                                   "", 0, (), check=_written("good.npz", "side")),
     "user's file under an output name": Case(run(), "exists and hht3d did not write it", absent=(),
                                             setup=_user_file("out/good_hht.npz"), check=_kept("out/good_hht.npz")),
+    "validate notes a user's file under an output name": Case(validate(), "", 0, (),
+                                                              setup=_user_file("out/good_hht.npz"),
+                                                              check=_noted("good_hht.npz: exists and hht3d did not")),
     "--overwrite replaces it": Case((*run(), "--overwrite"), "", 0, (), setup=_user_file("out/good_hht.npz"),
                                     check=_replaced("out/good_hht.npz")),
     "--resume does not trust a 0-byte output": Case((*run(), "--resume"), "exists and hht3d did not write it",
