@@ -94,19 +94,20 @@ def _alive(pid: int) -> bool:
 
 
 def remove_stale_parts(folders, own=()) -> list[Path]:
-    """Remove the temporary files of :func:`atomic_path` in ``folders`` (and below) whose writing
+    """Remove the temporary files of :func:`atomic_path` in ``folders`` (not below) whose writing
     process has ended, or is one of ``own`` (pids of this run stopping); return what was removed."""
     removed = []
     for folder in {Path(f) for f in folders}:
-        if not folder.is_dir():
+        try:
+            names = [entry.name for entry in os.scandir(folder) if entry.is_file(follow_symlinks=False)]
+        except OSError:  # not made yet, or not a folder
             continue
-        for root, _, names in os.walk(folder):
-            for name in names:
-                match = PART.match(name)
-                if match and (int(match.group(1)) in own or not _alive(int(match.group(1)))):
-                    with contextlib.suppress(OSError):
-                        os.unlink(os.path.join(root, name))
-                        removed.append(Path(root, name))
+        for name in names:
+            match = PART.match(name)
+            if match and (int(match.group(1)) in own or not _alive(int(match.group(1)))):
+                with contextlib.suppress(OSError):
+                    os.unlink(folder / name)
+                    removed.append(folder / name)
     return removed
 
 

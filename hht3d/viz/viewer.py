@@ -45,12 +45,10 @@ the spectrum and the quality figures always come from every vertex.
 from __future__ import annotations
 
 import base64
-import html
 import json
 import re
 import zipfile
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -60,6 +58,7 @@ from ..io.atomic import atomic_path
 from ..io.formats import check_regular_file
 from ..io.read import load as load_surface
 from ..decomposition.quality import ENERGY_RATIO_LIMIT, ORTHOGONALITY_LIMIT, SPIKE_LIMIT, Quality, decomposition_quality
+from .page import viewer_page
 from .render import camera, color_scale
 from ..spectral.spectrum import HilbertSpectrum
 from ..geometry.surface import Surface
@@ -287,11 +286,6 @@ def _size_text(surface: Surface) -> str:
     return f"{surface.n_vertices:,} vertices, {kind}"
 
 
-def _json_script(text: str) -> str:
-    """JSON made safe inside a <script> element."""
-    return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
-
-
 def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectrum: HilbertSpectrum | None = None,
                quality: Quality | None = None, field: str | None = None, max_vertices: int = VERTEX_BUDGET,
                percentiles=PERCENTILES, view="front", up="y") -> Path:
@@ -388,38 +382,10 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
             "quality": None if quality is None else _quality_data(quality),
             "config": {"displaylogo": False, "responsive": True}}
     figure = _figure_json(shown, labels, view, up)
-    data = _json_script(json.dumps(meta, allow_nan=False)[:-1] + ', "figure": ' + figure + "}")
-    page = _fill(_asset("viewer.html"), {"VERSION": _version(), "TITLE": html.escape(title),
-                                         "PLOTLY": _plotly_js(), "SCRIPT": _asset("viewer.js"), "DATA": data})
+    page = viewer_page(title, json.dumps(meta, allow_nan=False)[:-1] + ', "figure": ' + figure + "}")
     with atomic_path(path) as tmp:
         tmp.write_text(page, encoding="utf-8")
     return path
-
-
-def _asset(name: str) -> str:
-    return (resources.files("hht3d") / "viz" / "web" / name).read_text(encoding="utf-8")
-
-
-#: A marker of the page template: ``{{NAME}}``.
-_MARKER = re.compile(r"\{\{([A-Z]+)\}\}")
-
-
-def _fill(template: str, values: dict) -> str:
-    """The template with each ``{{NAME}}`` replaced by ``values[NAME]``, in one pass over the template
-    only: a title, a field name or a script that holds a marker is never substituted into."""
-    return _MARKER.sub(lambda match: values[match.group(1)], template)
-
-
-def _version() -> str:
-    from .. import __version__
-
-    return __version__
-
-
-def _plotly_js() -> str:
-    from plotly.offline import get_plotlyjs
-
-    return get_plotlyjs()
 
 
 # -- entry points ------------------------------------------------------------------------------
