@@ -170,10 +170,7 @@ def _info(args) -> int:
         _backends()
     if args.file is None:
         return 0
-    import numpy as np
-
-    with np.errstate(all="ignore"):  # overflow shows as the value below, not as a numpy warning
-        info = _finite(describe(load(args.file, clean=not args.no_clean)))
+    info = describe(load(args.file, clean=not args.no_clean))  # coordinates are bounded: values are finite
     if args.json:
         print(json.dumps(info, indent=2, allow_nan=False))
     else:
@@ -181,19 +178,6 @@ def _info(args) -> int:
         for key, value in info.items():
             print(f"{key:<{width}}  {value}")
     return 0
-
-
-def _finite(value):
-    """``value`` with every NaN or infinite float replaced by a word saying so (JSON has neither)."""
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return type(value)(_finite(v) for v in value)
-    if isinstance(value, float) and value != value:
-        return "not a number (overflow: scale the surface down)"
-    if isinstance(value, float) and value in (float("inf"), float("-inf")):
-        return "overflow (beyond float64: scale the surface down)"
-    return value
 
 
 def _view(args) -> int:

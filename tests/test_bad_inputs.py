@@ -159,6 +159,8 @@ def _write_inputs(folder: Path) -> None:
     (folder / "latin1.yaml").write_bytes("version: 1\nname: caf\xe9\n".encode("latin-1"))
     _write_references(folder, v, f)
     _ply_with_property(folder / "0bad.ply", v, f, "0bad", v[:, 0])
+    _ply(folder / "huge300.ply", 1e300 * v, f)
+    _ply(folder / "huge70.ply", 1e70 * v, f)
     (folder / "fake.npz").write_bytes(b"PK\x03\x04 this is not a zip archive")
 
 
@@ -486,6 +488,15 @@ def _embedded(ran: Ran) -> None:
     np.testing.assert_allclose(rows(_npz(ran, "embedded")["vertices"]), rows(_bumpy()[0]), atol=1e-6)
 
 
+def _strict_json(ran: Ran) -> None:
+    """``info --json`` of a mesh near the coordinate limit: strict JSON (no NaN, no Infinity), finite area."""
+    def refuse(constant):
+        raise AssertionError(f"{constant} is not JSON")
+
+    info = json.loads(ran.stdout, parse_constant=refuse)
+    assert info["vertices"] == 162 and 1e139 < info["surface_area"] < 1e142
+
+
 def _renamed_property(ran: Ran) -> None:
     header = PlyData.read(str(ran.out / "0bad_hht.ply"))["vertex"].data.dtype.names
     assert "_0bad" in header and "0bad" not in header
@@ -548,6 +559,10 @@ SAFETY_CASES = {
     "view of a fake .npz": Case(("view", "<in>/fake.npz"), "not a readable .npz file"),
     "PLY property 0bad": Case(run("inputs=<in>/0bad.ply", "outputs.files=[{path: '{stem}_hht.ply'}]"), "", 0, (),
                               check=_renamed_property),
+    "info --json of a mesh x1e300": Case(("info", "--json", "<in>/huge300.ply"), "huge300.ply: huge300: coordinates "
+                                         "reach 1.06e+300; beyond 1e+75 areas and curvatures overflow float64"),
+    "run on a mesh x1e300": Case(run("inputs=<in>/huge300.ply"), "coordinates reach 1.06e+300; beyond 1e+75"),
+    "info --json of a mesh x1e70": Case(("info", "--json", "<in>/huge70.ply"), "", 0, (), check=_strict_json),
     "spectrum figure of max_imfs 0": Case(validate("steps.hht.params.max_imfs=0",
                                                    "outputs.files=[{path: x.png, figure: spectrum}]"),
                                           "a spectrum figure needs IMFs"),

@@ -182,9 +182,6 @@ class Surface:
             else:
                 lap = ops.cotan_laplacian(self.vertices, self.faces)
                 mass = ops.mixed_voronoi_mass(self.vertices, self.faces)
-            if not np.all(np.isfinite(mass)) or not np.isfinite(lap.data).all():
-                raise InputError(f"{self.name}: vertex areas or the Laplacian overflow float64 (coordinates up to "
-                                 f"{np.abs(self.vertices).max():.3g}); scale the surface down")
             if not np.all(mass > 0):
                 hint = ("load with clean=True to remove unreferenced vertices" if self.clean_report is None
                         else "they are isolated or on zero-area faces only")
@@ -292,6 +289,10 @@ def _check_cloud(points: np.ndarray, n_neighbors: int, name: str) -> None:
         raise InputError(f"{name}: {exc}") from None
 
 
+#: The largest coordinate a surface may have: areas, their squares (cleaning) and products stay inside float64.
+MAX_COORDINATE = 1e75
+
+
 def _as_vertices(vertices, name: str) -> np.ndarray:
     try:
         v = np.array(vertices, dtype=np.float64)
@@ -305,6 +306,10 @@ def _as_vertices(vertices, name: str) -> np.ndarray:
     if bad.any():
         raise InputError(f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates "
                          f"(first: vertex {int(np.flatnonzero(bad)[0])}); remove or repair them")
+    largest = np.abs(v).max()
+    if largest > MAX_COORDINATE:
+        raise InputError(f"{name}: coordinates reach {largest:.3g}; beyond {MAX_COORDINATE:.0e} areas and curvatures "
+                         "overflow float64: scale the surface down")
     return v
 
 
