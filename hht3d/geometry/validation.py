@@ -72,14 +72,7 @@ def check_signal(surface: Surface, values, what: str = "signal") -> np.ndarray:
     if bad.any():
         raise InputError(f"{what} has {int(bad.sum())} NaN or infinite values "
                          f"(first at vertex {int(np.flatnonzero(bad)[0])})")
-    if a.size and np.abs(a).max() > MAX_MAGNITUDE:
-        raise InputError(f"{what} reaches {np.abs(a).max():.3g}; beyond {MAX_MAGNITUDE:.0e} its squares (energies, "
-                         "amplitudes) overflow float64: scale the signal down")
     return a
-
-
-#: The largest signal value :func:`check_signal` accepts: its square stays far inside float64.
-MAX_MAGNITUDE = 1e150
 
 
 def as_signals(surface: Surface, f, what: str = "signal") -> tuple[np.ndarray, bool]:

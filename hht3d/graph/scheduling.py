@@ -102,9 +102,18 @@ def open_client(workers: int | None = None, address: str | None = None, *, log=s
 @contextlib.contextmanager
 def _sigint_ignored_by_children():
     """Worker processes started inside ignore SIGINT (an ignored signal stays ignored in a new
-    interpreter), so Ctrl-C reaches the main process only, which stops them (:mod:`hht3d.stopping`)."""
-    import threading
+    interpreter), so Ctrl-C reaches the main process only, which stops them (:mod:`hht3d.stopping`).
 
+    Multiprocessing's resource tracker is started first with its output dropped: after a stop it
+    would otherwise report, on the terminal, the semaphores of the ended workers that it removes.
+    """
+    import threading
+    from multiprocessing import resource_tracker
+
+    from ..open3d_quiet import captured_native_output
+
+    with captured_native_output():
+        resource_tracker.ensure_running()
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -145,13 +154,31 @@ def compute(*graphs, scheduler: str = "threads", workers: int | None = None, add
         with open_client(workers, address) as opened:
             return _compute_distributed(opened, graphs, progress, address or "a local cluster")
     options = {"scheduler": scheduler}
-    if scheduler != "synchronous" and workers:
+    if scheduler == "threads" and workers:
         options["num_workers"] = workers
-    if scheduler == "processes":
-        options["initializer"] = _limit_blas_threads
     bar = _local_progress() if progress else contextlib.nullcontext()
-    with bar:
-        return dask.compute(*graphs, **options)
+    with bar, (_process_pool(workers) if scheduler == "processes" else contextlib.nullcontext()) as pool:
+        return dask.compute(*graphs, **options, **({"pool": pool} if pool is not None else {}))
+
+
+@contextlib.contextmanager
+def _process_pool(workers: int | None):
+    """A pool of ``workers`` processes (default one per core) with BLAS limited to one thread, all
+    started at once with SIGINT ignored (so that Ctrl-C, sent to the whole process group, reaches the
+    main process only, even while a worker is still starting)."""
+    from concurrent.futures import ProcessPoolExecutor
+    import multiprocessing
+
+    count = workers or os.cpu_count() or 1
+    context = multiprocessing.get_context(dask.config.get("multiprocessing.context", "spawn"))
+    with _sigint_ignored_by_children():
+        pool = ProcessPoolExecutor(count, mp_context=context, initializer=_limit_blas_threads)
+        for _ in range(count):  # each submission finding no idle worker starts one
+            pool.submit(os.getpid)
+    try:
+        yield pool
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _is_terminal(stream) -> bool:
