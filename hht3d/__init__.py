@@ -3,7 +3,7 @@
 The main functions are exported here as plain functions; their building
 blocks live in the subpackages, which follow the data flow:
 :mod:`~hht3d.geometry` → :mod:`~hht3d.decomposition` → :mod:`~hht3d.spectral`
-→ :mod:`~hht3d.transform` → :mod:`~hht3d.apps`, with :mod:`~hht3d.io.read`,
+→ :mod:`~hht3d.transform` → :mod:`~hht3d.apps`, with :mod:`~hht3d.io`,
 :mod:`~hht3d.linalg.backends` beneath and :mod:`~hht3d.graph.stages`, :mod:`~hht3d.pipeline`,
 :mod:`~hht3d.viz` and the CLI above.
 
@@ -12,7 +12,7 @@ Examples
 >>> import hht3d
 >>> from hht3d.geometry import mean_curvature
 >>> surface = hht3d.load(hht3d.data_path("spot.ply"))
->>> decomposition = hht3d.decomposition.decompose(surface, mean_curvature(surface), max_imfs=2)
+>>> decomposition = hht3d.emd(surface, mean_curvature(surface), max_imfs=2)
 >>> decomposition.n_imfs
 2
 >>> from hht3d.decomposition import envelope_operator

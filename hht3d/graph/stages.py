@@ -408,7 +408,7 @@ hht = mirror(_hht, _hht_tasks, extras=(_ENSEMBLE, _RIESZ_TASKS),
     >>> lazy = graph.hht(graph.from_surface(surface), mean_curvature(surface), emd_options={"max_imfs": 2},
     ...                  riesz_tasks=2)
     >>> (result,) = graph.compute(lazy, scheduler="synchronous", progress=False)
-    >>> eager = hht3d.transform(surface, mean_curvature(surface), emd_options={"max_imfs": 2})
+    >>> eager = hht3d.hht(surface, mean_curvature(surface), emd_options={"max_imfs": 2})
     >>> np.array_equal(result.imfs, eager.imfs)
     True
     >>> np.allclose(result.monogenic.riesz, eager.monogenic.riesz, rtol=0, atol=1e-10)
