@@ -9,12 +9,15 @@
 ``hht3d demo``                    run the demo pipeline shipped in the package.
 
 Exit codes: 0 on success; 1 with a one-line ``hht3d: error: ...`` reason for
-an invalid pipeline, bad input or a failed step; 2 for bad command-line usage.
+an invalid pipeline, bad input or a failed step; 2 for bad command-line usage;
+130 on SIGINT (Ctrl-C) and 143 on SIGTERM, after a clean stop
+(:mod:`hht3d.stopping`).
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -57,7 +60,7 @@ def _row_lines(row) -> list[str]:
         quality = f", energy ratio {row.energy_ratio:.3g}" if row.energy_ratio is not None else ""
         lines = [f"{row.source}: ok{size}, {row.seconds:.1f} s{quality}"]
     elif row.status == "skipped":
-        lines = [f"{row.source}: skipped (outputs exist){size}; not re-run"]
+        lines = [f"{row.source}: skipped (outputs complete){size}; not re-run"]
     else:
         lines = [f"{row.source}: FAILED in step {row.step}: {row.error}"]
     lines += [f"  warning: {w}" for w in row.warnings]
@@ -65,20 +68,40 @@ def _row_lines(row) -> list[str]:
     return lines + [f"  {verb} {path}" for path in row.outputs]
 
 
+def _not_done(plan, folder) -> str:
+    """The inputs whose outputs are not all done in ``folder`` (an OutputFolder), for a message."""
+    left = [redact(str(s)) for s in plan.inputs if not folder.done(plan.output_paths(s))]
+    return f"{len(left)} of {len(plan.inputs)} inputs not done" + (f" ({shown(left)})" if left else "")
+
+
 def _execute(plan, args) -> int:
     from .graph.dataset import summary_paths, write_summary
+    from .graph.scheduling import ClusterLost
     from .pipeline import failures, run_pipeline
+    from .pipeline.runner import output_folder
+    from .stopping import Stopped, clean_stop
 
-    rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
-                        progress=False if args.quiet else None, resume=args.resume, summary=False)
-    for row in rows:
-        print(redact("\n".join(_row_lines(row))), flush=True)
-    slow = [row for row in rows if row.solver_advice]
-    if slow:  # once per run, for its largest input
-        print(f"hht3d: warning: {max(slow, key=lambda row: row.vertices).solver_advice}", file=sys.stderr)
-    if plan.summary:
-        write_summary(rows, plan.folder, plan.storage_options)
-        print(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}")
+    folder = output_folder(plan)
+    try:
+        rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
+                            progress=False if args.quiet else None, resume=args.resume,
+                            overwrite=args.overwrite, summary=False, run=folder.run)
+        for row in rows:
+            print(redact("\n".join(_row_lines(row))), flush=True)
+        slow = [row for row in rows if row.solver_advice]
+        if slow:  # once per run, for its largest input
+            print(f"hht3d: warning: {max(slow, key=lambda row: row.vertices).solver_advice}", file=sys.stderr)
+        if plan.summary:
+            write_summary(rows, plan.folder, folder.run, plan.storage_options)
+            print(redact(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}"))
+    except Stopped as stop:
+        clean_stop(folder.part_folders(plan.written_paths()))
+        print(f"hht3d: stopped by {stop}: {_not_done(plan, folder)}; temporary files removed; run again with "
+              "--resume to finish", file=sys.stderr, flush=True)
+        sys.stdout.flush()
+        os._exit(stop.exit_code)  # worker threads of the stopped run are not waited for
+    except ClusterLost as exc:
+        raise ClusterLost(f"{exc}; {_not_done(plan, folder)}; run again with --resume to finish") from None
     failed = failures(rows)
     if failed:
         raise PipelineError(f"{len(failed)} of {len(rows)} inputs failed; first: {failed[0]}")
@@ -94,8 +117,15 @@ def _demo(args) -> int:
 
 
 def _validate(args) -> int:
+    from .errors import OutputError
+    from .pipeline.runner import output_folder
+
     plan = _plan(args.pipeline, args.set)
     print(redact(plan.describe()))
+    try:
+        output_folder(plan).check_overwrites(plan.written_paths())
+    except OutputError as exc:
+        print(redact(f"note: {exc}"))
     print("valid: parameters, inputs and output locations checked; nothing was run")
     return 0
 
@@ -136,7 +166,7 @@ def _backends(vertices: int) -> None:
 
 
 def _info(args) -> int:
-    from .io.read import load
+    from .io import load
     from .geometry.topology import describe
 
     surface = None if args.file is None else load(args.file, clean=not args.no_clean)
@@ -144,9 +174,9 @@ def _info(args) -> int:
         _backends(args.vertices if surface is None else surface.n_vertices)
     if surface is None:
         return 0
-    info = describe(surface)
+    info = describe(surface)  # coordinates are bounded at load: values are finite
     if args.json:
-        print(json.dumps(info, indent=2))
+        print(json.dumps(info, indent=2, allow_nan=False))
     else:
         width = max(map(len, info))
         for key, value in info.items():
@@ -167,7 +197,7 @@ def _view(args) -> int:
 
 
 def _schema(args) -> int:
-    from .io.read import atomic_path
+    from .io.atomic import atomic_path
     from .pipeline.json_schema import schema_text
 
     if args.output is None:
@@ -189,7 +219,11 @@ def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -
                         help="Dask scheduler (default: the pipeline's execution.scheduler)")
     parser.add_argument("--workers", type=int, default=None, help="threads, processes or cluster workers")
     parser.add_argument("--address", default=None, help="address of a running dask.distributed scheduler")
-    parser.add_argument("--resume", action="store_true", help="skip inputs whose outputs all exist")
+    parser.add_argument("--resume", action="store_true",
+                        help="skip inputs whose outputs are done: recorded complete in a local folder's "
+                        "manifest, or existing in a URL folder")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace existing local output files that hht3d did not write (kept otherwise)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -251,14 +285,17 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.command == "info" and args.file is None and not args.backends:
         parser.error("hht3d info needs a FILE, or --backends")
+    from .stopping import Stopped, stop_on_signals
+
     try:
-        return args.run(args)
+        with stop_on_signals():
+            return args.run(args)
     except HHT3DError as exc:
         print(f"hht3d: error: {one_line(exc, MAX_MESSAGE)}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print("hht3d: interrupted", file=sys.stderr)
-        return 130
+    except Stopped as stop:  # before a run started: nothing to clean (a run cleans itself, see _execute)
+        print(f"hht3d: stopped by {stop}", file=sys.stderr)
+        return stop.exit_code
 
 
 if __name__ == "__main__":

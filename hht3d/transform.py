@@ -133,7 +133,7 @@ class HHTResult:
     def to_open3d(self):
         """An Open3D tensor ``TriangleMesh`` (or ``PointCloud``) carrying
         :meth:`vertex_attributes` as named (n, 1) float vertex attributes."""
-        return self.surface.to_open3d(self.vertex_attributes())
+        return io.surface_to_open3d(self.surface, self.vertex_attributes())
 
 
 class Stages(Protocol):

@@ -362,7 +362,7 @@ def test_output_is_an_open3d_mesh(bumps, tmp_path):
     surface, _, _, result = bumps
     out = filter_geometry(result, LowPass(cutoff=OMEGA / 2))
     path = tmp_path / "filtered.ply"
-    assert o3d.t.io.write_triangle_mesh(str(path), out.to_open3d())
+    assert o3d.t.io.write_triangle_mesh(str(path), hht3d.io.surface_to_open3d(out))
     back = hht3d.load(path, clean=False)
     assert np.allclose(back.vertices, out.vertices, atol=1e-6) and np.array_equal(back.faces, surface.faces)
 

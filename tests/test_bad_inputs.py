@@ -157,6 +157,50 @@ def _write_inputs(folder: Path) -> None:
     shutil.copy(folder / "good.ply", unicode / "tête à claque.ply")
     (folder / "no_meshes").mkdir()
     (folder / "latin1.yaml").write_bytes("version: 1\nname: caf\xe9\n".encode("latin-1"))
+    _write_references(folder, v, f)
+    _ply_with_property(folder / "0bad.ply", v, f, "0bad", v[:, 0])
+    _ply(folder / "huge300.ply", 1e300 * v, f)
+    _ply(folder / "huge70.ply", 1e70 * v, f)
+    (folder / "fake.npz").write_bytes(b"PK\x03\x04 this is not a zip archive")
+
+
+def _gltf(vertices, faces, buffer_uri: str | None = None) -> dict:
+    """A glTF 2.0 document of one triangle mesh; its buffer is a data URI unless ``buffer_uri`` is given."""
+    import base64
+
+    positions = np.asarray(vertices, dtype="<f4").tobytes()
+    indices = np.asarray(faces, dtype="<u4").tobytes()
+    data = positions + indices
+    uri = buffer_uri or "data:application/octet-stream;base64," + base64.b64encode(data).decode()
+    lo, hi = np.min(vertices, axis=0).tolist(), np.max(vertices, axis=0).tolist()
+    return {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]}],
+            "buffers": [{"uri": uri, "byteLength": len(data)}],
+            "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": len(positions), "target": 34962},
+                            {"buffer": 0, "byteOffset": len(positions), "byteLength": len(indices),
+                             "target": 34963}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": len(vertices), "type": "VEC3",
+                           "min": lo, "max": hi},
+                          {"bufferView": 1, "componentType": 5125, "count": 3 * len(faces), "type": "SCALAR"}]}
+
+
+def _write_references(folder: Path, v, f) -> None:
+    """glTF and OBJ files that refer to other files: beside them (fine) or outside their folder (refused)."""
+    (folder / "embedded.gltf").write_text(json.dumps(_gltf(v, f)))
+    (folder / "passwd.gltf").write_text(json.dumps(_gltf(v, f, "../../../../../../../../etc/passwd")))
+    (folder / "absolute.gltf").write_text(json.dumps(_gltf(v, f, "/etc/passwd")))
+    obj = "".join(f"v {a} {b} {c}\n" for a, b, c in v) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in f)
+    (folder / "mtl_outside.obj").write_text("mtllib ../../../../../../etc/passwd\n" + obj)
+
+
+def _ply_with_property(path: Path, v, f, name: str, values) -> None:
+    """A PLY whose vertices carry one extra float property ``name`` (any name PLY allows)."""
+    vertex = np.empty(len(v), dtype=[("x", "f8"), ("y", "f8"), ("z", "f8"), (name, "f8")])
+    vertex["x"], vertex["y"], vertex["z"] = np.asarray(v).T
+    vertex[name] = values
+    face = np.empty(len(f), dtype=[("vertex_indices", "i4", (3,))])
+    face["vertex_indices"] = f
+    PlyData([PlyElement.describe(vertex, "vertex"), PlyElement.describe(face, "face")]).write(str(path))
 
 
 @pytest.fixture(scope="module")
@@ -275,7 +319,7 @@ def _warned(ran: Ran) -> None:
 def _resumed(ran: Ran) -> None:
     (row,) = json.loads((ran.out / "summary.json").read_text())
     assert (row["status"], row["vertices"], row["imfs"], row["seconds"]) == ("skipped", 162, 2, None)
-    assert "skipped (outputs exist), 162 vertices, 2 IMFs; not re-run" in ran.stdout
+    assert "skipped (outputs complete), 162 vertices, 2 IMFs; not re-run" in ran.stdout
 
 
 def _partial(ran: Ran) -> None:
@@ -310,6 +354,7 @@ class Case:
     fault: Callable | None = None  # fault(monkeypatch) injected before the run
     unprivileged: bool = False  # run without root's permission override (read-only folders)
     issue: bool = False  # a case listed in issue 15 (the rest extend it)
+    setup: Callable | None = None  # setup(tmp_path, inputs) after the runs made first: files the user made
 
 
 def run(*sets: str, command: str = "run") -> tuple[str, ...]:
@@ -356,6 +401,176 @@ def _failing_write(name: str, error: int):
 
 TWO_GOOD = 'inputs=["<in>/good.ply", "<in>/huge.ply"]'
 SUMMARY = "outputs.summary=true"
+
+
+# -- issue 23: nothing read or written outside where it belongs ------------------------------------------------
+def _user_file(relative: str, content: bytes = b"mine"):
+    """A setup: the user's own file at ``<tmp>/relative``."""
+    def setup(tmp: Path, inputs: Path) -> None:
+        (tmp / relative).parent.mkdir(parents=True, exist_ok=True)
+        (tmp / relative).write_bytes(content)
+    return setup
+
+
+def _kept(relative: str, content: bytes = b"mine"):
+    def check(ran: Ran) -> None:
+        assert (ran.out.parent / relative).read_bytes() == content
+    return check
+
+
+def _replaced(relative: str):
+    def check(ran: Ran) -> None:
+        assert set(np.load(ran.out.parent / relative)) >= {"imfs", "residue"}
+    return check
+
+
+def _noted(fragment: str):
+    def check(ran: Ran) -> None:
+        assert any(line.startswith("note: ") and fragment in line for line in ran.stdout.splitlines()), ran.stdout
+    return check
+
+
+def _truncate(relative: str):
+    def setup(tmp: Path, inputs: Path) -> None:
+        (tmp / relative).write_bytes(b"")
+    return setup
+
+
+def _scans(tmp: Path, inputs: Path) -> None:
+    """``<tmp>/scans``: good.ply, ``scan[1].ply`` and a symlink loop ``loop -> .``."""
+    (tmp / "scans").mkdir(exist_ok=True)
+    shutil.copy(inputs / "good.ply", tmp / "scans" / "good.ply")
+    shutil.copy(inputs / "good.ply", tmp / "scans" / "scan[1].ply")
+    if not (tmp / "scans" / "loop").exists():
+        (tmp / "scans" / "loop").symlink_to(".")
+
+
+def _scans_run_once(tmp: Path, inputs: Path) -> None:
+    """:func:`_scans`, then a run on that folder into itself, which leaves ``good_hht.ply`` there."""
+    _scans(tmp, inputs)
+    sets = [f"inputs={tmp}/scans", f"outputs.folder={tmp}/scans", PLY_OUTPUT]
+    assert main(["run", str(tmp / "pipeline.yaml"), *[a for s in sets for a in ("--set", s)]]) == 0
+    assert (tmp / "scans" / "good_hht.ply").is_file()
+
+
+def _special_files(tmp: Path, inputs: Path) -> None:
+    os.mkfifo(tmp / "fifo.ply")
+    (tmp / "random.ply").symlink_to("/dev/urandom")
+
+
+def _only_inputs(*names: str):
+    def check(ran: Ran) -> None:
+        reported = re.findall(r"^(\S.*?): ok", ran.stdout, flags=re.M)
+        assert [Path(r).name for r in reported] == list(names), ran.stdout
+    return check
+
+
+def _summary_rows(*names: str):
+    def check(ran: Ran) -> None:
+        rows = json.loads((ran.out / "summary.json").read_text())
+        assert sorted(Path(r["source"]).name for r in rows) == sorted(names)
+    return check
+
+
+def _written(name: str, folder: str = "out"):
+    """A check: ``<tmp>/folder/name`` was written."""
+    def check(ran: Ran) -> None:
+        path = ran.out.parent / folder / name
+        assert path.is_file() and path.stat().st_size > 0
+    return check
+
+
+def _embedded(ran: Ran) -> None:
+    """The data URI's vertices are the bumpy sphere's (as float32), every one of them (in Open3D's order)."""
+    def rows(a):
+        return a[np.lexsort(np.round(a, 5).T)]
+
+    np.testing.assert_allclose(rows(_npz(ran, "embedded")["vertices"]), rows(_bumpy()[0]), atol=1e-6)
+
+
+def _strict_json(ran: Ran) -> None:
+    """``info --json`` of a mesh near the coordinate limit: strict JSON (no NaN, no Infinity), finite area."""
+    def refuse(constant):
+        raise AssertionError(f"{constant} is not JSON")
+
+    info = json.loads(ran.stdout, parse_constant=refuse)
+    assert info["vertices"] == 162 and 1e139 < info["surface_area"] < 1e142
+
+
+def _renamed_property(ran: Ran) -> None:
+    header = PlyData.read(str(ran.out / "0bad_hht.ply"))["vertex"].data.dtype.names
+    assert "_0bad" in header and "0bad" not in header
+
+
+LONG = "n" * 240  # + "_hht.npz" (8): 248 bytes, legal; its temporary name would not be without cutting
+SCANS = "outputs.folder=<tmp>/scans"
+PLY_OUTPUT = "outputs.files=[{path: '{stem}_hht.ply'}]"
+SAFETY_CASES = {
+    "glTF buffer ../../etc/passwd": refused("passwd.gltf", "refers to '../../../../../../../../etc/passwd', "
+                                                           "outside the file's folder"),
+    "glTF buffer /etc/passwd": refused("absolute.gltf", "refers to '/etc/passwd', outside the file's folder"),
+    "OBJ mtllib outside": refused("mtl_outside.obj", "outside the file's folder"),
+    "glTF with an embedded buffer": accepted("embedded.gltf", check=_embedded),
+    "output replaces the input": Case(run("outputs.folder=<in>", "outputs.files=[{path: '{stem}.ply'}]"),
+                                      "is the input", absent=()),
+    "output path ../../": Case(validate("outputs.files=[{path: '../../x_{stem}.npz'}]"),
+                               "outside the output folder"),
+    "absolute output path": Case(validate("outputs.files=[{path: '<tmp>/elsewhere/{stem}.npz'}]"),
+                                 "outside the output folder", absent=("out", "elsewhere")),
+    "{parent} that is ..": Case(validate("inputs=<in>/no_meshes/../good.ply",
+                                         "outputs.files=[{path: '{parent}/{stem}.npz'}]"),
+                                "output '{parent}/{stem}.npz' of step 'hht': "),
+    "{name} that escapes": Case(validate("name=../../n", "outputs.files=[{path: '{name}_{stem}.npz'}]"),
+                                "outside the output folder"),
+    "allow_outside opts in": Case(run("outputs.allow_outside=true", "outputs.files=[{path: '../side/{stem}.npz'}]"),
+                                  "", 0, (), check=_written("good.npz", "side")),
+    "user's file under an output name": Case(run(), "exists and hht3d did not write it", absent=(),
+                                            setup=_user_file("out/good_hht.npz"), check=_kept("out/good_hht.npz")),
+    "validate notes a user's file under an output name": Case(validate(), "", 0, (),
+                                                              setup=_user_file("out/good_hht.npz"),
+                                                              check=_noted("good_hht.npz: exists and hht3d did not")),
+    "--overwrite replaces it": Case((*run(), "--overwrite"), "", 0, (), setup=_user_file("out/good_hht.npz"),
+                                    check=_replaced("out/good_hht.npz")),
+    "--resume does not trust a 0-byte output": Case((*run(), "--resume"), "exists and hht3d did not write it",
+                                                   absent=(), before=(run(),), setup=_truncate("out/good_hht.npz")),
+    "--resume --overwrite redoes it": Case((*run(), "--resume", "--overwrite"), "", 0, (), before=(run(),),
+                                           setup=_truncate("out/good_hht.npz"), check=_written("good_hht.npz")),
+    "outputs are never inputs": Case(run("inputs=<tmp>/scans", SCANS, PLY_OUTPUT), "", 0, (), setup=_scans_run_once,
+                                     check=_only_inputs("good.ply", "scan[1].ply")),
+    "two pipelines share a summary": Case(run(SUMMARY, "inputs=<in>/huge.ply"), "", 0, (), before=(run(SUMMARY),),
+                                          check=_summary_rows("good.ply", "huge.ply")),
+    "format spec in a placeholder": Case(validate("outputs.files=[{path: '{stem:>9999999999}.npz'}]"),
+                                         "has a format spec or conversion"),
+    "conversion in a placeholder": Case(validate("outputs.files=[{path: '{stem!r}.npz'}]"),
+                                        "has a format spec or conversion"),
+    "248-byte output name": Case(run(f"outputs.files=[{{path: '{LONG}_hht.npz'}}]"), "", 0, (),
+                                 check=_written(f"{LONG}_hht.npz")),
+    "300-byte output name": Case(run(f"outputs.files=[{{path: '{'n' * 296}.npz'}}]"),
+                                 "is 300 bytes long; the limit is 255"),
+    "NUL in an output name": Case(run('outputs.files=[{path: "a\\0{stem}.npz"}]'), "holds a control character"),
+    "existing file named like a glob": Case(run("inputs=<tmp>/scans/scan[1].ply", SCANS), "", 0, (), setup=_scans,
+                                            check=_written("scan[1]_hht.npz", "scans")),
+    "symlink loop listed once": Case(run("inputs=<tmp>/scans/**/good.ply", "outputs.files=[{path: '{stem}.npz'}]"),
+                                     "", 0, (), setup=_scans, check=_only_inputs("good.ply")),
+    "FIFO input": Case(("info", "<tmp>/fifo.ply"), "is a FIFO (named pipe), not a regular file", absent=(),
+                       setup=_special_files),
+    "symlink to /dev/urandom": Case(run("inputs=<tmp>/random.ply"), "is a character device, not a regular file",
+                                    setup=_special_files),
+    "view of a fake .npz": Case(("view", "<in>/fake.npz"), "not a readable .npz file"),
+    "PLY property 0bad": Case(run("inputs=<in>/0bad.ply", "outputs.files=[{path: '{stem}_hht.ply'}]"), "", 0, (),
+                              check=_renamed_property),
+    "info --json of a mesh x1e300": Case(("info", "--json", "<in>/huge300.ply"), "huge300.ply: huge300: coordinates "
+                                         "reach 1.06e+300; beyond 1e+75 areas and curvatures overflow float64"),
+    "run on a mesh x1e300": Case(run("inputs=<in>/huge300.ply"), "coordinates reach 1.06e+300; beyond 1e+75"),
+    "info --json of a mesh x1e70": Case(("info", "--json", "<in>/huge70.ply"), "", 0, (), check=_strict_json),
+    "spectrum figure of max_imfs 0": Case(validate("steps.hht.params.max_imfs=0",
+                                                   "outputs.files=[{path: x.png, figure: spectrum}]"),
+                                          "a spectrum figure needs IMFs"),
+    "a plain list of 200,000 inputs": Case(validate(), "the YAML holds more than 100000 values",
+                                           yaml=PIPELINE.replace('inputs: "<in>/good.ply"', "inputs: [" + ", ".join(
+                                               ["a.ply"] * 200_000) + "]")),
+    "malformed --address": Case((*run(), "--address", "http://[::1"), "cannot reach the Dask scheduler"),
+}
 
 CASES = {
     # 1. output locations that cannot be written: refused by validate and before run computes anything
@@ -499,6 +714,7 @@ CASES = {
                               yaml=PIPELINE.replace("mean_curvature}}", "mean_curvature}")),
     "--set without =": Case(validate("steps.hht.params.max_imfs"), "expected KEY.PATH=VALUE"),
     "step id of 100 characters": Case(validate("steps.hht.id=" + "h" * 100), "step id must be 1 to 64 letters"),
+    **SAFETY_CASES,
 }
 
 
@@ -536,6 +752,8 @@ def test_bad_input(name, inputs, tmp_path, capfd, monkeypatch):
     (tmp_path / "read-only").mkdir(mode=0o555)
     for before in case.before:
         assert main([_substitute(a, places) for a in before]) == 0
+    if case.setup is not None:
+        case.setup(tmp_path, inputs)
     capfd.readouterr()
     argv = [_substitute(a, places) for a in case.argv]
     if case.fault is not None:
@@ -627,3 +845,62 @@ def test_any_value_replaced_by_an_odd_one_is_a_clear_error(odd, inputs, tmp_path
         except HHT3DError as exc:
             assert "\n" not in str(exc) and len(str(exc)) < 1000, (place, str(exc)[:300])
     assert not (tmp_path / "out").exists()
+
+
+# -- issue 23: the folders around a run ---------------------------------------------------------------------------
+def _checksums(root: Path, skip: Path) -> dict:
+    """SHA-256 of every file below ``root`` (symlinks as their targets' text), except below ``skip``."""
+    import hashlib
+
+    listing = {}
+    for path in sorted(root.rglob("*")):
+        if path == skip or skip in path.parents:
+            continue
+        if path.is_symlink():
+            listing[str(path)] = f"-> {os.readlink(path)}"
+        elif path.is_file():
+            listing[str(path)] = hashlib.sha256(path.read_bytes()).hexdigest()
+        else:
+            listing[str(path)] = "folder"
+    return listing
+
+
+@pytest.mark.parametrize("sets", [
+    (), ("outputs.files=[{path: '../../x_{stem}.npz'}]",), ("outputs.files=[{path: '{name}.npz'}]", "name=../n"),
+    ("outputs.folder=<in>", "outputs.files=[{path: '{stem}.ply'}]"),
+], ids=["a run", "escaping path", "escaping name", "over its input"])
+def test_nothing_around_a_run_changes_but_its_output_folder(sets, inputs, tmp_path):
+    """A checksum listing of the folders around a run (its inputs, their parent, the working folder's
+    neighbours) is the same after it, whether it ran or was refused; only the output folder changed."""
+    around = tmp_path.parent
+    pipeline = tmp_path / "pipeline.yaml"
+    places = {"in": inputs, "out": tmp_path / "out"}
+    pipeline.write_text(_substitute(PIPELINE, places), encoding="utf-8")
+    before = _checksums(around, tmp_path / "out")
+    code = main(["run", str(pipeline), *[a for s in sets for a in ("--set", _substitute(s, places))]])
+    assert code == (0 if not sets else 1)
+    assert _checksums(around, tmp_path / "out") == before
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"formats": (".obj",)}, "unknown output format '.obj'"),
+    ({"signal": "bogus"}, "unknown signal 'bogus'"),
+])
+def test_run_dataset_refuses_bad_options_before_building_the_graph(options, message, inputs, tmp_path, monkeypatch):
+    from hht3d.errors import InputError
+    from hht3d.graph.dataset import run_dataset
+
+    monkeypatch.setattr("hht3d.graph.stages.transform_file", lambda *a, **k: pytest.fail("built the graph"))
+    with pytest.raises(InputError, match=re.escape(message)):
+        run_dataset([inputs / "good.ply"], tmp_path / "out", scheduler="synchronous", progress=False, **options)
+    assert not (tmp_path / "out").exists()
+
+
+def test_riesz_tasks_zero_is_named(inputs):
+    from hht3d import graph
+    from hht3d.errors import InputError
+
+    surface = load(inputs / "good.ply")
+    with pytest.raises(InputError, match="riesz_tasks must be an integer >= 1, got 0"):
+        graph.hht(surface, surface.vertices[:, 0], riesz_tasks=0)
+

@@ -5,6 +5,7 @@ import shutil
 import numpy as np
 import pytest
 from helpers.results import assert_same_hht, hht_arrays_from_ply
+from helpers.folders import produced_names
 
 from hht3d import Surface, load
 from hht3d.graph.dataset import run_dataset
@@ -38,7 +39,7 @@ def test_corrupt_file_is_reported_and_others_finish(tmp_path):
     assert bad.status == "failed" and bad.step == "load" and "not a readable PLY" in bad.error
     tiny = status["three_points.xyz"]
     assert tiny.status == "failed" and "at least 4" in tiny.error
-    produced = sorted(p.name for p in out.iterdir())
+    produced = produced_names(out)
     assert produced == ["good0_hht.npz", "good0_hht.ply", "good1_hht.npz", "good1_hht.ply",
                         "summary.csv", "summary.json"]  # nothing for the failures, no temp files
     summary = json.loads((out / "summary.json").read_text())

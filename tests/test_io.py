@@ -6,7 +6,7 @@ from scipy.spatial import cKDTree
 
 from hht3d import InputError, Surface, load
 from hht3d.errors import OutputError
-from hht3d.io import (atomic_path, check_output_paths, read_npz_shapes, read_ply_header, write_colored_ply, write_npz,
+from hht3d.io import (atomic_path, surface_from_open3d, surface_to_open3d, check_output_paths, read_npz_shapes, read_ply_header, write_colored_ply, write_npz,
                       write_ply)
 from helpers.meshes import gltf_to_glb, icosphere
 
@@ -88,15 +88,15 @@ def test_open3d_point_formats(tmp_path, ext):
 def test_open3d_geometries(sphere):
     legacy = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(sphere.vertices),
                                        o3d.utility.Vector3iVector(sphere.faces))
-    from_legacy = Surface.from_open3d(legacy)
+    from_legacy = surface_from_open3d(legacy)
     np.testing.assert_array_equal(from_legacy.vertices, sphere.vertices)  # float64 in memory: exact
     np.testing.assert_array_equal(from_legacy.faces, sphere.faces)
-    tensor = sphere.to_open3d({"signal": sphere.vertices[:, 0]})
-    back = Surface.from_open3d(tensor, clean=False)
+    tensor = surface_to_open3d(sphere, {"signal": sphere.vertices[:, 0]})
+    back = surface_from_open3d(tensor, clean=False)
     np.testing.assert_array_equal(back.attributes["signal"], sphere.vertices[:, 0])
     np.testing.assert_array_equal(back.vertices, sphere.vertices)
     np.testing.assert_array_equal(back.faces, sphere.faces)
-    cloud = Surface.from_open3d(o3d.t.geometry.PointCloud(o3d.core.Tensor(sphere.vertices)))
+    cloud = surface_from_open3d(o3d.t.geometry.PointCloud(o3d.core.Tensor(sphere.vertices)))
     assert not cloud.is_mesh
     np.testing.assert_array_equal(cloud.vertices, sphere.vertices)
 

@@ -260,3 +260,47 @@ def test_the_cli_reads_and_writes_urls(tmp_path, capsys):
     assert main(["view", "memory://cli/scans/spot.ply", "--out", "memory://cli/pages/spot.html"]) == 0
     assert capsys.readouterr().out.strip() == "memory://cli/pages/spot.html"
     assert memory.cat_file("/cli/pages/spot.html").lstrip().lower().startswith(b"<!doctype html")
+
+
+def test_url_inputs_into_a_local_folder_keep_the_local_rules(store, tmp_path):
+    """S3 inputs, a local output folder: the manifest records every output with its size and SHA-256,
+    resume trusts it, and an output changed since is neither trusted nor replaced without --overwrite."""
+    import hashlib
+
+    from hht3d.io.manifest import entries
+
+    _, options, _ = store
+    spot, out = f"s3://{BUCKET}/scans/spot.ply", tmp_path / "out"
+
+    def run(**flags):
+        return run_dataset(spot, out, storage_options=options, scheduler="synchronous", progress=False, emd=EMD,
+                           **flags)
+
+    assert [r.status for r in run()] == ["ok"]
+    recorded = entries(out)
+    assert set(recorded) == {"spot_hht.npz", "spot_hht.ply", "summary.json", "summary.csv"}
+    npz = (out / "spot_hht.npz").read_bytes()
+    assert (recorded["spot_hht.npz"]["size"], recorded["spot_hht.npz"]["sha256"]) == (
+        len(npz), hashlib.sha256(npz).hexdigest())
+    assert [r.status for r in run(resume=True)] == ["skipped"]
+    (out / "spot_hht.ply").write_bytes(b"")  # changed since it was recorded
+    with pytest.raises(OutputError, match="hht3d did not write it"):
+        run(resume=True)
+    assert (out / "spot_hht.ply").read_bytes() == b""
+    assert [r.status for r in run(resume=True, overwrite=True)] == ["ok"]
+    assert (out / "spot_hht.ply").stat().st_size == entries(out)["spot_hht.ply"]["size"] > 0
+
+
+def test_a_url_output_folder_resumes_by_existence_and_keeps_no_manifest(store, tmp_path, capsys):
+    """A local pipeline writing to s3://: the CLI's --resume skips what exists in the bucket, and the
+    bucket gets the outputs and the summary only (no manifest, no lock object)."""
+    endpoint, _, fs = store
+    pipeline = tmp_path / "p.yaml"
+    pipeline.write_text(PIPELINE.format(endpoint=endpoint, inputs=str(shipped_model_path("spot.ply")),
+                                        folder=f"s3://{BUCKET}/resumed"))
+    assert main(["run", str(pipeline), "--scheduler", "synchronous", "--quiet"]) == 0
+    assert main(["run", str(pipeline), "--scheduler", "synchronous", "--quiet", "--resume"]) == 0
+    assert "spot.ply: skipped (outputs complete), 2930 vertices, 2 IMFs" in capsys.readouterr().out
+    fs.invalidate_cache()
+    assert sorted(Path(p).name for p in fs.ls(f"{BUCKET}/resumed")) == [
+        "spot_frequency_1.ply", "spot_hht.npz", "summary.csv", "summary.json"]

@@ -9,6 +9,7 @@ from helpers.meshes import fibonacci_sphere, icosphere
 
 from helpers.results import assert_same_hht, hht_arrays_from_ply
 from helpers.pages import field_values, page_data
+from helpers.folders import produced_names
 from hht3d import Surface, graph
 from hht3d.apps import (HighBoost, LowPass, PiecewiseLinear, filter_geometry, filter_signal, hks_features,
                         imf_enhancement, manifold_harmonics_filter, prominent_features, reconstruct)
@@ -278,7 +279,7 @@ def test_failed_file_is_reported_with_step_and_file_while_others_finish(tmp_path
     captured = capsys.readouterr()
     assert captured.err.count("\n") == 1
     assert f"1 of 3 inputs failed; first: step load failed on {folder / 'broken.ply'}: InputError" in captured.err
-    produced = sorted(p.name for p in (tmp_path / "out").iterdir())
+    produced = produced_names(tmp_path / "out")
     assert produced == ["part0_imfs.npz", "part1_imfs.npz", "summary.csv", "summary.json"]
     rows = {Path(r["source"]).name: r for r in json.loads((tmp_path / "out" / "summary.json").read_text())}
     assert rows["broken.ply"]["status"] == "failed" and rows["broken.ply"]["step"] == "load"

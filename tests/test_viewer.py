@@ -11,6 +11,7 @@ import os
 import re
 import shutil
 from html.parser import HTMLParser
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -284,7 +285,7 @@ def test_filtered_surface_beside_the_original(result, tmp_path):
 def test_file_html_of_a_plain_surface_shows_its_properties(tmp_path):
     v, f = icosphere(2)
     path = tmp_path / "ball.ply"
-    hht3d.io.read.write_ply(path, Surface(v, f, name="ball"), {"height": v[:, 2]})
+    hht3d.io.write_ply(path, Surface(v, f, name="ball"), {"height": v[:, 2]})
     data = page_data(file_html(path))
     assert [e["name"] for e in data["fields"]] == ["height"]
     assert data["spectrum"] is None and data["quality"] is None
@@ -365,3 +366,27 @@ def test_point_cloud_page_renders(browser, opened, tmp_path):
     low, high = page.page.evaluate("document.getElementById('hht3d-spectrum').layout.xaxis.range")
     assert 0 < low < np.log10(12.0) < high < 2   # the log axis spans the spectrum, not the marker's log10
     assert page.errors == []
+
+
+# -- names carrying template markers and markup ----------------------------------------------------
+PAYLOAD_NAME = '{{SCRIPT}}{{DATA}}{{TITLE}}<img src=x onerror="window.pwned=1">'
+PAYLOAD_FIELD = '<svg onload="window.pwned=2">{{PLOTLY}}'
+
+
+def test_names_with_template_markers_and_markup_are_shown_as_text(browser, opened, tmp_path, capsys):
+    """A file or field name is data: the page builds, nothing in it runs, it is shown literally."""
+    v, f = icosphere(2)
+    source = tmp_path / f"{PAYLOAD_NAME}.npz"
+    np.savez(source, vertices=v, faces=f, **{PAYLOAD_FIELD: v[:, 0], "height": v[:, 2]})
+    assert main(["view", str(source)]) == 0
+    page_path = Path(capsys.readouterr().out.strip())
+    assert page_path.name == f"{PAYLOAD_NAME}.html"
+    data = page_data(page_path)
+    assert {e["name"] for e in data["fields"]} == {PAYLOAD_FIELD, "height"}
+    page = opened(page_path)
+    assert page.page.evaluate("() => window.pwned") is None
+    assert page.page.text_content("#hht3d-title") == PAYLOAD_NAME
+    assert PAYLOAD_FIELD in page.page.locator("#hht3d-field option").all_text_contents()
+    page.select("#hht3d-field", PAYLOAD_FIELD)
+    assert page.page.evaluate("() => window.pwned") is None
+    assert page.errors == [] and page.requests == [page.url]

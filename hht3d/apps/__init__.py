@@ -19,7 +19,7 @@ A band-stop of the Hilbert spectrum moves vertices and keeps the faces
 >>> from hht3d.apps import BandStop, filter_geometry, prominent_features
 >>> surface = load(data_path("spot.ply"))
 >>> result = hht(surface, mean_curvature(surface), emd={"max_imfs": 3})
->>> smooth = filter_geometry(result, BandStop(low=40.0, high=120.0, width=10.0))  # a Surface: smooth.to_open3d()
+>>> smooth = filter_geometry(result, BandStop(low=40.0, high=120.0, width=10.0))  # a Surface: hht3d.io.surface_to_open3d(smooth)
 >>> bool(np.abs(smooth.vertices - surface.vertices).max() > 0), np.array_equal(smooth.faces, surface.faces)
 (True, True)
 >>> features = prominent_features(surface, result.imfs)   # features.vertices, features.counts

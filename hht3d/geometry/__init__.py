@@ -1,5 +1,6 @@
 """Geometry: the Surface value, mesh cleaning, discrete operators, topology and signals on surfaces."""
-from .surface import (MIN_VERTICES, FLAT, LAPLACIANS, Surface, principal_axes)
+from .normals import FLAT, estimate_point_normals, principal_axes
+from .surface import MIN_VERTICES, LAPLACIANS, Surface
 from . import cleaning
 from . import operators
 from . import topology

@@ -15,14 +15,13 @@ import scipy.sparse as sp
 
 from . import operators as ops
 from .cleaning import CleanReport, clean_mesh, clean_points
+from .normals import estimate_point_normals, principal_axes
 from ..errors import InputError
 
-__all__ = ["Surface", "MIN_VERTICES", "LAPLACIANS", "FLAT", "principal_axes"]
+__all__ = ["Surface", "MIN_VERTICES", "LAPLACIANS"]
 
 #: The fewest vertices a surface may have (a tetrahedron).
 MIN_VERTICES = 4
-#: A point cloud thinner than this fraction of its extent is treated as planar.
-FLAT = 1e-9
 #: Mesh Laplacians; point clouds always use ``robust_laplacian.point_cloud_laplacian``.
 LAPLACIANS = ("cotan", "robust")
 
@@ -88,20 +87,6 @@ class Surface:
 
     # -- construction -----------------------------------------------------------------
     @classmethod
-    def from_file(cls, path, **options) -> "Surface":
-        """Load a mesh or point cloud; see :func:`hht3d.io.read.load`."""
-        from ..io.read import load
-
-        return load(path, **options)
-
-    @classmethod
-    def from_open3d(cls, geometry, *, clean: bool = True, name: str | None = None, **options) -> "Surface":
-        """Build from an Open3D legacy or tensor ``TriangleMesh`` / ``PointCloud``."""
-        from ..io.read import surface_from_open3d
-
-        return surface_from_open3d(geometry, clean=clean, name=name, **options)
-
-    @classmethod
     def cleaned(cls, vertices, faces=None, *, colors=None, attributes=None, **options) -> "Surface":
         """Clean the arrays (see :mod:`hht3d.geometry.cleaning`) and build a surface.
 
@@ -163,8 +148,6 @@ class Surface:
     def _build_normals(self) -> np.ndarray:
         if self.is_mesh:
             return ops.vertex_normals(self.vertices, self.faces)
-        from ..io.read import estimate_point_normals
-
         return estimate_point_normals(self.vertices)
 
     @property
@@ -183,8 +166,9 @@ class Surface:
                 lap = ops.cotan_laplacian(self.vertices, self.faces)
                 mass = ops.mixed_voronoi_mass(self.vertices, self.faces)
             if not np.all(mass > 0):
-                raise InputError(f"{self.name}: {int(np.sum(mass <= 0))} vertices have zero area; "
-                                 "load with clean=True to remove unreferenced vertices")
+                hint = ("load with clean=True to remove unreferenced vertices" if self.clean_report is None
+                        else "they are isolated or on zero-area faces only")
+                raise InputError(f"{self.name}: {int(np.sum(mass <= 0))} vertices have zero area; {hint}")
             return _Operators(sp.csr_matrix(lap, dtype=np.float64), mass)
 
         return self._cached("operators", build)
@@ -260,22 +244,6 @@ class Surface:
         if not self.is_mesh:
             raise InputError(f"{self.name}: {what} needs a triangle mesh, this is a point cloud")
 
-    # -- export -----------------------------------------------------------------------
-    def to_open3d(self, attributes: dict | None = None):
-        """An Open3D tensor ``TriangleMesh``/``PointCloud`` with named float vertex attributes."""
-        from ..io.read import surface_to_open3d
-
-        return surface_to_open3d(self, attributes or {})
-
-
-def principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Singular values (descending) and principal axes of centred points; collinear points are an error."""
-    _, spread, axes = np.linalg.svd(centered, full_matrices=False)
-    if spread[1] <= FLAT * spread[0]:
-        raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two "
-                         "directions")
-    return spread, axes
-
 
 def _check_cloud(points: np.ndarray, n_neighbors: int, name: str) -> None:
     """What the point-cloud Laplacian needs: more points than neighbours, not all on a line."""
@@ -286,6 +254,10 @@ def _check_cloud(points: np.ndarray, n_neighbors: int, name: str) -> None:
         principal_axes(points - points.mean(axis=0))
     except InputError as exc:
         raise InputError(f"{name}: {exc}") from None
+
+
+#: The largest coordinate a surface may have: areas, their squares (cleaning) and products stay inside float64.
+MAX_COORDINATE = 1e75
 
 
 def _as_vertices(vertices, name: str) -> np.ndarray:
@@ -301,6 +273,10 @@ def _as_vertices(vertices, name: str) -> np.ndarray:
     if bad.any():
         raise InputError(f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates "
                          f"(first: vertex {int(np.flatnonzero(bad)[0])}); remove or repair them")
+    largest = np.abs(v).max()
+    if largest > MAX_COORDINATE:
+        raise InputError(f"{name}: coordinates reach {largest:.3g}; beyond {MAX_COORDINATE:.0e} areas and curvatures "
+                         "overflow float64: scale the surface down")
     return v
 
 

@@ -1,242 +1,105 @@
-"""Datasets of many surfaces: one independent subgraph per file, failures isolated.
+"""Datasets of many surfaces: one independent subgraph per file, failures isolated, outputs safe.
 
 :func:`dataset_graph` builds, for every input file, the subgraph
-load → signal → EMD → Riesz shift groups → spectra → export, with every task
-*guarded*: an exception inside a task becomes a :class:`Failure` record that
-the item's later tasks pass along, so one unreadable or degenerate file is
+load → signal → EMD → Riesz shift groups → spectra → export, every task
+*guarded* (:mod:`hht3d.graph.guard`): one unreadable or degenerate file is
 reported with its step and reason while the other files finish.  Outputs are
-written atomically, one task each, so a failed item leaves nothing
-half-written, and its summary row lists the outputs it did write.  Output
-locations are checked before anything is computed.
+written atomically, one task each, and recorded in the output folder's
+manifest (:mod:`hht3d.io.manifest`) once complete.
 
-:func:`run_dataset` computes that graph on any scheduler of
-:mod:`hht3d.graph.scheduling` and writes ``summary.json`` and ``summary.csv``: one
-row per file with its status, size, run time and decomposition quality
-(:mod:`hht3d.decomposition.quality`: energy ratio, index of orthogonality, warnings).
+:func:`items_graph` is shared with the pipeline runner
+(:mod:`hht3d.pipeline.runner`): the one loop that skips finished inputs on
+resume.  What "finished", "writable" and "written" mean for a local folder
+or an fsspec URL is decided in one place, :class:`hht3d.io.folder.OutputFolder`.
+
+:func:`run_dataset` computes the graph on any scheduler of
+:mod:`hht3d.graph.scheduling` and writes ``summary.json`` and ``summary.csv``
+(:mod:`hht3d.graph.summary`).
 """
 from __future__ import annotations
-
-import csv
-import io as _stdio
-import json
-import time
-import warnings
-from dataclasses import asdict, dataclass, fields
-from pathlib import Path
 
 from dask import delayed
 from dask.base import tokenize
 
 from . import stages as graph
-from ..errors import InputError, one_line
+from ..errors import InputError
+from ..geometry.signals import SIGNALS
+from ..io.folder import OutputFolder, check_locations
+from ..io.manifest import new_run_id
+from ..io.storage import join, name, resolve_locations, stem
 from ..transform import HHTResult
-from ..io.read import _MAX_HEADER, read_npz_shapes, read_ply_header
-from ..io.storage import atomic_location, check_outputs, exists, join, local_copy, name, resolve_locations, stem
-from ..redaction import redact
-from ..decomposition.quality import QualityWarning, decomposition_quality
-from ..linalg.estimate import slow_fallback
+from .guard import MAX_ERROR, Failure, Guarded
 from .scheduling import compute
+from .summary import (SUMMARY_FILES, ItemSummary, item_summary, quality_fields, skipped_summary, summary_paths,
+                      write_summary)
 
 __all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary",
-           "summary_paths", "item_summary", "skipped_summary", "quality_fields", "SUMMARY_FILES"]
+           "summary_paths", "item_summary", "skipped_summary", "quality_fields", "SUMMARY_FILES", "MAX_ERROR",
+           "FORMATS", "items_graph"]
 
 #: Output formats of a dataset item, by file suffix.
 FORMATS = (".ply", ".npz")
-#: The summary table, in the output folder.
-SUMMARY_FILES = ("summary.json", "summary.csv")
-#: Characters of an exception's message kept in a summary row.
-MAX_ERROR = 500
 
 
-@dataclass(frozen=True)
-class Failure:
-    """Why a dataset item failed: the step, the input file and the error."""
-
-    step: str
-    source: str
-    error: str
-
-
-@dataclass(frozen=True)
-class _Timed:
-    """A guarded task's value and its own run time."""
-
-    value: object
-    seconds: float
-
-
-class Guarded:
-    """Run ``func`` unless an input already failed; turn an exception into a :class:`Failure`."""
-
-    def __init__(self, step: str, func, source: str):
-        self.step, self.func, self.source = step, func, source
-        self.__name__ = f"{step}"
-
-    def __dask_tokenize__(self):
-        return (self.step, self.func.__module__, self.func.__qualname__, self.source)
-
-    def __call__(self, *args, **kwargs):
-        args = [_unwrap(a) for a in args]
-        kwargs = {k: _unwrap(v) for k, v in kwargs.items()}
-        failed = next((a for a in _flat(args, kwargs) if isinstance(a, Failure)), None)
-        if failed is not None:
-            return failed
-        start = time.perf_counter()
-        try:
-            with warnings.catch_warnings():  # the summary row reports the quality figures instead
-                warnings.simplefilter("ignore", QualityWarning)
-                value = self.func(*args, **kwargs)
-        except Exception as exc:  # a dataset item must never take the others down
-            return Failure(self.step, self.source, one_line(f"{type(exc).__name__}: {exc}", MAX_ERROR))
-        return _Timed(value, time.perf_counter() - start)
-
-
-def _unwrap(value):
-    if isinstance(value, _Timed):
-        return value.value
-    if isinstance(value, (list, tuple)):
-        return type(value)(_unwrap(v) for v in value)
-    return value
-
-
-def _flat(args, kwargs):
-    for value in [*args, *kwargs.values()]:
-        yield from (value if isinstance(value, (list, tuple)) else [value])
-
-
-@dataclass(frozen=True)
-class ItemSummary:
-    """One row of the dataset summary table.
-
-    ``status`` is ``"ok"``, ``"failed"`` (``step`` and ``error`` say where
-    and why; ``outputs`` lists what was written before) or ``"skipped"``
-    (``--resume``: ``vertices`` and ``imfs`` are read from the existing
-    outputs; ``seconds`` and the quality are empty, since nothing ran).
-    ``energy_ratio``, ``orthogonality_index`` and ``warnings`` are the
-    quality of the item's last decomposition (:mod:`hht3d.decomposition.quality`).
-    ``solver_advice`` says which extra to install when a slow sparse solver ran on a
-    large mesh (:func:`hht3d.linalg.estimate.slow_fallback`).
-    """
-
-    source: str
-    status: str  # "ok", "failed" or "skipped"
-    vertices: int | None = None
-    imfs: int | None = None
-    seconds: float | None = None
-    energy_ratio: float | None = None
-    orthogonality_index: float | None = None
-    warnings: tuple[str, ...] = ()
-    outputs: tuple[str, ...] = ()
-    step: str | None = None
-    error: str | None = None
-    solver_advice: str | None = None
-
-
-def output_paths(source: Path, out_dir: Path, formats=FORMATS, pattern: str = "{stem}_hht") -> list[Path]:
+def output_paths(source, out_dir, formats=FORMATS, pattern: str = "{stem}_hht") -> list:
     """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format (paths or URLs)."""
     base = pattern.format(stem=stem(source))
     return [join(out_dir, f"{base}{suffix}") for suffix in formats]
 
 
-def summary_paths(out_dir) -> list[Path]:
-    """``summary.json`` and ``summary.csv`` in ``out_dir``."""
-    return [join(out_dir, file_name) for file_name in SUMMARY_FILES]
+def items_graph(items: dict, folder: OutputFolder, make_item, *, resume: bool = False):
+    """One lazy :class:`ItemSummary` per input, in a delayed list: the one resume loop.
 
-
-def quality_fields(decomposition, surface) -> dict:
-    """``energy_ratio``, ``orthogonality_index`` and ``warnings`` of an EMD or HHT result on ``surface``."""
-    if isinstance(decomposition, HHTResult):
-        quality = decomposition.quality
-    else:
-        imfs, residue = decomposition.imfs, decomposition.residue
-        quality = decomposition_quality(surface, imfs.sum(axis=0) + residue, imfs, residue)
-    return {"energy_ratio": quality.energy_ratio, "orthogonality_index": quality.orthogonality_index,
-            "warnings": tuple(quality.warnings)}
-
-
-def item_summary(source: str, paths, surface, decomposition, quality, parts, writes) -> ItemSummary:
-    """The summary row of one item from the values of its guarded tasks.
-
-    ``surface`` is the load task's value, ``decomposition`` that of the last
-    step making IMFs (or None) and ``quality`` its :func:`quality_fields`
-    task's; ``parts`` are every task of the item, ``writes`` the write task
-    of each of ``paths``.
+    ``items`` maps each input to its output paths; ``make_item(source, paths)``
+    builds an input's lazy row.  With ``resume``, an input that ``folder``
+    finds done (:meth:`~hht3d.io.folder.OutputFolder.done`: locally, outputs the
+    manifest records as complete with the same size and checksum; for a URL,
+    outputs that exist) is a ``"skipped"`` row instead.
     """
-    written = tuple(str(p) for p, w in zip(paths, writes) if isinstance(w, _Timed))
-    failure = next((v for v in [*parts, *writes] if isinstance(v, Failure)), None)
-    if failure is not None:
-        return ItemSummary(source, "failed", outputs=written, step=failure.step, error=failure.error)
-    seconds = round(sum(v.seconds for v in [*parts, *writes]), 3)
-    imfs = None if decomposition is None else decomposition.value.n_imfs
-    fields = {} if quality is None else quality.value
-    vertices = surface.value.n_vertices
-    advice = None if decomposition is None else slow_fallback(vertices, _backend_of(decomposition.value))
-    return ItemSummary(source, "ok", vertices=vertices, imfs=imfs, seconds=seconds,
-                       outputs=written, solver_advice=advice, **fields)
+    rows = []
+    for source, paths in items.items():
+        if resume and folder.done(paths):
+            rows.append(skipped_summary(source, paths, folder.storage_options))
+        else:
+            rows.append(make_item(source, paths))
+    return delayed(list, pure=True)(rows)
 
 
-def _backend_of(decomposition) -> str | None:
-    """The sparse solver an EMD or HHT result was computed with."""
-    info = decomposition.info
-    return info.get("emd", info).get("backend")
-
-
-def skipped_summary(source, paths, storage_options: dict | None = None) -> ItemSummary:
-    """The row of an item whose outputs all exist (``resume``): its size read from those outputs."""
-    vertices = imfs = None
-    for path in paths:
-        head = _MAX_HEADER if name(path).lower().endswith(".ply") else None
-        try:
-            with local_copy(path, storage_options, head=head) as local:  # a URL: its header, or the npz
-                found = _stored_size(local)
-        except InputError:
-            continue
-        vertices = vertices if vertices is not None else found[0]
-        imfs = imfs if imfs is not None else found[1]
-    return ItemSummary(str(source), "skipped", vertices=vertices, imfs=imfs, outputs=tuple(map(str, paths)))
-
-
-def _stored_size(path: Path) -> tuple[int | None, int | None]:
-    """Vertices and IMFs of a written result, from its PLY or npz headers (None where it does not say)."""
-    suffix = path.suffix.lower()
-    if suffix == ".npz":
-        shapes = read_npz_shapes(path)
-        if "imfs" in shapes:
-            return shapes["imfs"][1], shapes["imfs"][0]
-        return next((shape[0] for shape in shapes.values() if len(shape) == 1), None), None
-    if suffix == ".ply":
-        header = read_ply_header(path)
-        names = set(header.vertex_properties)
-        decomposed = "residue" in names and ("signal" in names or "imf_1" in names)
-        imfs = sum(1 for name in names if name.startswith("imf_")) if decomposed else None
-        return header.counts.get("vertex"), imfs
-    return None, None
-
-
-def _save(result, path, storage_options=None):
-    return result.save(path, storage_options=storage_options)
+def _check_options(signal: str, formats) -> None:
+    """An invalid option is the caller's error, found before any task is made."""
+    if signal not in SIGNALS:
+        raise InputError(f"unknown signal {signal!r}; run_dataset takes one of {sorted(SIGNALS)}")
+    for suffix in formats:
+        if suffix not in FORMATS:
+            raise InputError(f"unknown output format {suffix!r}; run_dataset writes {', '.join(FORMATS)}")
 
 
 def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=FORMATS,
-                  pattern: str = "{stem}_hht", resume: bool = False, load_options: dict | None = None,
-                  storage_options: dict | None = None, **hht_options):
+                  pattern: str = "{stem}_hht", resume: bool = False, overwrite: bool = False,
+                  load_options: dict | None = None, run: str | None = None, storage_options: dict | None = None,
+                  **hht_options):
     """Lazy HHT of every input file; returns a delayed list of :class:`ItemSummary`.
 
     Parameters
     ----------
     inputs : path, glob, folder or list of them
         Local or fsspec URLs (``s3://bucket/scans/*.ply``), resolved by
-        :func:`hht3d.io.storage.resolve_locations`.
+        :func:`hht3d.io.storage.resolve_locations` (local files hht3d wrote are never inputs).
     out_dir : path or URL
-        Where the per-item outputs go (see :func:`output_paths`).
+        Where the per-item outputs go (see :func:`output_paths`); a local
+        folder keeps a manifest, a URL does not (:mod:`hht3d.io.folder`).
     signal : str
-        Signal name of :func:`hht3d.geometry.signals.signal`.
+        One of :data:`hht3d.geometry.signals.SIGNALS`.
     formats : sequence of {".ply", ".npz"}
     resume : bool
-        Skip items whose outputs all exist (writes are atomic, so an existing
-        file is complete).
+        Skip items whose outputs are done: recorded complete in a local folder's
+        manifest, or existing in a URL folder.
+    overwrite : bool
+        Replace existing files hht3d did not write (refused otherwise; local folders).
     load_options : dict, optional
-        Passed to :func:`hht3d.io.read.load`.
+        Passed to :func:`hht3d.io.load`.
+    run : str, optional
+        The run id recorded in the manifest (default: a new one).
     storage_options : dict, optional
         Options of the fsspec back-end of URL inputs and outputs; the workers
         receive them with the URLs and read and write the files themselves.
@@ -245,50 +108,30 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=FO
 
     Raises
     ------
+    InputError
+        An unknown ``signal`` or format, or bad inputs.
     OutputError
-        An output cannot be written there (checked before any task is made).
+        An output cannot be written there, is an input, or would replace a
+        file hht3d did not write (checked before any task is made).
     """
+    _check_options(signal, formats)
     sources = resolve_locations(inputs, storage_options)
     items = {source: output_paths(source, out_dir, formats, pattern) for source in sources}
-    check_outputs([p for paths in items.values() for p in paths] + summary_paths(out_dir), storage_options)
+    check_locations(items, out_dir)
+    folder = OutputFolder(out_dir, storage_options=storage_options, run=run)
+    folder.prepare([p for paths in items.values() for p in paths] + summary_paths(out_dir), overwrite=overwrite)
+    save = folder.writer(HHTResult.save)
     load_options = {**(load_options or {}), **({"storage_options": storage_options} if storage_options else {})}
-    rows = []
-    for source, paths in items.items():
-        if resume and all(exists(p, storage_options) for p in paths):
-            rows.append(skipped_summary(source, paths, storage_options))
-            continue
+
+    def item(source, paths):
         tasks = graph.Builder(guard=lambda step, func, src=str(source): Guarded(step, func, src))
         stages = graph.transform_file(tasks, source, signal, load_options, **hht_options)
         quality = tasks.task("quality", quality_fields)(stages["hht"], stages["load"])
-        writes = [tasks.task(f"write {name(p)}", _save)(stages["hht"], str(p), storage_options) for p in paths]
-        rows.append(delayed(item_summary, pure=True, name=f"summary-{tokenize(str(source), paths)}")(
-            str(source), paths, stages["load"], stages["hht"], quality, [*stages.values(), quality], writes))
-    return delayed(list, pure=True)(rows)
+        writes = [tasks.task(f"write {name(p)}", save)(stages["hht"], str(p)) for p in paths]
+        return delayed(item_summary, pure=True, name=f"summary-{tokenize(str(source), paths)}")(
+            str(source), paths, stages["load"], stages["hht"], quality, [*stages.values(), quality], writes)
 
-
-def write_summary(rows: list[ItemSummary], out_dir, storage_options: dict | None = None) -> list[Path]:
-    """Write the summary table as ``summary.json`` and ``summary.csv`` (atomically; ``out_dir`` may
-    be a URL), secrets redacted (:func:`hht3d.redaction.redact`).
-
-    In the CSV, ``outputs`` are joined with ``;`` and ``warnings`` with `` | ``.
-
-    Raises
-    ------
-    OutputError
-        A summary file cannot be written (names it and the reason).
-    """
-    json_path, csv_path = summary_paths(out_dir)
-    records = [asdict(r) | {"outputs": list(r.outputs), "warnings": list(r.warnings)} for r in rows]
-    with atomic_location(json_path, storage_options) as tmp:
-        tmp.write_text(redact(json.dumps(records, indent=2)), encoding="utf-8")
-    buffer = _stdio.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=[f.name for f in fields(ItemSummary)])
-    writer.writeheader()
-    for r in records:
-        writer.writerow(r | {"outputs": ";".join(r["outputs"]), "warnings": " | ".join(r["warnings"])})
-    with atomic_location(csv_path, storage_options) as tmp:
-        tmp.write_text(redact(buffer.getvalue()), encoding="utf-8")
-    return [json_path, csv_path]
+    return items_graph(items, folder, item, resume=resume)
 
 
 def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int | None = None,
@@ -303,7 +146,8 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
         As for :func:`hht3d.graph.scheduling.compute`.
     **options
         Those of :func:`dataset_graph` (``signal``, ``formats``, ``resume``,
-        ``load_options``, ``storage_options``) and the HHT options of :func:`hht3d.graph.stages.transform`.
+        ``overwrite``, ``load_options``, ``storage_options``) and the HHT options of
+        :func:`hht3d.graph.stages.transform`.
 
     Returns
     -------
@@ -321,10 +165,11 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     ...                    emd={"max_imfs": 2})
     >>> [(row.status, row.vertices, row.imfs) for row in rows]
     [('ok', 2930, 2)]
-    >>> sorted(path.name for path in out.iterdir())
+    >>> sorted(path.name for path in out.iterdir() if not path.name.startswith("."))
     ['spot_hht.npz', 'spot_hht.ply', 'summary.csv', 'summary.json']
     """
-    (rows,) = compute(dataset_graph(inputs, out_dir, **options), scheduler=scheduler, workers=workers,
+    run = options.pop("run", None) or new_run_id()
+    (rows,) = compute(dataset_graph(inputs, out_dir, run=run, **options), scheduler=scheduler, workers=workers,
                       address=address, progress=progress)
-    write_summary(rows, out_dir, options.get("storage_options"))
+    write_summary(rows, out_dir, run, options.get("storage_options"))
     return rows

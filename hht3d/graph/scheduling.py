@@ -18,17 +18,20 @@ plain line at most every :data:`PROGRESS_INTERVAL` seconds.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
+import signal
 import sys
 import time
 
 import dask
 from dask.callbacks import Callback
 
-from ..errors import InputError
+from ..errors import InputError, one_line
+from .cluster import ClusterLost, gather_bounded
 
 __all__ = ["SCHEDULERS", "MAX_WORKERS", "PROGRESS_INTERVAL", "ProgressLines", "compute", "open_client",
-           "worker_count"]
+           "worker_count", "ClusterLost"]
 
 SCHEDULERS = ("synchronous", "threads", "processes", "distributed")
 #: The most workers a run may ask for: threads, processes or local-cluster workers.
@@ -56,8 +59,14 @@ def worker_count() -> int:
 
 
 def _limit_blas_threads() -> None:
-    """Process-pool initializer: runs before numpy is imported in a spawned worker."""
+    """Process-pool initializer: runs before numpy is imported in a spawned worker.
+
+    Workers also ignore SIGINT: Ctrl-C reaches the whole process group, and
+    the main process stops them (:mod:`hht3d.stopping`), without a traceback
+    from each.
+    """
     os.environ.update(SINGLE_THREAD_ENV)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 @contextlib.contextmanager
@@ -73,12 +82,15 @@ def open_client(workers: int | None = None, address: str | None = None, *, log=s
     if address:
         try:
             client = Client(address, timeout="10s")
-        except (OSError, TimeoutError) as exc:
-            raise InputError(f"cannot reach the Dask scheduler at {address!r}: {exc}") from None
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            raise InputError(f"cannot reach the Dask scheduler at {address!r}: {one_line(exc)}") from None
         cluster = None
     else:
-        cluster = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1,
-                               processes=True, dashboard_address=":0", silence_logs=40)
+        with _sigint_ignored_by_children():
+            # Only critical logs: a worker stopped mid-heartbeat (SIGTERM, Ctrl-C) logs an ERROR with a
+            # traceback; task errors reach the client and the summary rows anyway.
+            cluster = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1,
+                                   processes=True, dashboard_address=":0", silence_logs=logging.CRITICAL)
         client = Client(cluster)
     try:
         if log is not None:
@@ -88,6 +100,31 @@ def open_client(workers: int | None = None, address: str | None = None, *, log=s
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+@contextlib.contextmanager
+def _sigint_ignored_by_children():
+    """Worker processes started inside ignore SIGINT (an ignored signal stays ignored in a new
+    interpreter), so Ctrl-C reaches the main process only, which stops them (:mod:`hht3d.stopping`).
+
+    Multiprocessing's resource tracker is started first with its output dropped: after a stop it
+    would otherwise report, on the terminal, the semaphores of the ended workers that it removes.
+    """
+    import threading
+    from multiprocessing import resource_tracker
+
+    from ..open3d_quiet import captured_native_output
+
+    with captured_native_output():
+        resource_tracker.ensure_running()
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def compute(*graphs, scheduler: str = "threads", workers: int | None = None, address: str | None = None,
@@ -118,15 +155,33 @@ def compute(*graphs, scheduler: str = "threads", workers: int | None = None, add
         if client is not None:
             return _compute_distributed(client, graphs, progress)
         with open_client(workers, address) as opened:
-            return _compute_distributed(opened, graphs, progress)
+            return _compute_distributed(opened, graphs, progress, address or "a local cluster")
     options = {"scheduler": scheduler}
-    if scheduler != "synchronous" and workers:
+    if scheduler == "threads" and workers:
         options["num_workers"] = workers
-    if scheduler == "processes":
-        options["initializer"] = _limit_blas_threads
     bar = _local_progress() if progress else contextlib.nullcontext()
-    with bar:
-        return dask.compute(*graphs, **options)
+    with bar, (_process_pool(workers) if scheduler == "processes" else contextlib.nullcontext()) as pool:
+        return dask.compute(*graphs, **options, **({"pool": pool} if pool is not None else {}))
+
+
+@contextlib.contextmanager
+def _process_pool(workers: int | None):
+    """A pool of ``workers`` processes (default one per core) with BLAS limited to one thread, all
+    started at once with SIGINT ignored (so that Ctrl-C, sent to the whole process group, reaches the
+    main process only, even while a worker is still starting)."""
+    from concurrent.futures import ProcessPoolExecutor
+    import multiprocessing
+
+    count = workers or os.cpu_count() or 1
+    context = multiprocessing.get_context(dask.config.get("multiprocessing.context", "spawn"))
+    with _sigint_ignored_by_children():
+        pool = ProcessPoolExecutor(count, mp_context=context, initializer=_limit_blas_threads)
+        for _ in range(count):  # each submission finding no idle worker starts one
+            pool.submit(os.getpid)
+    try:
+        yield pool
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _is_terminal(stream) -> bool:
@@ -180,11 +235,11 @@ class ProgressLines(Callback):
               file=self.out, flush=True)
 
 
-def _compute_distributed(client, graphs, progress: bool):
+def _compute_distributed(client, graphs, progress: bool, where: str = "the given client"):
     from distributed import progress as show_progress
 
     futures = client.compute(list(graphs))
     if progress and _is_terminal(sys.stderr):
         show_progress(futures, notebook=False)
         print(file=sys.stderr)
-    return tuple(client.gather(futures))
+    return tuple(gather_bounded(client, futures, where))

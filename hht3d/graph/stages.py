@@ -38,7 +38,6 @@ How the tasks are made, and how workers keep each surface's operators, is
 from __future__ import annotations
 
 import functools
-from pathlib import Path
 import inspect
 from typing import Any, Callable, ParamSpec
 
@@ -54,7 +53,7 @@ from ..geometry.surface import Surface
 from ..io.read import load as _load
 from ..spectral.monogenic_signal import monogenic_from_potential as _monogenic_from_potential
 from ..spectral.options import RieszOptions
-from ..transform import decomposition_stage, hht_stages
+from ..transform import HHTResult, decomposition_stage, hht_stages
 from .scheduling import compute
 from .tasks import Builder, as_key, from_surface, resident, riesz_potential
 
@@ -217,14 +216,10 @@ def hht(surface: Surface, signal, *, emd: EMDOptions | dict | None = None, riesz
                      riesz_tasks=riesz_tasks)["hht"]
 
 
-def _save(result, path, storage_options=None) -> Path:
-    return result.save(path, storage_options=storage_options)
-
-
 def save(result, path, *, storage_options: dict | None = None):
-    """Lazy ``result.save(path)`` (atomic PLY or npz write; ``path`` may be an fsspec URL, written by
-    the worker with ``storage_options``); returns the path."""
-    return _PLAIN.task("save", _save)(result, str(path), storage_options)
+    """Lazy :meth:`HHTResult.save <hht3d.transform.HHTResult.save>` (atomic PLY or npz write; ``path``
+    may be an fsspec URL, written by the worker with ``storage_options``); returns the path."""
+    return _PLAIN.task("save", HHTResult.save)(result, str(path), storage_options=storage_options)
 
 
 # -- applications (Sec. 5, hht3d.apps): one task each ----------------------------------------

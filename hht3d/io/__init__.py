@@ -1,6 +1,29 @@
-"""Reading and writing surfaces and results (PLY, NPZ and Open3D's formats)."""
-from .read import (MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS, data_path, load, PlyHeader, read_ply_header,
-                   read_npz_shapes, surface_from_open3d, surface_to_open3d, estimate_point_normals,
-                   atomic_path, check_output_paths, write_ply, write_npz, field_colors, write_colored_ply,
-                   resolve_inputs)
+"""Reading and writing surfaces and results, and where files may be read and written.
+
+* :mod:`~hht3d.io.read` — meshes, point clouds, PLY and NPZ headers;
+* :mod:`~hht3d.io.write` — PLY, NPZ and coloured PLY writers;
+* :mod:`~hht3d.io.open3d` — conversion to and from Open3D geometries;
+* :mod:`~hht3d.io.formats` — readable extensions, regular-file and property-name checks, name limits;
+* :mod:`~hht3d.io.references` — files a glTF or OBJ refers to, confined to its folder;
+* :mod:`~hht3d.io.paths` — output confinement, file-name checks, input expansion;
+* :mod:`~hht3d.io.atomic` — atomic writes and their stale temporary files;
+* :mod:`~hht3d.io.manifest` — what hht3d wrote in an output folder (overwrite and resume rules);
+* :mod:`~hht3d.io.folder` — an output folder's rules, local (manifest, lock, confinement) or URL;
+* :mod:`~hht3d.io.storage` — fsspec URLs (``s3://``, ``gs://``, ...): reading, atomic uploads, listing;
+* :mod:`~hht3d.io.results` — reading back a saved result.
+"""
+from .atomic import atomic_path, check_output_paths, remove_stale_parts
+from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS, check_regular_file
+from .manifest import check_overwrites, is_recorded, new_run_id, record
+from .open3d import surface_from_open3d, surface_to_open3d
+from .paths import check_name, check_output_location, confined, resolve_inputs
+from .read import PlyHeader, data_path, load, read_npz_shapes, read_ply_header
+from .write import field_colors, write_colored_ply, write_npz, write_ply
+from ..geometry.normals import estimate_point_normals
 from . import storage
+
+__all__ = ["MESH_EXTENSIONS", "POINT_CLOUD_EXTENSIONS", "data_path", "load", "PlyHeader", "read_ply_header",
+           "read_npz_shapes", "surface_from_open3d", "surface_to_open3d", "estimate_point_normals", "atomic_path",
+           "check_output_paths", "remove_stale_parts", "check_regular_file", "check_overwrites", "is_recorded",
+           "new_run_id", "record", "check_name", "check_output_location", "confined", "write_ply", "write_npz",
+           "field_colors", "write_colored_ply", "resolve_inputs"]

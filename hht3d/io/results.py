@@ -7,6 +7,7 @@ figures and pages equal those of the result that was saved.
 """
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -52,7 +53,7 @@ def load_result(path) -> HHTResult:
     try:
         with np.load(path, allow_pickle=False) as stored:
             arrays = {name: stored[name] for name in stored.files}
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
         raise InputError(f"{path}: not a readable .npz file ({one_line(exc)})") from None
     missing = [name for name in RESULT_ARRAYS if name not in arrays]
     if missing:

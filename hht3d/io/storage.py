@@ -30,7 +30,9 @@ from urllib.parse import urlsplit
 
 from ..errors import HHT3DError, InputError, OutputError, one_line
 from ..redaction import redact, remember_secrets
-from .read import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS, atomic_path, check_output_paths, resolve_inputs
+from .atomic import atomic_path, check_output_paths
+from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS
+from .paths import resolve_inputs
 
 __all__ = ["EXTRAS", "is_url", "filesystem", "name", "stem", "parent_name", "join", "resolve_locations",
            "exists", "local_copy", "load_url", "atomic_location", "write_via", "check_outputs"]
@@ -116,7 +118,7 @@ def _access_error(exc: Exception) -> str:
 
 
 def resolve_locations(spec, storage_options: dict | None = None) -> list:
-    """:func:`hht3d.io.read.resolve_inputs` for paths and URLs: files, folders, globs, lists.
+    """:func:`hht3d.io.paths.resolve_inputs` for paths and URLs: files, folders, globs, lists.
 
     URLs come back as URLs (``s3://bucket/scans/a.ply``), local files as Paths.
 
@@ -210,7 +212,7 @@ def load_url(load, url: str, storage_options: dict | None = None, **options):
 
 @contextlib.contextmanager
 def atomic_location(location, storage_options: dict | None = None):
-    """Like :func:`hht3d.io.read.atomic_path`, for a path or URL: yield a temporary local path.
+    """Like :func:`hht3d.io.atomic.atomic_path`, for a path or URL: yield a temporary local path.
 
     For a URL, the file is uploaded once the block succeeds; on an exception
     nothing is uploaded and the temporary file is removed.
@@ -268,7 +270,7 @@ def write_via(write, *args, storage_options: dict | None = None, **options):
 
 
 def check_outputs(locations, storage_options: dict | None = None) -> None:
-    """:func:`hht3d.io.read.check_output_paths` for paths and URLs, creating nothing that stays.
+    """:func:`hht3d.io.atomic.check_output_paths` for paths and URLs, creating nothing that stays.
 
     For URLs: the bucket (or container) exists and a probe object can be
     written and removed in each output folder.

@@ -15,7 +15,8 @@ import yaml
 
 from ..errors import MAX_SHOWN, PipelineError, did_you_mean, one_line, shown
 
-__all__ = ["YAMLMapping", "MAX_YAML_VALUES", "read_yaml", "at", "apply_overrides", "add_implicit_load"]
+__all__ = ["YAMLMapping", "MAX_YAML_VALUES", "read_yaml", "at", "known_keys", "as_mapping", "apply_overrides",
+           "add_implicit_load"]
 
 
 # -- YAML with line numbers ------------------------------------------------------------------------
@@ -66,8 +67,9 @@ def read_yaml(text: str, source: str):
     """Parse YAML, keeping ``source:line`` of every mapping key; duplicate keys are errors.
 
     Floats are read as YAML 1.2 does (``1e-8`` is a number, not text).
-    Documents that aliases expand past :data:`MAX_YAML_VALUES` values are
-    refused before anything is built from them.  A one-line ``text`` (a
+    A document of more than :data:`MAX_YAML_VALUES` values is refused as
+    soon as the parser reaches that many, and one that aliases expand past
+    that many before anything is built from it.  A one-line ``text`` (a
     ``--set`` value) is located by ``source`` alone.
 
     Raises
@@ -80,6 +82,16 @@ def read_yaml(text: str, source: str):
         return f"{source}:{node.start_mark.line + 1}" if "\n" in text.strip() else source
 
     class Loader(yaml.SafeLoader):
+        nodes = 0
+
+        def compose_node(self, parent, index):
+            self.nodes += 1
+            if self.nodes > MAX_YAML_VALUES:
+                raise PipelineError(f"{source}:{self.peek_event().start_mark.line + 1}: the YAML holds more than "
+                                    f"{MAX_YAML_VALUES} values; list input files with a folder or a glob, and "
+                                    "outputs with path placeholders")
+            return super().compose_node(parent, index)
+
         def get_single_node(self):
             node = super().get_single_node()
             if node is not None:
@@ -175,6 +187,20 @@ def at(mapping, key=None) -> str:
     if isinstance(mapping, YAMLMapping):
         return mapping.at(key) if key is not None else mapping.where
     return "--set"
+
+
+def known_keys(mapping, known, what: str) -> None:
+    """Refuse a key of ``mapping`` not among ``known`` (``what`` names the mapping), with a "did you mean"."""
+    for key in mapping:
+        if key not in known:
+            raise PipelineError(f"{at(mapping, key)}: unknown key {shown(key)} in {what}{did_you_mean(key, known)}")
+
+
+def as_mapping(value, where: str, what: str) -> dict:
+    """``value`` if it is a mapping, else an error naming ``where`` and ``what``."""
+    if not isinstance(value, dict):
+        raise PipelineError(f"{where}: {what} must be a mapping (key: value lines), got {shown(value)}")
+    return value
 
 
 def add_implicit_load(document) -> None:

@@ -154,6 +154,8 @@ def pipeline_schema() -> dict:
             "outputs": {"type": "object", "additionalProperties": False, "properties": {
                 "folder": {"type": "string", "description": "default: out"},
                 "summary": {"type": "boolean", "default": True, "description": "summary.json and summary.csv"},
+                "allow_outside": {"type": "boolean", "default": False,
+                                  "description": "let outputs resolve outside folder (default: refused)"},
                 "files": {"type": "array", "items": {"$ref": "#/$defs/output"}},
             }},
         },

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError, PipelineError, shown
-from ..io.read import write_colored_ply, write_npz, write_ply
+from ..io.write import write_colored_ply, write_npz, write_ply
 from ..viz.render import UP_AXES, VIEWS
 from ..viz.viewer import VERTEX_BUDGET
 from .params import Param, did_you_mean

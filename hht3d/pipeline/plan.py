@@ -95,6 +95,9 @@ class Pipeline:
         Write ``summary.json`` and ``summary.csv`` in ``folder``.
     storage_options : dict
         Options of the fsspec back-end of URL inputs and outputs (:mod:`hht3d.io.storage`).
+    allow_outside : bool
+        Outputs may resolve outside ``folder`` (``outputs.allow_outside``;
+        refused by validation otherwise).
     """
 
     name: str
@@ -106,6 +109,7 @@ class Pipeline:
     folder: Path | str
     summary: bool = True
     storage_options: dict = field(default_factory=dict)
+    allow_outside: bool = False
 
     def step(self, step_id: str) -> Step:
         return next(s for s in self.steps if s.id == step_id)

@@ -2,12 +2,18 @@
 
 Every input file becomes an independent subgraph of its steps' tasks
 (:mod:`hht3d.graph.stages`) and output writes.  Every task is guarded as in
-:mod:`hht3d.graph.dataset`: an exception becomes a record of the step and the
+:mod:`hht3d.graph.guard`: an exception becomes a record of the step and the
 input file that the item's later tasks pass along, so one bad file is
 reported while the others finish.  An output is written once the step it
 comes from is done, atomically: a failed item may have the outputs of its
 earlier steps, which its summary row lists, never a half-written file.
-Output locations are checked before anything is computed.
+Inputs are skipped on resume by the loop shared with
+:func:`hht3d.graph.dataset.run_dataset`, and outputs checked, written and
+recorded through :class:`hht3d.io.folder.OutputFolder`: in a local folder,
+before anything is computed, a file hht3d did not write is refused unless
+``overwrite`` and temporary files of killed runs are removed, and every
+output is recorded in the folder's manifest; a URL folder is probed and
+written by upload.
 """
 from __future__ import annotations
 
@@ -17,15 +23,15 @@ from pathlib import Path
 from dask import delayed
 from dask.base import tokenize
 
-from ..graph.dataset import Guarded, ItemSummary, item_summary, quality_fields, skipped_summary, write_summary
-from ..graph.stages import Builder
-from ..io.storage import check_outputs, exists, write_via
-from ..io.storage import name as file_name
+from ..graph.dataset import Guarded, ItemSummary, item_summary, items_graph, quality_fields, write_summary
 from ..graph.scheduling import compute
+from ..graph.stages import Builder
+from ..io.folder import OutputFolder
+from ..io.storage import name as file_name
 from .plan import FILE, Pipeline
 from .schema import EXECUTION
 
-__all__ = ["pipeline_graph", "run_pipeline", "failures"]
+__all__ = ["output_folder", "pipeline_graph", "run_pipeline", "failures"]
 
 
 def _guarded(source: Path, label):
@@ -33,8 +39,8 @@ def _guarded(source: Path, label):
     return Builder(guard=lambda task, func: Guarded(label(task), func, str(source)))
 
 
-def _item(plan: Pipeline, source: Path, paths: list[Path]):
-    """The lazy :class:`~hht3d.graph.dataset.ItemSummary` of one input file."""
+def _item(plan: Pipeline, folder: OutputFolder, source: Path, paths: list[Path]):
+    """The lazy :class:`~hht3d.graph.summary.ItemSummary` of one input file."""
     results, parts = {}, {}
     for step in plan.steps:
         builder = _guarded(source, lambda task, s=step: s.id if task in (s.op.name, s.id) else f"{s.id} ({task})")
@@ -48,9 +54,8 @@ def _item(plan: Pipeline, source: Path, paths: list[Path]):
     writes = []
     for output, path in zip(plan.outputs, paths):
         write = _guarded(source, lambda task, label=f"write {file_name(path)}": label)
-        writes.append(write.task("write", write_via)(  # a URL: written locally by the worker, then uploaded
-            output.format.write, results[output.step], results[plan.origin_of(output.step)], str(path),
-            storage_options=plan.storage_options or None, **output.options))
+        writes.append(write.task("write", folder.writer(output.format.write))(
+            results[output.step], results[plan.origin_of(output.step)], str(path), **output.options))
     surface = results[next(s.id for s in plan.steps if s.op.name == "load")]
     last = next((s.id for s in reversed(plan.steps) if s.kind in ("emd", "hht")), None)
     decomposition = quality = None
@@ -64,34 +69,40 @@ def _item(plan: Pipeline, source: Path, paths: list[Path]):
                                                        decomposition, quality, list(parts.values()), writes)
 
 
-def pipeline_graph(plan: Pipeline, *, resume: bool = False):
-    """The pipeline as one lazy list of :class:`~hht3d.graph.dataset.ItemSummary`, one per input file.
+def output_folder(plan: Pipeline, run: str | None = None) -> OutputFolder:
+    """The pipeline's output folder (local or URL), writing under the run id ``run`` (default: a new one)."""
+    return OutputFolder(plan.folder, storage_options=plan.storage_options, run=run)
+
+
+def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder | None = None):
+    """The pipeline as one lazy list of :class:`~hht3d.graph.summary.ItemSummary`, one per input file.
 
     Parameters
     ----------
     plan : Pipeline
     resume : bool
-        Skip inputs whose outputs all exist (status ``"skipped"``, sizes read
-        from those outputs).
+        Skip inputs whose outputs are done (status ``"skipped"``, sizes read
+        from those outputs): recorded complete in a local folder's manifest,
+        existing in a URL folder.
+    folder : OutputFolder, optional
+        Where the outputs go (default: :func:`output_folder` with a new run id).
     """
-    rows = []
-    for source in plan.inputs:
-        paths = plan.output_paths(source)
-        if resume and all(exists(p, plan.storage_options) for p in paths):
-            rows.append(skipped_summary(source, paths, plan.storage_options))
-        else:
-            rows.append(_item(plan, source, paths))
-    return delayed(list, pure=True)(rows)
+    folder = folder or output_folder(plan)
+    items = {source: plan.output_paths(source) for source in plan.inputs}
+    return items_graph(items, folder, lambda source, paths: _item(plan, folder, source, paths), resume=resume)
 
 
 def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int | None = None,
                  address: str | None = None, progress: bool | None = None,
-                 resume: bool = False, summary: bool = True) -> list[ItemSummary]:
-    """Run a pipeline; return one :class:`~hht3d.graph.dataset.ItemSummary` per input file.
+                 resume: bool = False, overwrite: bool = False, summary: bool = True,
+                 run: str | None = None) -> list[ItemSummary]:
+    """Run a pipeline; return one :class:`~hht3d.graph.summary.ItemSummary` per input file.
 
     Arguments left as ``None`` take the pipeline's ``execution`` block and
     are checked like it.  The output locations are checked first, so a run
-    that could not write its results computes nothing.  Failed items are
+    that could not write its results computes nothing; in a local folder,
+    an existing file that hht3d did not write is refused unless
+    ``overwrite``.  ``run`` is the run id of the manifest (default: a new one).  Failed items are
     reported in the rows (see :func:`failures`), not raised.  With
     ``summary`` and the pipeline's ``outputs.summary``, the rows are also
     written to ``summary.json`` and ``summary.csv`` in the output folder (the
@@ -100,7 +111,7 @@ def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int |
     Raises
     ------
     OutputError
-        An output or the summary cannot be written.
+        An output or the summary cannot be written, or would replace a file hht3d did not write.
     PipelineError
         A bad ``scheduler`` or ``workers``.
 
@@ -116,18 +127,19 @@ def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int |
     >>> plan = load_pipeline(data_path("demo.yaml"), overrides=[
     ...     "steps.hht.params.max_imfs=2", f"outputs.folder={out}", "outputs.files=[{path: '{stem}_hht.npz'}]"])
     >>> rows = run_pipeline(plan, scheduler="synchronous", progress=False)
-    >>> [(row.status, row.imfs) for row in rows], sorted(path.name for path in out.iterdir())
+    >>> [(row.status, row.imfs) for row in rows], sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
     ([('ok', 2)], ['spot_hht.npz'])
     """
     given = {"scheduler": scheduler, "workers": workers, "address": address, "progress": progress}
     checked = {p.name: p.check(given[p.name], f"{p.name}={given[p.name]}") for p in EXECUTION
                if given.get(p.name) is not None}
     execution = dataclasses.replace(plan.execution, **checked)
-    check_outputs(plan.written_paths(), plan.storage_options)
-    (rows,) = compute(pipeline_graph(plan, resume=resume), scheduler=execution.scheduler,
+    folder = output_folder(plan, run)
+    folder.prepare(plan.written_paths(), overwrite=overwrite)
+    (rows,) = compute(pipeline_graph(plan, resume=resume, folder=folder), scheduler=execution.scheduler,
                       workers=execution.workers, address=execution.address, progress=execution.progress)
     if summary and plan.summary:
-        write_summary(rows, plan.folder, plan.storage_options)
+        write_summary(rows, plan.folder, folder.run, plan.storage_options)
     return rows
 
 

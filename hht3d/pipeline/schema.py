@@ -26,11 +26,13 @@
     outputs:
       folder: out/demo              # default "out"; or a URL: s3://bucket/results
       summary: true                 # summary.json / summary.csv (default true)
+      allow_outside: false          # let outputs resolve outside folder (default false)
       files:
         - {from: hht, path: "{stem}_hht.ply"}
         - {from: hht, path: "{stem}_frequency_1.ply", format: colored_ply, field: frequency_1}
         # from: default the last step to run; format: default from the suffix
         # (.ply with field or cmap: colored_ply); path placeholders {stem}, {parent}, {name}
+        # (no format specs); every output must resolve inside folder and never be an input
 
 Steps without ``load`` get an implicit first step ``{id: load, op: load}``
 (``--set steps.load.params.laplacian=robust`` reaches it).
@@ -56,14 +58,14 @@ from __future__ import annotations
 import string
 from pathlib import Path
 
-from ..errors import InputError, OutputError, PipelineError, shown
-from ..io.read import data_path, read_ply_header
-from ..io.storage import check_outputs, is_url, resolve_locations
+from ..errors import InputError, PipelineError, shown
+from ..io import data_path, read_ply_header
+from ..io.storage import is_url, resolve_locations
 from ..graph.scheduling import MAX_WORKERS, SCHEDULERS
-from .document import YAMLMapping, add_implicit_load, apply_overrides, at, read_yaml
-from .outputs import FORMATS, SUFFIXES, check_options, field_imf
+from .document import YAMLMapping, add_implicit_load, apply_overrides, as_mapping, at, known_keys, read_yaml
+from .output_checks import FILE_KEYS, OUTPUTS_KEYS, check_plan_outputs, read_outputs
 from .params import Param, did_you_mean
-from .plan import FILE, PLACEHOLDERS, Execution, Output, Pipeline, Step
+from .plan import FILE, Execution, Pipeline, Step
 from .registry import MAX_SEED, OPERATIONS, operation
 from .storage_options import storage_options
 
@@ -73,11 +75,9 @@ __all__ = ["VERSION", "EXECUTION", "TOP_KEYS", "STEP_KEYS", "OUTPUTS_KEYS", "FIL
 #: The schema version this package reads.
 VERSION = 1
 
-#: The keys of a pipeline, of a step, of the outputs block and of an output file.
+#: The keys of a pipeline and of a step (those of the outputs block: :mod:`.output_checks`).
 TOP_KEYS = ("version", "name", "execution", "storage_options", "inputs", "steps", "outputs")
 STEP_KEYS = ("id", "op", "from", "params")
-OUTPUTS_KEYS = ("folder", "summary", "files")
-FILE_KEYS = ("from", "path", "format")
 #: Parameters of the ``execution`` block (also the checks of the CLI's --scheduler and --workers).
 EXECUTION = (
     Param("scheduler", "choice", "Dask scheduler", default="threads", choices=SCHEDULERS),
@@ -136,18 +136,6 @@ def builtin_models() -> dict[str, Path]:
     return {p.stem: p for p in folder.iterdir() if p.suffix == ".ply"}
 
 
-def _known_keys(mapping, known, what: str) -> None:
-    for key in mapping:
-        if key not in known:
-            raise PipelineError(f"{at(mapping, key)}: unknown key {shown(key)} in {what}{did_you_mean(key, known)}")
-
-
-def _mapping(value, where: str, what: str) -> dict:
-    if not isinstance(value, dict):
-        raise PipelineError(f"{where}: {what} must be a mapping (key: value lines), got {shown(value)}")
-    return value
-
-
 class Validator:
     """Checks a read pipeline document and builds the typed :class:`~hht3d.pipeline.plan.Pipeline`.
 
@@ -189,7 +177,7 @@ class Validator:
         self._vertex_counts: dict[Path, int] | None = None
 
     def pipeline(self, doc) -> Pipeline:
-        _known_keys(doc, TOP_KEYS, "the pipeline")
+        known_keys(doc, TOP_KEYS, "the pipeline")
         self._version(doc)
         name = doc.get("name", Path(self.source).stem)
         if not isinstance(name, str) or not name:
@@ -198,15 +186,11 @@ class Validator:
         self.storage_options = storage_options(doc)
         inputs = self.inputs = self._inputs(doc)
         steps = self._steps(doc, execution)
-        folder, summary, outputs = self._outputs(doc, steps)
+        folder, summary, allow_outside, outputs = read_outputs(doc, steps, self.source)
         plan = Pipeline(name=name, source=self.source, execution=execution, inputs=inputs, steps=steps,
-                        outputs=outputs, folder=folder, summary=summary, storage_options=self.storage_options)
-        self._distinct_paths(plan, doc)
-        try:
-            check_outputs(plan.written_paths(), self.storage_options)
-        except (OutputError, InputError) as exc:
-            block = doc.get("outputs")
-            raise PipelineError(f"{at(block, 'folder')}: outputs: {exc}") from None
+                        outputs=outputs, folder=folder, summary=summary, storage_options=self.storage_options,
+                        allow_outside=allow_outside)
+        check_plan_outputs(plan, doc)
         return plan
 
     def _version(self, doc) -> None:
@@ -217,8 +201,8 @@ class Validator:
                                 f"this hht3d reads version {VERSION}")
 
     def _execution(self, block) -> Execution:
-        block = _mapping(block, at(block), "execution")
-        _known_keys(block, [p.name for p in EXECUTION], "execution")
+        block = as_mapping(block, at(block), "execution")
+        known_keys(block, [p.name for p in EXECUTION], "execution")
         values = {p.name: p.check(block[p.name], f"{at(block, p.name)}: execution") if p.name in block
                   else p.default for p in EXECUTION}
         return Execution(**values)
@@ -229,7 +213,7 @@ class Validator:
                                 "them, or {builtin: spot}")
         spec, where = doc["inputs"], at(doc, "inputs")
         if isinstance(spec, dict):
-            _known_keys(spec, ["builtin"], "inputs")
+            known_keys(spec, ["builtin"], "inputs")
             models = builtin_models()
             name = spec.get("builtin")
             if name not in models:
@@ -251,7 +235,7 @@ class Validator:
         if not isinstance(raw, list) or not raw:
             raise PipelineError(f"{at(doc, 'steps') if 'steps' in doc else self.source}: steps must be a "
                                 "non-empty list of {id, op, params} entries")
-        entries = [_mapping(e, at(doc, "steps"), f"step {i + 1}") for i, e in enumerate(raw)]
+        entries = [as_mapping(e, at(doc, "steps"), f"step {i + 1}") for i, e in enumerate(raw)]
         parsed = [self._step(entry, execution) for entry in entries]
         ids = [p[0] for p in parsed]
         for i, step_id in enumerate(ids):
@@ -263,7 +247,7 @@ class Validator:
         return _ordered(steps, entries)
 
     def _step(self, entry, execution: Execution):
-        _known_keys(entry, STEP_KEYS, "a step")
+        known_keys(entry, STEP_KEYS, "a step")
         where = at(entry, "op")
         if "op" not in entry:
             raise PipelineError(f"{at(entry)}: a step needs an op (`hht3d ops` lists them)")
@@ -273,7 +257,7 @@ class Validator:
             raise PipelineError(f"{at(entry, 'id')}: step id must be 1 to {MAX_ID} letters, digits, '_' or '-', "
                                 f"got {shown(step_id)}")
         context = f"step {shown(step_id)} (op {op.name})"
-        raw = _mapping(entry.get("params") or YAMLMapping(at(entry)), at(entry, "params"), f"{context} params")
+        raw = as_mapping(entry.get("params") or YAMLMapping(at(entry)), at(entry, "params"), f"{context} params")
         for key in raw:
             if op.param(key) is None:
                 known = [p.name for p in op.params]
@@ -373,98 +357,6 @@ class Validator:
     def _known_step(ref, kinds: dict, context: str, what: str) -> None:
         if not isinstance(ref, str) or ref not in kinds:
             raise PipelineError(f"{context}: {what} refers to unknown step {shown(ref)}{did_you_mean(ref, kinds)}")
-
-    # -- outputs --------------------------------------------------------------------------------
-    def _outputs(self, doc, steps: tuple[Step, ...]):
-        block = doc.get("outputs")
-        if not isinstance(block, dict) or not block.get("files"):
-            raise PipelineError(f"{at(doc, 'outputs') if 'outputs' in doc else self.source}: outputs must be a "
-                                "mapping with files: a list of {from: STEP, path: PATTERN} entries")
-        _known_keys(block, OUTPUTS_KEYS, "outputs")
-        folder = block.get("folder", "out")
-        if not isinstance(folder, str) or not folder:
-            raise PipelineError(f"{at(block, 'folder')}: outputs.folder must be a path, got {shown(folder)}")
-        summary = Param("summary", "bool", "").check(block.get("summary", True), f"{at(block, 'summary')}: outputs")
-        if not isinstance(block["files"], list):
-            raise PipelineError(f"{at(block, 'files')}: outputs.files must be a list of {{from, path}} entries")
-        by_id = {s.id: s for s in steps}
-        last = next(s.id for s in reversed(steps))
-        files = tuple(self._output(_mapping(e, at(block, "files"), "an output"), by_id, last)
-                      for e in block["files"])
-        return folder if is_url(folder) else Path(folder), summary, files
-
-    def _output(self, entry, steps: dict, last: str) -> Output:
-        step_id = entry.get("from", last)
-        if not isinstance(step_id, str) or step_id not in steps:
-            raise PipelineError(f"{at(entry, 'from')}: output from unknown step {shown(step_id)}"
-                                f"{did_you_mean(step_id, steps)}")
-        kind = steps[step_id].kind
-        formats = FORMATS.get(kind, {})
-        path = entry.get("path")
-        if not isinstance(path, str) or not path:
-            raise PipelineError(f"{at(entry)}: an output needs a path pattern, e.g. path: \"{{stem}}_hht.ply\"")
-        self._placeholders(path, at(entry, "path"))
-        name = entry.get("format") or self._format_from(path, entry, formats)
-        context = (f"{at(entry, 'format' if 'format' in entry else 'path')}: output {shown(path)} "
-                   f"of step {shown(step_id)}")
-        if name not in formats:
-            raise PipelineError(f"{context}: step {shown(step_id)} makes {kind}, which can be written as "
-                                f"{', '.join(formats) or 'nothing'}, not {shown(name)}")
-        fmt = formats[name]
-        if not path.lower().endswith(fmt.suffix):
-            raise PipelineError(f"{context}: format {name} writes {fmt.suffix} files; end the path with {fmt.suffix}")
-        known = [p.name for p in fmt.params]
-        for key in entry:
-            if key not in FILE_KEYS and key not in known:
-                raise PipelineError(f"{at(entry, key)}: output {shown(path)}: unknown option {shown(key)} for format "
-                                    f"{name}{did_you_mean(key, [*FILE_KEYS, *known])}")
-        options = {p.name: p.check(entry[p.name], f"{at(entry, p.name)}: output {shown(path)}") if p.name in entry
-                   else p.default for p in fmt.params}
-        check_options(options, context)
-        self._imf_exists(options, steps[step_id], context)
-        return Output(step_id, path, fmt, options, tuple(k for k in entry if k in known))
-
-    @staticmethod
-    def _imf_exists(options: dict, step: Step, where: str) -> None:
-        """Refuse a field ``imf_K`` (or amplitude_K, ...) of an IMF the step cannot make."""
-        number, most = field_imf(options.get("field")), step.params.get("max_imfs")
-        if number is not None and most is not None and number > most:
-            raise PipelineError(f"{where}: field {options['field']} needs {number} IMFs, but step {step.id!r} makes "
-                                f"at most max_imfs: {most}; use K <= {most} or raise max_imfs")
-
-    @staticmethod
-    def _format_from(path: str, entry, formats: dict) -> str:
-        suffix = Path(path).suffix.lower()
-        if suffix == ".ply" and ("field" in entry or "cmap" in entry):
-            return "colored_ply"
-        names = [n for n, s in SUFFIXES.items() if s == suffix]
-        if not names:
-            raise PipelineError(f"{at(entry, 'path')}: cannot tell the format of {shown(path)}; end it with "
-                                f"{', '.join(sorted(set(SUFFIXES.values())))} or give format:")
-        return names[0]
-
-    @staticmethod
-    def _placeholders(path: str, where: str) -> None:
-        try:
-            fields = [f for _, f, _, _ in string.Formatter().parse(path) if f is not None]
-        except ValueError as exc:
-            raise PipelineError(f"{where}: bad path pattern {shown(path)}: {exc}") from None
-        for f in fields:
-            if f not in PLACEHOLDERS:
-                raise PipelineError(f"{where}: unknown placeholder {{{f}}} in {shown(path)}"
-                                    f"{did_you_mean(f, PLACEHOLDERS)}"
-                                    f" (use {', '.join('{' + p + '}' for p in PLACEHOLDERS)})")
-
-    def _distinct_paths(self, plan: Pipeline, doc) -> None:
-        seen: dict[Path, Path] = {}
-        for source in plan.inputs:
-            for path in plan.output_paths(source):
-                if path in seen:
-                    other = seen[path]
-                    clash = ("two outputs" if other == source else f"inputs {other} and {source}")
-                    raise PipelineError(f"{at(doc, 'outputs')}: {clash} would both write {path}; make the path "
-                                        "patterns distinct (use {stem} or {parent})")
-                seen[path] = source
 
 
 def _ordered(steps: list[Step], entries) -> tuple[Step, ...]:

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..geometry.surface import Surface
-from ..io.read import atomic_path
+from ..io.atomic import atomic_path
 from .render import PERCENTILES, ColorScale, Rendering, color_scale, model_aspect, renderer
 from .render.image import check_field, check_size
 

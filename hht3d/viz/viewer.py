@@ -44,18 +44,18 @@ the spectrum and the quality figures always come from every vertex.
 """
 from __future__ import annotations
 
-import html
 import json
-from importlib import resources
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from ..version import __version__
 from ..errors import InputError
-from ..io.read import atomic_path
+from ..io.atomic import atomic_path
+from ..io.formats import check_regular_file
 from ..io.read import load as load_surface
 from ..decomposition.quality import Quality, decomposition_quality
+from .page import viewer_page
 from .page_data import colorscale, field_title, figure_json, order, quality_data, size_text, spectrum_data, typed
 from .render import PERCENTILES, SEQUENTIAL_CMAP, SYMMETRIC_CMAP, camera
 from .shown import VERTEX_BUDGET, shown_copy, color_limits
@@ -77,11 +77,6 @@ _STACKED = {"imfs": "imf", "amplitude": "amplitude", "phase": "phase", "frequenc
 
 
 # -- the page ------------------------------------------------------------------------------------
-
-
-def _json_script(text: str) -> str:
-    """JSON made safe inside a <script> element."""
-    return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
 
 
 def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectrum: HilbertSpectrum | None = None,
@@ -180,28 +175,10 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
             "quality": None if quality is None else quality_data(quality),
             "config": {"displaylogo": False, "responsive": True}}
     figure = figure_json(shown, labels, view, up)
-    data = _json_script(json.dumps(meta, allow_nan=False)[:-1] + ', "figure": ' + figure + "}")
-    page = _template().replace("{{TITLE}}", html.escape(title))
-    for key, text in (("{{PLOTLY}}", _plotly_js()), ("{{SCRIPT}}", _asset("viewer.js")), ("{{DATA}}", data)):
-        before, after = page.split(key)
-        page = before + text + after
+    page = viewer_page(title, json.dumps(meta, allow_nan=False)[:-1] + ', "figure": ' + figure + "}")
     with atomic_path(path) as tmp:
         tmp.write_text(page, encoding="utf-8")
     return path
-
-
-def _asset(name: str) -> str:
-    return (resources.files("hht3d") / "viz" / "web" / name).read_text(encoding="utf-8")
-
-
-def _template() -> str:
-    return _asset("viewer.html").replace("{{VERSION}}", __version__)
-
-
-def _plotly_js() -> str:
-    from plotly.offline import get_plotlyjs
-
-    return get_plotlyjs()
 
 
 # -- entry points ------------------------------------------------------------------------------
@@ -262,12 +239,11 @@ def read_fields(path) -> tuple[Surface, dict, np.ndarray | None]:
     if path.suffix.lower() != ".npz":
         surface = load_surface(path, clean=False)
         return surface, dict(surface.attributes), None
-    if not path.is_file():
-        raise InputError(f"{path}: no such file; check the path")
+    check_regular_file(path, "an .npz file")
     try:
         with np.load(path, allow_pickle=False) as stored:
             arrays = {k: stored[k] for k in stored.files}
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
         raise InputError(f"{path}: not a readable .npz file ({exc})") from None
     if "vertices" not in arrays:
         raise InputError(f"{path}: no 'vertices' array; expected a file written by HHTResult.save")

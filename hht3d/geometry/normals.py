@@ -1,0 +1,58 @@
+"""Normals and principal axes of point clouds (meshes get their normals from
+:func:`hht3d.geometry.operators.vertex_normals`)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError, one_line
+from ..open3d_quiet import quiet_open3d
+
+__all__ = ["FLAT", "principal_axes", "estimate_point_normals"]
+
+#: A point cloud thinner than this fraction of its extent is treated as planar.
+FLAT = 1e-9
+
+
+def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
+    """Unit normals of a point cloud: PCA over ``k`` neighbours, consistently oriented.
+
+    Open3D orients them along a minimum spanning tree over tangent planes;
+    the whole set is then flipped, if needed, to point away from the centroid
+    on average (outward for closed scans).  A planar cloud (thinner than
+    :data:`FLAT` times its extent, where Open3D's
+    Delaunay step fails) gets the plane's normal everywhere, its largest
+    component positive.
+
+    Raises
+    ------
+    InputError
+        The points lie on a line, or Open3D cannot orient the normals.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    centered = points - points.mean(axis=0)
+    spread, axes = principal_axes(centered)
+    if spread[2] <= FLAT * spread[0]:
+        normal = axes[2] * np.sign(axes[2][np.argmax(np.abs(axes[2]))])
+        return np.tile(normal, (len(points), 1))
+    with quiet_open3d() as o3d:
+        try:
+            pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+            pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(knn=k))
+            pcd.orient_normals_consistent_tangent_plane(k)
+        except RuntimeError as exc:
+            reason = one_line(str(exc).split("\n", 1)[0])
+            raise InputError(f"cannot orient the point normals ({reason}); the cloud may be degenerate: "
+                             "check it with `hht3d info`, or store normals (nx, ny, nz) in the file") from None
+        normals = np.asarray(pcd.normals, dtype=np.float64)
+    if np.einsum("ij,ij->", normals, centered) < 0:
+        normals = -normals
+    return normals
+
+
+def principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Singular values (descending) and principal axes of centred points; collinear points are an error."""
+    _, spread, axes = np.linalg.svd(centered, full_matrices=False)
+    if spread[1] <= FLAT * spread[0]:
+        raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two "
+                         "directions")
+    return spread, axes

@@ -1,0 +1,71 @@
+"""Conversion between :class:`~hht3d.geometry.surface.Surface` and Open3D geometries (legacy and tensor)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+from ..geometry.surface import Surface
+from .formats import checked_name
+from .write import per_vertex
+
+__all__ = ["surface_from_open3d", "surface_to_open3d"]
+
+
+def surface_from_open3d(geometry, *, clean: bool = True, name: str | None = None, **options) -> Surface:
+    """Build a surface from an Open3D legacy or tensor ``TriangleMesh`` / ``PointCloud``.
+
+    Colours and (tensor geometries) every other float vertex attribute are
+    carried over; point-cloud normals are kept when present.
+    """
+    import open3d as o3d
+
+    if isinstance(geometry, o3d.geometry.TriangleMesh):
+        data = {"vertices": np.asarray(geometry.vertices), "faces": np.asarray(geometry.triangles)}
+        if geometry.has_vertex_colors():
+            data["colors"] = np.asarray(geometry.vertex_colors)
+    elif isinstance(geometry, o3d.geometry.PointCloud):
+        data = {"vertices": np.asarray(geometry.points), "faces": None}
+        if geometry.has_normals():
+            data["normals"] = np.asarray(geometry.normals)
+        if geometry.has_colors():
+            data["colors"] = np.asarray(geometry.colors)
+    elif isinstance(geometry, (o3d.t.geometry.TriangleMesh, o3d.t.geometry.PointCloud)):
+        is_mesh = isinstance(geometry, o3d.t.geometry.TriangleMesh)
+        attrs = geometry.vertex if is_mesh else geometry.point
+        data = {"vertices": attrs["positions"].numpy(),
+                "faces": geometry.triangle["indices"].numpy() if is_mesh and "indices" in geometry.triangle
+                else None}
+        n = len(data["vertices"])
+        for key in list(attrs):
+            values = attrs[key].numpy()
+            if key == "colors":
+                data["colors"] = values.astype(np.float64) / (255.0 if values.dtype.kind in "iu" else 1.0)
+            elif key == "normals" and not is_mesh:
+                data["normals"] = values
+            elif key not in ("positions", "normals") and values.size == n:
+                data.setdefault("attributes", {})[key] = values.reshape(n).astype(np.float64)
+    else:
+        raise InputError(f"expected an Open3D TriangleMesh or PointCloud, got {type(geometry).__name__}")
+    if len(data["vertices"]) == 0:
+        raise InputError(f"{name or 'open3d geometry'}: the geometry is empty")
+    build = Surface.cleaned if clean else Surface
+    return build(**data, name=name, **options)
+
+
+def surface_to_open3d(surface: Surface, attributes: dict | None = None):
+    """Tensor ``TriangleMesh``/``PointCloud`` carrying the surface's attributes and ``attributes``
+    as (n, 1) float vertex attributes."""
+    import open3d as o3d
+    import open3d.core as o3c
+
+    geometry = (o3d.t.geometry.TriangleMesh() if surface.is_mesh else o3d.t.geometry.PointCloud())
+    store = geometry.vertex if surface.is_mesh else geometry.point
+    store["positions"] = o3c.Tensor(surface.vertices)
+    store["normals"] = o3c.Tensor(surface.normals)
+    if surface.colors is not None:
+        store["colors"] = o3c.Tensor(surface.colors)
+    if surface.is_mesh:
+        geometry.triangle["indices"] = o3c.Tensor(surface.faces)
+    for key, values in {**surface.attributes, **(attributes or {})}.items():
+        store[checked_name(key)] = o3c.Tensor(per_vertex(surface, key, values)[:, None])
+    return geometry

@@ -1,0 +1,87 @@
+"""Writing surfaces and per-vertex fields: binary PLY (every field a vertex property), NPZ, coloured PLY.
+
+Every write is atomic (:func:`hht3d.io.atomic.atomic_path`).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..geometry.surface import Surface
+from .atomic import atomic_path
+from .formats import checked_name
+
+__all__ = ["per_vertex", "write_ply", "write_npz", "field_colors", "write_colored_ply"]
+
+
+def per_vertex(surface: Surface, key: str, values) -> np.ndarray:
+    a = np.asarray(values, dtype=np.float64)
+    if a.shape != (surface.n_vertices,):
+        raise InputError(f"attribute {key!r} has shape {a.shape}; expected ({surface.n_vertices},)")
+    return a
+
+
+def write_ply(path, surface: Surface, attributes: dict | None = None, *, colors=None) -> Path:
+    """Write the surface with named float64 per-vertex ``attributes`` to a binary PLY.
+
+    Positions and normals are float64; ``colors`` (n, 3) in [0, 1] (default:
+    the surface's own) become uchar red/green/blue.  The file's stored scalars
+    (``surface.attributes``) are written too unless overridden by name.
+    """
+    from plyfile import PlyData, PlyElement
+
+    fields = {**surface.attributes, **(attributes or {})}
+    columns = {"x": surface.vertices[:, 0], "y": surface.vertices[:, 1], "z": surface.vertices[:, 2]}
+    normals = surface.normals
+    columns.update(nx=normals[:, 0], ny=normals[:, 1], nz=normals[:, 2])
+    dtype = [(k, "f8") for k in columns]
+    colors = surface.colors if colors is None else np.asarray(colors, dtype=np.float64)
+    if colors is not None:
+        rgb = np.clip(np.round(colors * 255.0), 0, 255).astype(np.uint8)
+        columns.update(red=rgb[:, 0], green=rgb[:, 1], blue=rgb[:, 2])
+        dtype += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
+    for key, values in fields.items():
+        columns[checked_name(key)] = per_vertex(surface, key, values)
+        dtype.append((key, "f8"))
+    vertex = np.empty(surface.n_vertices, dtype=dtype)
+    for key, values in columns.items():
+        vertex[key] = values
+    elements = [PlyElement.describe(vertex, "vertex")]
+    if surface.is_mesh:
+        face = np.empty(len(surface.faces), dtype=[("vertex_indices", "i4", (3,))])
+        face["vertex_indices"] = surface.faces
+        elements.append(PlyElement.describe(face, "face"))
+    with atomic_path(path) as tmp:
+        PlyData(elements, text=False).write(str(tmp))
+    return Path(path)
+
+
+def write_npz(path, arrays: dict) -> Path:
+    """Write a compressed ``.npz`` of named arrays atomically."""
+    with atomic_path(path) as tmp, open(tmp, "wb") as handle:
+        np.savez_compressed(handle, **{k: np.asarray(v) for k, v in arrays.items()})
+    return Path(path)
+
+
+def field_colors(values, *, cmap: str = "viridis", limits=None) -> np.ndarray:
+    """Map a scalar field to RGB in [0, 1]; default limits: 1st and 99th percentile."""
+    import matplotlib
+
+    values = np.asarray(values, dtype=np.float64)
+    finite = values[np.isfinite(values)]
+    if finite.size == 0:
+        raise InputError("the field has no finite values to colour")
+    lo, hi = limits if limits is not None else np.percentile(finite, [1, 99])
+    scale = (values - lo) / (hi - lo) if hi > lo else np.full_like(values, 0.5)
+    rgba = matplotlib.colormaps[cmap](np.clip(np.nan_to_num(scale, nan=0.0), 0.0, 1.0))
+    return rgba[:, :3]
+
+
+def write_colored_ply(path, surface: Surface, values, *, cmap: str = "viridis", limits=None,
+                      name: str = "field") -> Path:
+    """Write a PLY whose vertex colours show one field (for any mesh viewer); the raw
+    values are kept as attribute ``name``."""
+    values = per_vertex(surface, name, values)
+    return write_ply(path, surface, {name: values}, colors=field_colors(values, cmap=cmap, limits=limits))
