@@ -35,13 +35,14 @@ from .summary import (SUMMARY_FILES, ItemSummary, item_summary, quality_fields, 
 
 __all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary",
            "summary_paths", "item_summary", "skipped_summary", "quality_fields", "SUMMARY_FILES", "MAX_ERROR",
-           "FORMATS", "items_graph"]
+           "RESULT_SUFFIXES", "items_graph"]
 
-#: Output formats of a dataset item, by file suffix.
-FORMATS = (".ply", ".npz")
+#: The files a dataset item's result can be saved as (:meth:`HHTResult.save`); a pipeline's
+#: output formats per kind of result are :data:`hht3d.pipeline.FORMATS`.
+RESULT_SUFFIXES = (".ply", ".npz")
 
 
-def output_paths(source, out_dir, formats=FORMATS, pattern: str = "{stem}_hht") -> list:
+def output_paths(source, out_dir, formats=RESULT_SUFFIXES, pattern: str = "{stem}_hht") -> list:
     """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format (paths or URLs)."""
     base = pattern.format(stem=stem(source))
     return [join(out_dir, f"{base}{suffix}") for suffix in formats]
@@ -70,11 +71,11 @@ def _check_options(signal: str, formats) -> None:
     if signal not in SIGNALS:
         raise InputError(f"unknown signal {signal!r}; run_dataset takes one of {sorted(SIGNALS)}")
     for suffix in formats:
-        if suffix not in FORMATS:
-            raise InputError(f"unknown output format {suffix!r}; run_dataset writes {', '.join(FORMATS)}")
+        if suffix not in RESULT_SUFFIXES:
+            raise InputError(f"unknown output format {suffix!r}; run_dataset writes {', '.join(RESULT_SUFFIXES)}")
 
 
-def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=FORMATS,
+def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=RESULT_SUFFIXES,
                   pattern: str = "{stem}_hht", resume: bool = False, overwrite: bool = False,
                   load_options: dict | None = None, run: str | None = None, storage_options: dict | None = None,
                   **hht_options):
