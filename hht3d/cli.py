@@ -78,10 +78,15 @@ def _execute(plan, args) -> int:
     from .graph.dataset import summary_paths, write_summary
     from .graph.scheduling import ClusterLost
     from .pipeline import failures, run_pipeline
+    from .pipeline.resources import check_resources, resource_lines
     from .pipeline.runner import output_folder
     from .stopping import Stopped, clean_stop
 
     folder = output_folder(plan)
+    if not args.quiet:
+        for line in resource_lines(plan):
+            print(redact(line), file=sys.stderr)
+    check_resources(plan)
     try:
         rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
                             progress=False if args.quiet else None, resume=args.resume,
@@ -118,15 +123,19 @@ def _demo(args) -> int:
 
 def _validate(args) -> int:
     from .errors import OutputError
+    from .pipeline.resources import check_resources, resource_lines
     from .pipeline.runner import output_folder
 
     plan = _plan(args.pipeline, args.set)
     print(redact(plan.describe()))
+    for line in resource_lines(plan):
+        print(redact(line))
+    check_resources(plan)
     try:
         output_folder(plan).check_overwrites(plan.written_paths())
     except OutputError as exc:
         print(redact(f"note: {exc}"))
-    print("valid: parameters, inputs and output locations checked; nothing was run")
+    print("valid: parameters, inputs, output locations and memory checked; nothing was run")
     return 0
 
 
