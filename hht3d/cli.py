@@ -83,10 +83,10 @@ def _execute(plan, args) -> int:
     from .stopping import Stopped, clean_stop
 
     folder = output_folder(plan)
+    check_resources(plan)
     if not args.quiet:
         for line in resource_lines(plan):
-            print(redact(line), file=sys.stderr)
-    check_resources(plan)
+            print(redact(line), flush=True)
     try:
         rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
                             progress=False if args.quiet else None, resume=args.resume,
@@ -135,7 +135,7 @@ def _validate(args) -> int:
         output_folder(plan).check_overwrites(plan.written_paths())
     except OutputError as exc:
         print(redact(f"note: {exc}"))
-    print("valid: parameters, inputs, output locations and memory checked; nothing was run")
+    print("valid: parameters, inputs and output locations checked, memory estimated; nothing was run")
     return 0
 
 

@@ -92,7 +92,7 @@ def test_validate_prints_the_planned_graph_and_runs_nothing(pipeline, tmp_path, 
     assert "hht        hht(surface=load, signal=curvature) -> hht" in out
     assert "max_imfs=2, riesz_tasks=3" in out
     assert "dask graph" not in out  # validation builds no graph (issue 15)
-    assert "output locations checked; nothing was run" in out
+    assert "output locations checked, memory estimated; nothing was run" in out
     assert not (tmp_path / "out").exists()
     assert main(["validate", str(pipeline), "--set", "steps.hht.op=hhtt"]) == 1
     assert "unknown op 'hhtt'; did you mean 'hht'?" in capsys.readouterr().err
