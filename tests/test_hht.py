@@ -87,3 +87,19 @@ def test_constant_signal_has_no_imfs():
     assert r.n_imfs == 0 and np.allclose(r.residue, 2.0)
     assert r.monogenic.amplitude.shape == (0, s.n_vertices)
     assert set(r.vertex_attributes()) == {"signal", "residue"}
+
+
+@pytest.mark.parametrize("frequency", ["phase", "gradient"])
+def test_hht_settings_reach_every_stage(frequency):
+    """hht's Riesz record is the one the monogenic stage uses: its frequencies equal
+    monogenic() of the same IMFs with the same settings, and the two estimators differ."""
+    from hht3d import data_path, load, monogenic
+    from hht3d.geometry.signals import mean_curvature
+
+    spot = load(data_path("spot.ply"))
+    result = hht(spot, mean_curvature(spot), emd={"max_imfs": 2}, riesz={"frequency": frequency, "gradient": "fem"})
+    direct = monogenic(spot, result.imfs, frequency=frequency, gradient="fem")
+    np.testing.assert_allclose(result.monogenic.frequency, direct.frequency, rtol=0, atol=1e-9 * direct.frequency.max())
+    other = monogenic(spot, result.imfs, frequency="gradient" if frequency == "phase" else "phase", gradient="fem")
+    assert np.abs(other.frequency - direct.frequency).max() > 0.1 * direct.frequency.max()
+    assert result.info["riesz"]["frequency"] == frequency
