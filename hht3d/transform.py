@@ -181,13 +181,20 @@ def decomposition_stage(stages: Stages, surface, signal, emd: EMDOptions, ensemb
     return stages.task("eemd_combine", combine_eemd)(surface, signal, members)
 
 
-def hht_stages(stages: Stages, surface, signal, *, emd: EMDOptions, riesz: RieszOptions,
-               ensemble: EnsembleOptions | None = None, backend: str | None = None) -> dict:
+def hht_stages(stages: Stages, surface, signal, *, emd: EMDOptions | dict | None = None,
+               riesz: RieszOptions | dict | None = None, ensemble: EnsembleOptions | dict | None = None,
+               backend: str | None = None) -> dict:
     """The HHT's stages in order (Alg. 2), by name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
 
     The one list of the stages: :func:`hht` runs it at once, :func:`hht3d.graph.transform`
-    as lazy tasks, and the pipeline's ``hht`` step through the graph.
+    as lazy tasks, and the pipeline's ``hht`` step through the graph.  The settings (records
+    or dicts) are checked here, before the first stage.
     """
+    if ensemble is None:
+        emd = EMDOptions.of(emd)
+    else:
+        emd, ensemble = ensemble_settings(emd, ensemble, {})
+    riesz = RieszOptions.of(riesz)
     decomposition = decomposition_stage(stages, surface, signal, emd, ensemble, backend)
     imfs = stages.task("imfs", _imfs)(decomposition)
     potential = stages.potential(surface, imfs, riesz, backend)
@@ -234,13 +241,8 @@ def hht(surface: Surface, signal, *, emd: EMDOptions | dict | None = None, riesz
     >>> result.info["riesz"]["tol"]
     1e-08
     """
-    if ensemble is None:
-        emd_options, ensemble_options = EMDOptions.of(emd), None
-    else:
-        emd_options, ensemble_options = ensemble_settings(emd, ensemble, {})
     stages = _Eager()
-    result = hht_stages(stages, surface, signal, emd=emd_options, riesz=RieszOptions.of(riesz),
-                        ensemble=ensemble_options, backend=backend)["hht"]
+    result = hht_stages(stages, surface, signal, emd=emd, riesz=riesz, ensemble=ensemble, backend=backend)["hht"]
     spent = stages.seconds
     result.info["seconds"] = {"emd": sum(spent.get(k, 0.0) for k in ("emd", "eemd_member", "eemd_combine")),
                               "spectra": spent.get("riesz", 0.0) + spent.get("monogenic", 0.0)}

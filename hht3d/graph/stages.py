@@ -172,13 +172,8 @@ def transform(builder: Builder, surface, signal, *, emd: EMDOptions | dict | Non
               backend: str | None = None, riesz_tasks: int | None = None) -> dict:
     """The tasks of one HHT by stage name (:func:`hht3d.transform.hht_stages`): ``emd``, ``imfs``,
     ``riesz``, ``monogenic``, ``hht``.  Settings are checked now, before any task runs."""
-    if ensemble is None:
-        emd_options, ensemble_options = EMDOptions.of(emd), None
-    else:
-        emd_options, ensemble_options = ensemble_settings(emd, ensemble, {})
-    stages = Builder(builder.guard, riesz_tasks)
-    return hht_stages(stages, surface, signal, emd=emd_options, riesz=RieszOptions.of(riesz),
-                      ensemble=ensemble_options, backend=backend)
+    return hht_stages(Builder(builder.guard, riesz_tasks), surface, signal, emd=emd, riesz=riesz,
+                      ensemble=ensemble, backend=backend)
 
 
 def transform_file(builder: Builder, path, signal: str = "mean_curvature", load_options: dict | None = None,

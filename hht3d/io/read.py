@@ -169,6 +169,25 @@ def read_ply_header(path) -> PlyHeader:
     raise InputError(f"{path}: not a readable PLY file (no end_header)")
 
 
+def read_npz(path) -> dict[str, np.ndarray]:
+    """Every array of a ``.npz`` file (no pickled objects).
+
+    Raises
+    ------
+    InputError
+        Not a regular file, or not a readable ``.npz``.
+    """
+    import zipfile
+
+    path = Path(path)
+    check_regular_file(path, "an .npz file")
+    try:
+        with np.load(path, allow_pickle=False) as stored:
+            return {name: stored[name] for name in stored.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise InputError(f"{path}: not a readable .npz file ({one_line(exc)})") from None
+
+
 def read_npz_shapes(path) -> dict[str, tuple[int, ...]]:
     """The shape of every array in a ``.npz`` file, from the array headers alone (no data is read).
 

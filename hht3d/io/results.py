@@ -7,13 +7,11 @@ figures and pages equal those of the result that was saved.
 """
 from __future__ import annotations
 
-import zipfile
 from pathlib import Path
 
-import numpy as np
-
-from ..errors import InputError, one_line
+from ..errors import InputError
 from ..geometry.surface import Surface
+from .read import read_npz
 from ..spectral.monogenic_signal import MonogenicSignal
 from ..transform import HHTResult
 
@@ -50,11 +48,7 @@ def load_result(path) -> HHTResult:
     path = Path(path)
     if path.suffix.lower() != ".npz":
         raise InputError(f"{path}: load_result reads the .npz of HHTResult.save (a .ply keeps no Riesz vectors)")
-    try:
-        with np.load(path, allow_pickle=False) as stored:
-            arrays = {name: stored[name] for name in stored.files}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        raise InputError(f"{path}: not a readable .npz file ({one_line(exc)})") from None
+    arrays = read_npz(path)
     missing = [name for name in RESULT_ARRAYS if name not in arrays]
     if missing:
         raise InputError(f"{path}: no {', '.join(missing)}; expected a file written by HHTResult.save")

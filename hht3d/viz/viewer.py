@@ -45,15 +45,14 @@ the spectrum and the quality figures always come from every vertex.
 from __future__ import annotations
 
 import json
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
 from ..io.atomic import atomic_path
-from ..io.formats import check_regular_file
 from ..io.read import load as load_surface
+from ..io.read import read_npz
 from ..decomposition.quality import Quality, decomposition_quality
 from .page import viewer_page
 from .page_data import colorscale, field_title, figure_json, order, quality_data, size_text, spectrum_data, typed
@@ -239,12 +238,7 @@ def read_fields(path) -> tuple[Surface, dict, np.ndarray | None]:
     if path.suffix.lower() != ".npz":
         surface = load_surface(path, clean=False)
         return surface, dict(surface.attributes), None
-    check_regular_file(path, "an .npz file")
-    try:
-        with np.load(path, allow_pickle=False) as stored:
-            arrays = {k: stored[k] for k in stored.files}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        raise InputError(f"{path}: not a readable .npz file ({exc})") from None
+    arrays = read_npz(path)
     if "vertices" not in arrays:
         raise InputError(f"{path}: no 'vertices' array; expected a file written by HHTResult.save")
     try:
