@@ -57,7 +57,8 @@ def _row_lines(row) -> list[str]:
     size = "".join([f", {row.vertices} vertices" if row.vertices is not None else "",
                     f", {row.imfs} IMFs" if row.imfs is not None else ""])
     if row.status == "ok":
-        quality = f", energy ratio {row.energy_ratio:.3g}" if row.energy_ratio is not None else ""
+        quality = (f", energy ratio {row.energy_ratio:.3g}, IO {row.orthogonality_index:+.2f}"
+                   if row.energy_ratio is not None else "")
         lines = [f"{row.source}: ok{size}, {row.seconds:.1f} s{quality}"]
     elif row.status == "skipped":
         lines = [f"{row.source}: skipped (outputs complete){size}; not re-run"]

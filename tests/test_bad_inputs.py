@@ -305,7 +305,7 @@ def _quality_columns(ran: Ran) -> None:
     (row,) = json.loads((ran.out / "summary.json").read_text())
     assert row["energy_ratio"] > 0 and isinstance(row["orthogonality_index"], float)
     header = (ran.out / "summary.csv").read_text().splitlines()[0]
-    assert "energy_ratio,orthogonality_index,warnings" in header
+    assert "energy_ratio,orthogonality_index,io_leaking,io_cancelling,warnings" in header
     assert f"energy ratio {row['energy_ratio']:.3g}" in ran.stdout
 
 

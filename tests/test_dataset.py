@@ -73,7 +73,7 @@ def test_summary_rows_carry_the_quality(tmp_path):
                        emd={"max_imfs": 2}, riesz_tasks=1)
     (row,) = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert row["energy_ratio"] == rows[0].energy_ratio > 0 and isinstance(row["warnings"], list)
-    assert "energy_ratio,orthogonality_index,warnings" in (tmp_path / "out" / "summary.csv").read_text()
+    assert "energy_ratio,orthogonality_index,io_leaking,io_cancelling,warnings" in (tmp_path / "out" / "summary.csv").read_text()
 
 
 def test_unwritable_output_folder_fails_before_computing(tmp_path, monkeypatch):

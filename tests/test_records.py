@@ -56,7 +56,8 @@ def test_emd_takes_a_record_a_dict_or_overrides_alike():
     h = mean_curvature(spot)
     a = emd(spot, h, PAPER_OPTIONS, max_imfs=2)
     b = emd(spot, h, {**PAPER_OPTIONS.as_dict(), "max_imfs": 2})
-    c = emd(spot, h, envelope="biharmonic", cancellation_tolerance=None, mean_correction=None, max_imfs=2)
+    c = emd(spot, h, envelope="biharmonic", cancellation_tolerance=None, mean_correction=None, boundary_extrema=True,
+            max_imfs=2)
     assert a.info["options"] == b.info["options"] == c.info["options"]
     np.testing.assert_array_equal(a.imfs, b.imfs)
     np.testing.assert_array_equal(a.imfs, c.imfs)

@@ -143,15 +143,21 @@ def emd(surface: Surface, signal, options: EMDOptions | dict | None = None, *, b
         ``1 + δ`` one IMF extraction may reach before more tension is tried;
         default ``δ = 0.05``.  ``None`` switches the guard off.
     mean_correction : float or None
-        ``c`` of the local-mean correction (:mod:`.sifting`): the part of each
-        IMF slower than ``c`` times its extrema spacing moves to the
-        residue; default 0.6, ``None`` off.  :data:`~hht3d.decomposition.options.PAPER_OPTIONS` is the
+        ``c`` of the local-mean correction (:mod:`.sifting`): each IMF's
+        mean and its part slower than ``c`` times its extrema spacing move
+        to the residue; default 0.6, ``None`` off.  :data:`~hht3d.decomposition.options.PAPER_OPTIONS` is the
         paper's method.
     extrema : {"strict", "relaxed"}
         Extremum rule of :func:`local_extrema`: 1-ring (default) or the
         relaxed ``ring``-ring rule with fraction ``ratio`` (Sec. 5.2).
     ring, ratio : int, float
         Used with ``extrema="relaxed"``; defaults 2 and 0.8 as in Sec. 5.2.
+    boundary_extrema : bool
+        Whether vertices on an open boundary may be extrema.  Default
+        ``False``: like the mirrored ends of 1-D EMD codes, a boundary creates
+        no extremum, so a trend across an open surface stays in the residue
+        (with the Neumann envelopes of :mod:`.envelopes`).  ``True`` is the
+        paper's rule (:data:`~hht3d.decomposition.options.PAPER_OPTIONS`).
     energy_threshold : float
         Decomposition stops when the residue's fluctuation energy
         ``∫(r − r̄)² dA`` (``r̄`` its mean per component) falls below this

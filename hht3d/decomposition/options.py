@@ -95,6 +95,8 @@ class EMDOptions(Record):
     extrema: str = option("strict", "extremum rule: above the whole 1-ring, or above ratio of the ring-ring (Sec. 5.2)", choices=EXTREMA_RULES)
     ring: int = option(2, "neighbourhood in edges of the relaxed extremum rule", minimum=1, maximum=MAX_RING)
     ratio: float = option(0.8, "fraction of the neighbourhood a relaxed extremum exceeds", minimum=0.5, maximum=1, open_minimum=True)
+    boundary_extrema: bool = option(False, "let open-boundary vertices be extrema (the paper's rule; a trend "
+                                    "then enters the IMFs)")
     energy_threshold: float = option(1e-8, "stop when the residue keeps less of the energy", minimum=0,
                                      maximum=1)
 
@@ -124,4 +126,5 @@ EMD_DEFAULTS = EMDOptions()
 #: The defaults of :func:`~hht3d.decomposition.eemd`'s ensemble.
 ENSEMBLE_DEFAULTS = EnsembleOptions()
 #: The paper's EMD (Sec. 4.1): thin-plate envelopes, no cancellation guard, no local-mean correction.
-PAPER_OPTIONS = EMDOptions(envelope="biharmonic", cancellation_tolerance=None, mean_correction=None)
+PAPER_OPTIONS = EMDOptions(envelope="biharmonic", cancellation_tolerance=None, mean_correction=None,
+                           boundary_extrema=True)

@@ -10,7 +10,10 @@ each connected component, ``f_k`` the IMFs and ``r`` the residue,
   M-orthogonal, large when they overshoot and cancel each other;
 * **index of orthogonality** (Huang et al. 1998) ``IO = Σ_{j≠k} x_jᵀ M x_k /
   s̃ᵀ M s̃`` over the IMFs and ``r̃``: 0 when orthogonal, negative when they
-  cancel;
+  cancel, positive when they *leak* (one component split over neighbouring
+  IMFs).  A total near 0 can hide both, so the positive and the negative
+  cross terms are also summed apart (``io_leaking >= 0``, ``io_cancelling <=
+  0``; their sum is ``IO``);
 * **energy share** of each IMF and of the residue, ``x_kᵀ M x_k`` over their
   sum;
 * **signal spike** ``max|s̃| / p99|s̃|``: large where the signal itself is
@@ -38,6 +41,7 @@ __all__ = [
     "decomposition_quality",
     "ENERGY_RATIO_LIMIT",
     "ORTHOGONALITY_LIMIT",
+    "LEAKAGE_LIMIT",
     "SPIKE_LIMIT",
 ]
 
@@ -45,6 +49,11 @@ __all__ = [
 ENERGY_RATIO_LIMIT = 1.5
 #: Index of orthogonality below which a decomposition is reported as cancelling.
 ORTHOGONALITY_LIMIT = -0.25
+#: Index of orthogonality above which a decomposition is reported as leaking, the mirror of
+#: :data:`ORTHOGONALITY_LIMIT`.  Huang et al. (1998) call ``|IO| < 0.05-0.1`` good in 1-D; on
+#: surfaces the defaults measure +0.13 to +0.30 (``benchmarks/results/quality.md``), so a limit of
+#: 0.1 would flag nearly every mesh and say nothing.
+LEAKAGE_LIMIT = 0.25
 #: ``max|s̃| / p99|s̃|`` above which the signal is reported as spiking.
 SPIKE_LIMIT = 20.0
 
@@ -61,6 +70,9 @@ class Quality:
     ----------
     energy_ratio : float
     orthogonality_index : float
+        ``io_leaking + io_cancelling``.
+    io_leaking, io_cancelling : float
+        Sums of the positive and of the negative cross terms of ``IO``.
     energy_share : (k + 1,) ndarray
         Share of each IMF, then of the residue; sums to 1.
     signal_spike : float
@@ -71,6 +83,8 @@ class Quality:
 
     energy_ratio: float
     orthogonality_index: float
+    io_leaking: float
+    io_cancelling: float
     energy_share: np.ndarray
     signal_spike: float
     warnings: tuple[str, ...] = ()
@@ -81,15 +95,17 @@ class Quality:
         return not self.warnings
 
     def summary(self) -> str:
-        """One line: ``energy ratio 1.12, IO -0.06, spike 3.1`` plus ``; WARNING: ...``."""
-        text = (f"energy ratio {self.energy_ratio:.3g}, IO {self.orthogonality_index:.3g}, "
+        """One line: ``energy ratio 1.12, IO -0.06 (+0.03 leaking, -0.09 cancelling), spike 3.1``
+        plus ``; WARNING: ...``."""
+        text = (f"energy ratio {self.energy_ratio:.3g}, IO {self.orthogonality_index:.3g} "
+                f"({self.io_leaking:+.2g} leaking, {self.io_cancelling:+.2g} cancelling), "
                 f"spike {self.signal_spike:.3g}")
         return text + "".join(f"; WARNING: {w}" for w in self.warnings)
 
     def as_dict(self) -> dict:
         """Plain numbers and strings, for JSON summaries."""
         return {"energy_ratio": self.energy_ratio, "orthogonality_index": self.orthogonality_index,
-                "energy_share": [float(x) for x in self.energy_share], "signal_spike": self.signal_spike,
+                "io_leaking": self.io_leaking, "io_cancelling": self.io_cancelling, "energy_share": [float(x) for x in self.energy_share], "signal_spike": self.signal_spike,
                 "warnings": list(self.warnings)}
 
 
@@ -134,12 +150,14 @@ def decomposition_quality(surface: Surface, signal, imfs, residue) -> Quality:
     energies = np.diag(gram)
     total = float(energies.sum())
     if reference <= 0:
-        return Quality(1.0, 0.0, np.r_[np.zeros(len(f)), 1.0], 1.0)
+        return Quality(1.0, 0.0, 0.0, 0.0, np.r_[np.zeros(len(f)), 1.0], 1.0)
     ratio = total / reference
-    io = float((gram.sum() - total) / reference)
+    cross = gram - np.diag(energies)
+    leaking, cancelling = float(cross[cross > 0].sum() / reference), float(cross[cross < 0].sum() / reference)
+    io = leaking + cancelling
     share = energies / total if total > 0 else np.r_[np.zeros(len(f)), 1.0]
     spike = _spike(s_tilde)
-    return Quality(ratio, io, share, spike, _warnings(ratio, io, spike))
+    return Quality(ratio, io, leaking, cancelling, share, spike, _warnings(ratio, io, spike))
 
 
 def _warnings(ratio: float, io: float, spike: float) -> tuple[str, ...]:
@@ -149,6 +167,9 @@ def _warnings(ratio: float, io: float, spike: float) -> tuple[str, ...]:
                      f"or IO {io:.3g} < {ORTHOGONALITY_LIMIT}): envelopes overshoot between sparse "
                      "extrema; keep the default envelope and cancellation guard, or try EEMD "
                      "(ensemble_size) or a higher emd option tension")
+    if io > LEAKAGE_LIMIT:
+        found.append(f"neighbouring IMFs share content (IO {io:.3g} > {LEAKAGE_LIMIT}): a component is split "
+                     "over several IMFs; read adjacent IMFs together, or try EEMD (ensemble_size)")
     if spike > SPIKE_LIMIT:
         found.append(f"the signal spikes to {spike:.3g}x its 99th percentile: likely tiny-area, needle "
                      "or cap triangles; use the curvature signals with their default min_area, or "

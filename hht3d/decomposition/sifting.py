@@ -25,18 +25,33 @@ Envelopes through sparse extrema leave a slow part in every IMF: a bump
 spanning several of its oscillations that the next IMFs and the residue
 then carry with the opposite sign (``benchmarks/results/quality.md``).  An IMF has zero local mean by
 definition, so after sifting, the part of ``f_k`` slower than its own
-oscillation is moved to the residue:
+oscillation is found,
 
-    m_k = (M + t² L M̃⁻¹ L)⁻¹ M f_k,   t = (c d_k)²,   f_k ← f_k − m_k,
+    G = (M + t² L M̃⁻¹ L)⁻¹ M,   t = (c d_k)²,   m_k = (3G² − 2G³) f_k,
 
 with ``d_k`` the IMF's scale (its extrema spacing or ``π`` over its RMS
 wavenumber, the larger) and ``c = mean_correction``.  ``L`` is the membrane
 part of the Laplacian and ``M̃`` the vertex areas floored at
 :data:`~hht3d.decomposition.envelopes.MASS_FLOOR` of their median, so the system stays definite on scans
-with caps and tiny areas.  The filter passes a fraction ``1 / (1 + (c d_k
-ω)⁴)`` of frequency ``ω``: at the IMF's own ``ω ≈ π/d_k`` (``c = 0.6``) 7%,
-at a third of it 86%.  One more numeric factorization per IMF, on the
-envelopes' pattern.
+with caps and tiny areas.  ``G`` passes a fraction ``g = 1 / (1 + (c d_k
+ω)⁴)`` of frequency ``ω`` and its smoothstep a fraction ``3g² − 2g³``, sharper
+around ``g = ½``: at the IMF's own
+``ω ≈ π/d_k`` (``c = 0.6``) 1.5% (``G`` alone: 7%), at a third of it 95%
+(86%).  One more numeric factorization per IMF, on the envelopes' pattern,
+and three solves.
+
+The IMF's mean on each connected component moves to the residue too, so
+every IMF has zero mean and the energy ratio and the index of orthogonality
+add up to 1 (:mod:`hht3d.decomposition.quality`):
+
+    f_k ← f̃_k − m̃_k      (tildes: fluctuations about the per-component mean).
+
+IMFs still *leak* (IO +0.13 to +0.30 on the models, as before this filter):
+a share of each IMF's own-scale content stays in the residue and returns in
+the next IMF.  Moving only the share of ``m_k`` that leaves the IMF
+orthogonal to the rest brought IO within ±0.12, but by adding cancelling
+cross terms, and it recovered known components worse
+(``benchmarks/results/design_notes.md``, "Leakage").
 """
 from __future__ import annotations
 
@@ -81,6 +96,7 @@ class Sifter:
         self.labels = surface.component_labels
         self.n_components = surface.n_components
         self.mass = surface.mass_diagonal
+        self.boundary = surface.boundary_vertices
         self.max_constraint_error = 0.0
 
     def extrema(self, h: np.ndarray):
@@ -88,6 +104,8 @@ class Sifter:
         o = self.options
         is_max, is_min = extrema_masks(self.surface, h, o.extrema,
                                         1 if o.extrema == "strict" else o.ring, o.ratio)
+        if not o.boundary_extrema:
+            is_max, is_min = is_max & ~self.boundary, is_min & ~self.boundary
         has_max = np.bincount(self.labels[is_max], minlength=self.n_components) > 0
         has_min = np.bincount(self.labels[is_min], minlength=self.n_components) > 0
         passive = ~(has_max & has_min)[self.labels]
@@ -108,12 +126,13 @@ class Sifter:
         return g
 
     def corrected(self, imf: np.ndarray, info: dict) -> np.ndarray:
-        """``f_k − m_k``, the IMF without its local mean (module notes); ``info`` records ``mean_share``.
+        """``f_k − f̄_k − m̃_k``: the IMF without its mean and its local mean (module notes).
 
-        ``d_k`` is the larger of the extrema spacing and ``π / ω_k`` with ``ω_k² = f_kᵀ L f_k /
-        f_kᵀ M f_k`` (the RMS wavenumber): extrema crowding in one region overstate the scale,
-        spikes at bad triangles understate it, and only an understated scale is harmful (the
-        filter then takes the IMF itself).
+        ``info`` records ``mean_share`` (``‖removed‖ / ‖f_k‖``).  ``d_k`` is the larger of the
+        extrema spacing and ``π / ω_k`` with ``ω_k² = f_kᵀ L f_k / f_kᵀ M f_k`` (the RMS
+        wavenumber): extrema crowding in one region overstate the scale, spikes at bad triangles
+        understate it, and only an understated scale is harmful (the filter then takes the IMF
+        itself).
         """
         c = self.options.mean_correction
         stiffness = float(imf @ (self.surface.stiffness @ imf))
@@ -125,12 +144,16 @@ class Sifter:
         data = (c * spacing) ** 4 * e.smoothing
         data[e.diagonal] += self.mass
         try:
-            mean = self.solver.factorize(e.matrix(data)).solve(self.mass * imf)
+            factor = self.solver.factorize(e.matrix(data))
+            g1 = factor.solve(self.mass * imf)
+            g2 = factor.solve(self.mass * g1)
+            slow = 3 * g2 - 2 * factor.solve(self.mass * g2)  # smoothstep 3G² − 2G³ of the filter G
         except NumericalError:  # not definite in floating point: leave the IMF as sifted
             return imf
-        info["mean_share"] = float(np.sqrt(self.energy(mean) / max(self.energy(imf), 1e-300)))
         info["factorizations"] += 1
-        return imf - mean
+        removed = imf - fluctuation(self.surface, imf) + fluctuation(self.surface, slow)
+        info["mean_share"] = float(np.sqrt(self.energy(removed) / max(self.energy(imf), 1e-300)))
+        return imf - removed
 
     def energy(self, f: np.ndarray) -> float:
         """``‖f̃‖²_M`` of the fluctuation about the per-component mean."""

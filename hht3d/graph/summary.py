@@ -42,7 +42,8 @@ class ItemSummary:
     and why; ``outputs`` lists what was written before) or ``"skipped"``
     (``--resume``: ``vertices`` and ``imfs`` are read from the existing
     outputs; ``seconds`` and the quality are empty, since nothing ran).
-    ``energy_ratio``, ``orthogonality_index`` and ``warnings`` are the
+    ``energy_ratio``, ``orthogonality_index`` (with its ``io_leaking`` and
+    ``io_cancelling`` parts) and ``warnings`` are the
     quality of the item's last decomposition (:mod:`hht3d.decomposition.quality`).
     ``solver_advice`` says which extra to install when a slow sparse solver ran on a
     large mesh (:func:`hht3d.linalg.estimate.slow_fallback`).
@@ -55,6 +56,8 @@ class ItemSummary:
     seconds: float | None = None
     energy_ratio: float | None = None
     orthogonality_index: float | None = None
+    io_leaking: float | None = None
+    io_cancelling: float | None = None
     warnings: tuple[str, ...] = ()
     outputs: tuple[str, ...] = ()
     step: str | None = None
@@ -68,13 +71,14 @@ def summary_paths(out_dir) -> list:
 
 
 def quality_fields(decomposition, surface) -> dict:
-    """``energy_ratio``, ``orthogonality_index`` and ``warnings`` of an EMD or HHT result on ``surface``."""
+    """``energy_ratio``, ``orthogonality_index``, its two parts and ``warnings`` of an EMD or HHT result."""
     if isinstance(decomposition, HHTResult):
         quality = decomposition.quality
     else:
         imfs, residue = decomposition.imfs, decomposition.residue
         quality = decomposition_quality(surface, imfs.sum(axis=0) + residue, imfs, residue)
     return {"energy_ratio": quality.energy_ratio, "orthogonality_index": quality.orthogonality_index,
+            "io_leaking": quality.io_leaking, "io_cancelling": quality.io_cancelling,
             "warnings": tuple(quality.warnings)}
 
 

@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 
-from ..decomposition.quality import ENERGY_RATIO_LIMIT, ORTHOGONALITY_LIMIT, SPIKE_LIMIT, Quality
+from ..decomposition.quality import ENERGY_RATIO_LIMIT, LEAKAGE_LIMIT, ORTHOGONALITY_LIMIT, SPIKE_LIMIT, Quality
 from ..geometry.surface import Surface
 from ..spectral.spectrum import HilbertSpectrum
 from .render import camera
@@ -122,7 +122,9 @@ def quality_data(quality: Quality) -> dict:
     rows = [["energy ratio (1 when orthogonal)", f"{quality.energy_ratio:.3g}",
              quality.energy_ratio > ENERGY_RATIO_LIMIT],
             ["index of orthogonality (0 when orthogonal)", f"{quality.orthogonality_index:.3g}",
-             quality.orthogonality_index < ORTHOGONALITY_LIMIT],
+             not ORTHOGONALITY_LIMIT <= quality.orthogonality_index <= LEAKAGE_LIMIT],
+            ["  of which leaking (positive cross terms)", f"{quality.io_leaking:.3g}", False],
+            ["  of which cancelling (negative cross terms)", f"{quality.io_cancelling:.3g}", False],
             ["signal spike max|s̃| / p99|s̃|", f"{quality.signal_spike:.3g}", quality.signal_spike > SPIKE_LIMIT]]
     names = [f"IMF {k + 1}" for k in range(len(quality.energy_share) - 1)] + ["residue"]
     rows += [[f"energy share: {name}", f"{share:.1%}", False] for name, share in zip(names, quality.energy_share)]
