@@ -26,7 +26,7 @@ phases of :mod:`hht3d.linalg` (analysis 11, numeric factorization 22, solve 33)
 are timed and PARDISO's own memory report is read after phases 11 and 22
 (``iparm`` 15-18: peak symbolic, permanent, factor + solve memory in KB, nnz
 of the factor; peak = max(iparm15, iparm16 + iparm17)); ``spectral_bounds``,
-``monogenic_from_potential`` and ``envelope_operator`` are wrapped by timers.
+``monogenic_from_potential`` and ``envelope_energies`` are wrapped by timers.
 Per stage the peak RSS is measured by resetting the high-water mark at the
 stage's start (``/proc/self/clear_refs``); the case's peak is the largest.  Wall and CPU
 seconds (process time, all threads) are both recorded: the machine is shared,
@@ -200,10 +200,10 @@ class Recorder:
 
     def instrument(self) -> None:
         """Wrap the solver phases of every backend and a few sub-steps (benchmark only)."""
-        import hht3d.decomposition.decompose as emd_module
+        import hht3d.decomposition.envelopes as envelopes
         import hht3d.linalg.backends as linalg
         import hht3d.spectral.monogenic_signal as mono_module
-        import hht3d.spectral.riesz_transform as riesz
+        import hht3d.spectral.quadrature as quadrature
 
         recorder = self
         backends = linalg.SOLVER_BACKENDS
@@ -227,9 +227,9 @@ class Recorder:
         backends["pardiso"].pattern.run = run
         for impl in (backends["cholmod"].pattern, backends["superlu"].pattern):
             self._instrument_backend(impl)
-        riesz.spectral_bounds = self.timed("rt_bounds", riesz.spectral_bounds, "bounds")
+        quadrature.spectral_bounds = self.timed("rt_bounds", quadrature.spectral_bounds, "bounds")
         mono_module.monogenic_from_potential = self.timed("rt_quantities", mono_module.monogenic_from_potential)
-        emd_module.envelope_operator = self.timed("emd_operator_q", emd_module.envelope_operator)
+        envelopes.envelope_energies = self.timed("emd_operator_q", envelopes.envelope_energies)
 
 
 def _nbytes(*arrays) -> float:
@@ -240,11 +240,12 @@ def _sparse_mb(a) -> float:
     return (a.data.nbytes + a.indices.nbytes + a.indptr.nbytes) / 2 ** 20
 
 
-def run_case(name: str, path: Path, max_imfs: int | None) -> dict:
-    """The whole HHT of one mesh, stage by stage (runs in a fresh subprocess)."""
+def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper") -> dict:
+    """The whole HHT of one mesh, stage by stage (runs in a fresh subprocess); ``preset`` names
+    the EMD settings: ``"paper"`` (``PAPER_OPTIONS``) or ``"defaults"``."""
     import hht3d
     from hht3d import linalg
-    from hht3d.decomposition import PAPER_OPTIONS, emd
+    from hht3d.decomposition import EMD_DEFAULTS, PAPER_OPTIONS, emd
     from hht3d.spectral.monogenic_signal import monogenic
     from hht3d.spectral import quadrature_nodes
     from hht3d.geometry.signals import mean_curvature
@@ -268,7 +269,8 @@ def run_case(name: str, path: Path, max_imfs: int | None) -> dict:
             rec.peaks[f"operators:{key}"] = rec.checkpoint()
     with rec.stage("signal"):
         signal = mean_curvature(surface)
-    options = PAPER_OPTIONS.as_dict() | ({} if max_imfs is None else {"max_imfs": max_imfs})
+    chosen = {"paper": PAPER_OPTIONS, "defaults": EMD_DEFAULTS}[preset]
+    options = chosen.as_dict() | ({} if max_imfs is None else {"max_imfs": max_imfs})
     with rec.stage("emd"):
         decomposition = emd(surface, signal, **options)
     with rec.stage("rt"):
@@ -276,13 +278,14 @@ def run_case(name: str, path: Path, max_imfs: int | None) -> dict:
     info = decomposition.info
     m, mbar = surface.cache.get("riesz:bounds", (np.nan, np.nan))
     shifts = len(quadrature_nodes(m, mbar, 1e-8)[0]) if np.isfinite(m) else 0
-    q = surface.cache.get("emd:operator:biharmonic")
+    q = surface.cache.get("emd:energies")  # L M^-1 L, L and the smoothing operator on one pattern
     stages = rec.stages
     total = sum(stages[s]["seconds"] for s in STAGES)
     return {
         "case": name, "source": str(path), "vertices": surface.n_vertices,
         "faces": 0 if surface.faces is None else len(surface.faces), "components": surface.n_components,
-        "backend": linalg.default_backend(), "max_imfs": max_imfs if max_imfs is not None else 10,
+        "backend": linalg.default_backend(), "emd_options": preset,
+        "max_imfs": max_imfs if max_imfs is not None else 10,
         "imfs": info["n_imfs"], "sifts": info["sifts"], "factorizations": info["factorizations"],
         "stop_reason": info["stop_reason"], "shifts": shifts, "condition": mbar / m,
         "stages": stages, "operators_detail": timings, "timers": rec.timers, "solver": rec.solver,
@@ -296,7 +299,7 @@ def run_case(name: str, path: Path, max_imfs: int | None) -> dict:
         "peak_rss_mb": max(st["peak_mb"] for st in stages.values()),
         "baseline_rss_mb": baseline_mb, "peak_resets": rec.peak_resets,
         "memory_mb": {"L": _sparse_mb(surface.stiffness), "G_lsq": _sparse_mb(surface.gradient("lsq")),
-                      "Q": _sparse_mb(q) if q is not None else 0.0, "imfs": _nbytes(decomposition.imfs),
+                      "Q": _nbytes(q.indptr, q.indices, q.bilaplacian, q.laplacian, q.smoothing) if q is not None else 0.0, "imfs": _nbytes(decomposition.imfs),
                       "monogenic_outputs": _nbytes(mono.imfs, mono.riesz, mono.amplitude, mono.phase,
                                                    mono.frequency),
                       "jacobian_transient": 72 * info["n_imfs"] * surface.n_vertices / 2 ** 20},
@@ -456,8 +459,8 @@ def _mb(x) -> str:
 
 def markdown(results: dict) -> str:
     meta = results["meta"]
-    ladder = [r for r in results["ladder"] if "error" not in r]
-    scaling = [r for r in results["scaling"] if "error" not in r]
+    ladder = [r for r in results["ladder"] if "error" not in r and r.get("emd_options", "paper") == "paper"]
+    scaling = [r for r in results["scaling"] if "error" not in r and r.get("emd_options", "paper") == "paper"]
     out = ["# End-to-end HHT benchmark: the paper's Table 1 and scaling to 1M vertices", "",
            (f"Machine: {meta['machine']['platform']}; {meta['machine']['cpus']} CPUs shared with other jobs "
            f"(1-minute load average per case in `hht.json`); backend `{meta['machine']['backend']}`; "
@@ -561,6 +564,7 @@ def markdown(results: dict) -> str:
                        "all cases >= 30k vertices"], rows), ""]
         largest = max(family, key=lambda r: r["vertices"])
         out += ["Memory at the largest case (what dominates its peak):", "", _memory(largest), ""]
+    out += _defaults_section(results)
     backend_runs = [r for r in results.get("backends", []) if "error" not in r]
     if backend_runs:
         out += _backends_section(backend_runs)
@@ -579,6 +583,28 @@ def markdown(results: dict) -> str:
             "case); wall times of the same case varied up to 2x between runs."),
             ""]
     return "\n".join(out)
+
+
+def _defaults_section(results: dict) -> list[str]:
+    """Cases run with ``--emd defaults`` beside the same case with the paper's options."""
+    runs = [r for part in ("ladder", "scaling") for r in results[part] if "error" not in r]
+    paper = {r["case"]: r for r in runs if r.get("emd_options", "paper") == "paper"}
+    rows = []
+    for r in (r for r in runs if r.get("emd_options") == "defaults"):
+        base = paper.get(r["case"].removesuffix(" (defaults)"))
+        for options, x in (("paper", base), ("defaults", r)):
+            if x is not None:
+                s = x["seconds"]
+                rows.append([x["case"], f"{x['vertices']:,}", options, x["imfs"], x["factorizations"], _f(s["emd"]),
+                             _f(s["rt"]), _f(s["total"]), _f(s["emd"] / max(x["imfs"], 1)), _mb(x["peak_rss_mb"]),
+                             x.get("started", ""), "/".join(f"{v:.1f}" for v in x["load_average_1min"])])
+    if not rows:
+        return []
+    return ["## The defaults against the paper's options", "",
+            ("The same mesh with `hht3d.decomposition.EMD_DEFAULTS` (`--emd defaults`) and with `PAPER_OPTIONS`; "
+             "each row is its own run (see its start time and load average)."), "",
+            table(["case", "#V", "EMD options", "#IMFs", "factorizations", "EMD s", "RT s", "total s",
+                   "EMD s/IMF", "peak RSS MB", "started", "load avg before/after"], rows), ""]
 
 
 def _backends_section(runs: list[dict]) -> list[str]:
@@ -685,6 +711,9 @@ def main(argv=None) -> int:
     parser.add_argument("--backend", default=None,
                         help="sparse solver of the ladder and scaling cases (default: the fastest installed)")
     parser.add_argument("--with-superlu", action="store_true", help="add SciPy SuperLU to the backends part")
+    parser.add_argument("--emd", choices=["paper", "defaults"], default="paper",
+                        help="EMD settings: the paper's (PAPER_OPTIONS, as Table 1) or hht3d's defaults; "
+                             "cases run with the defaults are named '<case> (defaults)'")
     parser.add_argument("--max-imfs", type=int, default=None, help="cap on IMFs for the ladder (default: emd's 10)")
     parser.add_argument("--scaling-max-imfs", type=int, default=None,
                         help="cap on IMFs for the scaling cases (default: emd's 10)")
@@ -699,8 +728,8 @@ def main(argv=None) -> int:
         if kind == "generate":
             record = generate(rest[0], Path(rest[1]))
         else:
-            name, path, cap = rest
-            record = run_case(name, Path(path), None if cap == "none" else int(cap))
+            name, path, cap, preset = rest
+            record = run_case(name, Path(path), None if cap == "none" else int(cap), preset)
         Path(args.out).write_text(json.dumps(record, default=float))
         return 0
 
@@ -722,18 +751,19 @@ def main(argv=None) -> int:
                                                                                     record.get("backend"))]
         results[part].append(record)
 
+    suffix = "" if args.emd == "paper" else " (defaults)"
     if "ladder" in args.parts:
         for name in args.models or LADDER:
             path = model_path(name)
             if path is None:
                 _log(f"skip {name}: {DATA / (name + '.ply')} not present")
                 continue
-            _log(f"ladder {name} ...")
+            _log(f"ladder {name}{suffix} ...")
             try:
-                r = _worker(["case", name, str(path), str(args.max_imfs or "none")], env, out)
+                r = _worker(["case", name + suffix, str(path), str(args.max_imfs or "none"), args.emd], env, out)
             except RuntimeError as exc:
                 _log(str(exc))
-                store("ladder", {"case": name, "error": str(exc)[-2000:]})
+                store("ladder", {"case": name + suffix, "error": str(exc)[-2000:]})
                 continue
             store("ladder", r)
             _log(f"  {r['vertices']:,} V, {r['imfs']} IMFs, EMD {r['seconds']['emd']:.1f} s, RT "
@@ -747,12 +777,12 @@ def main(argv=None) -> int:
             if not mesh.is_file() or size not in results["generated"]:
                 _log(f"generate {name} ...")
                 results["generated"][size] = _worker(["generate", size, str(mesh)], env, out)
-            _log(f"scaling {name} ...")
+            _log(f"scaling {name}{suffix} ...")
             try:
-                r = _worker(["case", name, str(mesh), str(args.scaling_max_imfs or "none")], env, out)
+                r = _worker(["case", name + suffix, str(mesh), str(args.scaling_max_imfs or "none"), args.emd], env, out)
             except RuntimeError as exc:
                 _log(str(exc))
-                store("scaling", {"case": name, "error": str(exc)[-2000:]})
+                store("scaling", {"case": name + suffix, "error": str(exc)[-2000:]})
                 continue
             finally:
                 if not args.keep_meshes:
