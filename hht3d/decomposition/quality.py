@@ -51,8 +51,8 @@ ENERGY_RATIO_LIMIT = 1.5
 ORTHOGONALITY_LIMIT = -0.25
 #: Index of orthogonality above which a decomposition is reported as leaking, the mirror of
 #: :data:`ORTHOGONALITY_LIMIT`.  Huang et al. (1998) call ``|IO| < 0.05-0.1`` good in 1-D; on
-#: surfaces the defaults measure +0.13 to +0.30 (``benchmarks/results/quality.md``), so a limit of
-#: 0.1 would flag nearly every mesh and say nothing.
+#: surfaces the defaults measure +0.04 to +0.30 (``benchmarks/results/quality.md``), so a limit of
+#: 0.1 would flag 9 of the 11 models and say nothing.
 LEAKAGE_LIMIT = 0.25
 #: ``max|s̃| / p99|s̃|`` above which the signal is reported as spiking.
 SPIKE_LIMIT = 20.0

@@ -46,7 +46,7 @@ add up to 1 (:mod:`hht3d.decomposition.quality`):
 
     f_k ← f̃_k − m̃_k      (tildes: fluctuations about the per-component mean).
 
-IMFs still *leak* (IO +0.13 to +0.30 on the models, as before this filter):
+IMFs still *leak* (IO +0.04 to +0.30 on the models, as before this filter):
 a share of each IMF's own-scale content stays in the residue and returns in
 the next IMF.  Moving only the share of ``m_k`` that leaves the IMF
 orthogonal to the rest brought IO within ±0.12, but by adding cancelling
