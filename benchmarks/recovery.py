@@ -130,9 +130,9 @@ def scores(imfs: np.ndarray, residue: np.ndarray, components, weights: np.ndarra
 
 
 def _surface_methods() -> dict:
-    quiet = dict(ensemble={"ensemble_size": ENSEMBLE})
+    members = {"ensemble_size": ENSEMBLE}
     return {"paper": lambda s, f: emd(s, f, PAPER_OPTIONS), "defaults": lambda s, f: emd(s, f, EMD_DEFAULTS),
-            f"eemd×{ENSEMBLE}": lambda s, f: eemd(s, f, EMD_DEFAULTS, **quiet)}
+            f"eemd×{ENSEMBLE}": lambda s, f: eemd(s, f, EMD_DEFAULTS, ensemble=members)}
 
 
 def _pyemd_methods() -> dict:
@@ -160,8 +160,7 @@ def part_recovery(spot_path, face_path) -> list[dict]:
     """One row per case and method: the score of each component, and the EMD's IO and energy ratio."""
     rows = []
     for case in strip_cases() + surface_cases(spot_path, face_path):
-        methods = dict(_surface_methods())
-        for name, run in methods.items():
+        for name, run in _surface_methods().items():
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 result = run(case.surface, case.signal)
