@@ -222,7 +222,7 @@ def emd(surface: Surface, signal, options: EMDOptions | dict | None = None, *, b
             if sifted is None:
                 reason = "extrema"
                 break
-            imfs.append(sifted[0])
+            imfs.append(sifter.corrected(*sifted))
             per_imf.append(sifted[1])
             residue = unit - np.sum(imfs, axis=0)
     imfs = np.array(imfs).reshape(len(imfs), len(f)) * (magnitude if magnitude > 0 else 1.0)

@@ -15,13 +15,7 @@ when already the first sift does, the IMF is extracted again with 4× the
 tension (:data:`~hht3d.decomposition.options.GUARD_TENSIONS`, then the harmonic envelope).  Signals whose
 extrema are dense and regular (noise, eigenfunctions) never trigger it, so
 they keep the thin plate's dyadic scale separation; intermittent signals
-(sharp creases on smooth patches) get the tension they need.  A candidate
-above ``1 + δ`` is judged again after the local-mean correction below, which
-removes the slow part it cancels through, and passes if that IMF is within
-the tolerance: the guard then neither cuts sifting short nor adds tension for
-cancellation the correction removes anyway.  Cut-short sifting and high
-tension made IMFs *leak* (IO +0.30 on the face scan, +0.11 with this rule;
-``benchmarks/results/design_notes.md``, "Leakage").  The IMFs then
+(sharp creases on smooth patches) get the tension they need.  The IMFs then
 add up without cancelling (per-step ratios multiply up to the total of
 :func:`hht3d.decomposition.quality.decomposition_quality`).
 
@@ -52,13 +46,12 @@ add up to 1 (:mod:`hht3d.decomposition.quality`):
 
     f_k ← f̃_k − m̃_k      (tildes: fluctuations about the per-component mean).
 
-IMFs still leak where sifting stops by its own rule (IO up to +0.23 on the
-models): the filter splits the lower half of each IMF's own octave, and the
-two coherent halves correlate.  Two cures met ``|IO| ≤ 0.1`` but recovered
-known components worse, so neither ships (``benchmarks/results/design_notes.md``,
-"Leakage"): moving only the share of ``m_k`` that leaves the IMF orthogonal to
-the rest, and the weakest filter (``c`` of 1.8, 1.2, 0.9, then 0.6) that does
-not let the step cancel.
+IMFs still *leak* (IO +0.04 to +0.30 on the models, as before this filter):
+a share of each IMF's own-scale content stays in the residue and returns in
+the next IMF.  Moving only the share of ``m_k`` that leaves the IMF
+orthogonal to the rest brought IO within ±0.12, but by adding cancelling
+cross terms, and it recovered known components worse
+(``benchmarks/results/design_notes.md``, "Leakage").
 """
 from __future__ import annotations
 
@@ -91,7 +84,6 @@ class _Sifted:
     value: float
     stop: str
     step_energy_ratio: float
-    corrected: tuple[np.ndarray, float] | None  # (IMF, mean_share) after :meth:`Sifter.corrected`, if known
 
 
 class Sifter:
@@ -196,7 +188,7 @@ class Sifter:
             if o.cancellation_tolerance is None or sifted.step_energy_ratio <= 1 + o.cancellation_tolerance:
                 break
         sifted, tension = best
-        info = {
+        return sifted.imf, {
             "sifts": sifted.sifts,
             "n_maxima": sifted.counts[0],
             "n_minima": sifted.counts[1],
@@ -208,18 +200,13 @@ class Sifter:
             "skipped_tensions": skipped,
             "step_energy_ratio": sifted.step_energy_ratio,
             "factorizations": self.solver.n_factorizations - factorizations,
+            "seconds": time.perf_counter() - start,
         }
-        if sifted.corrected is None:
-            imf = self.corrected(sifted.imf, info)
-        else:
-            imf, info["mean_share"] = sifted.corrected
-        info["seconds"] = time.perf_counter() - start
-        return imf, info
 
     def _sift(self, residue: np.ndarray, tension: float, reference: float) -> _Sifted | None:
         """Sift with one tension until the stopping rule, the guard or the sift cap ends it."""
         o = self.options
-        h, sifts, stable, previous, step, corrected = residue, 0, 0, None, 1.0, None
+        h, sifts, stable, previous, step = residue, 0, 0, None, 1.0
         value = float(np.inf) if o.stopping == "sd" else 0.0
         while True:
             is_max, is_min, passive = self.extrema(h)
@@ -243,35 +230,18 @@ class Sifter:
                     stop = "rfg"
                     break
             candidate = h - mean
-            candidate_step, final = self._step(candidate, residue, reference, counts)
+            candidate_step = (self.energy(candidate) + self.energy(residue - candidate)) / reference
             if o.cancellation_tolerance is not None and sifts > 0 \
                     and candidate_step > 1 + o.cancellation_tolerance:
                 stop = "guard"
                 break
             if o.stopping == "sd":  # Cauchy criterion: |h_k-1 - h_k|² / |h_k-1|²
                 value = float(np.dot(self.mass * mean, mean) / np.dot(self.mass * h, h))
-            h, step, corrected = candidate, candidate_step, final
+            h, step = candidate, candidate_step
             sifts += 1
             if o.stopping == "fixed":
                 value = sifts
-        return _Sifted(h, sifts, counts, value, stop, step, corrected)
-
-    def _step(self, candidate: np.ndarray, residue: np.ndarray, reference: float, counts):
-        """The step energy ratio of extracting ``candidate``, judged on the corrected IMF when it matters.
-
-        The local-mean correction removes the slow part through which an
-        under-sifted IMF cancels its residue, so a candidate whose own ratio
-        exceeds the guard's ``1 + δ`` is judged again after the correction
-        (one factorization), and the corrected IMF is returned for reuse.
-        """
-        ratio = (self.energy(candidate) + self.energy(residue - candidate)) / reference
-        tolerance = self.options.cancellation_tolerance
-        if tolerance is None or ratio <= 1 + tolerance or self.options.mean_correction is None:
-            return ratio, None
-        info = {"n_maxima": counts[0], "n_minima": counts[1], "factorizations": 0}
-        imf = self.corrected(candidate, info)
-        ratio = (self.energy(imf) + self.energy(residue - imf)) / reference
-        return ratio, (imf, info.get("mean_share", 0.0))
+        return _Sifted(h, sifts, counts, value, stop, step)
 
     def _stopped(self, sifts: int, stable: int, value: float) -> str:
         """The rule that ends sifting before the next sift, or ``""``."""
