@@ -152,3 +152,40 @@ def test_hht_result_reports_the_same_quality(spot):
                                 "signal_spike", "warnings"}
     with pytest.raises(InputError, match="did you mean 'max_imfs'"):
         hht(surface, signal, emd={"max_imf": 3})
+
+
+# -- muting, thread by thread ---------------------------------------------------------------------------
+# Under a threaded Dask scheduler one task's muted block must not end another's: with
+# warnings.catch_warnings (which swaps the process-wide filters) thread A's warning below was shown
+# once thread B had left its block, which is how a QualityWarning reached the CLI's stderr
+# (test_signals_and_workers, threads scheduler, 1 run in ~6).
+def test_quality_warnings_stay_muted_in_a_thread_when_another_thread_unmutes():
+    import threading
+
+    from hht3d.decomposition.quality import quality_warnings_muted, warn_quality
+
+    a_inside, b_done, seen = threading.Event(), threading.Event(), []
+
+    def a():
+        with quality_warnings_muted():
+            a_inside.set()
+            b_done.wait(10)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                warn_quality("from A", stacklevel=1)
+            seen.extend(str(w.message) for w in caught)
+
+    def b():
+        a_inside.wait(10)
+        with quality_warnings_muted():
+            pass
+        b_done.set()
+
+    threads = [threading.Thread(target=a), threading.Thread(target=b)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(20)
+    assert seen == []
+    with pytest.warns(QualityWarning, match="outside"):
+        warn_quality("outside", stacklevel=1)

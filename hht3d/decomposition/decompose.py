@@ -24,7 +24,6 @@ residue.
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,7 +32,7 @@ from ..geometry.signals import fluctuation
 from ..geometry.surface import Surface
 from ..geometry.validation import check_signal, check_surface
 from .options import EMDOptions
-from .quality import Quality, QualityWarning, decomposition_quality
+from .quality import Quality, decomposition_quality, warn_quality
 from .sifting import Sifter
 
 __all__ = ["EMDResult", "emd", "result_with_quality"]
@@ -245,5 +244,5 @@ def result_with_quality(surface: Surface, f: np.ndarray, imfs: np.ndarray, info:
     residue = f - imfs.sum(axis=0)
     quality = decomposition_quality(surface, f, imfs, residue)
     for message in quality.warnings:
-        warnings.warn(f"{surface.name}: {message}", QualityWarning, stacklevel=3)
+        warn_quality(f"{surface.name}: {message}", stacklevel=3)
     return EMDResult(imfs, residue, info, quality)

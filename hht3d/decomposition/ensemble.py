@@ -6,7 +6,6 @@ as tasks of their own, and :func:`combine_eemd` averages them.
 """
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 
@@ -15,7 +14,7 @@ from ..geometry.surface import Surface
 from ..geometry.validation import check_int, check_signal, check_surface
 from .decompose import EMDResult, emd, result_with_quality
 from .options import EMDOptions, EnsembleOptions
-from .quality import QualityWarning
+from .quality import quality_warnings_muted
 
 __all__ = ["eemd", "eemd_member", "combine_eemd", "ensemble_settings"]
 
@@ -63,8 +62,7 @@ def eemd_member(surface: Surface, signal, member_index: int, ensemble: EnsembleO
     check_int("member_index", member_index, 0)
     rng = np.random.default_rng(np.random.SeedSequence(ensemble.seed, spawn_key=(int(member_index),)))
     noise = ensemble.noise_std * np.std(f) * rng.standard_normal(len(f))
-    with warnings.catch_warnings():  # a noisy member's quality is not the ensemble's
-        warnings.simplefilter("ignore", QualityWarning)
+    with quality_warnings_muted():  # a noisy member's quality is not the ensemble's
         return emd(surface, f + noise, options, backend=backend)
 
 

@@ -26,6 +26,9 @@ try.  :class:`QualityWarning` is the warning category the core emits.
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,6 +41,8 @@ from ..geometry.validation import check_surface
 __all__ = [
     "Quality",
     "QualityWarning",
+    "quality_warnings_muted",
+    "warn_quality",
     "decomposition_quality",
     "ENERGY_RATIO_LIMIT",
     "ORTHOGONALITY_LIMIT",
@@ -60,6 +65,30 @@ SPIKE_LIMIT = 20.0
 
 class QualityWarning(UserWarning):
     """A result was computed but should not be trusted as it is (see its message)."""
+
+
+_MUTED = contextvars.ContextVar("hht3d_quality_warnings_muted", default=False)
+
+
+@contextlib.contextmanager
+def quality_warnings_muted():
+    """Issue no :class:`QualityWarning` inside the block, in this thread only.
+
+    ``warnings.catch_warnings`` swaps the process-wide filter list, so under a
+    threaded scheduler one task leaving the block unmuted another task's
+    warnings; a context variable is private to its thread.
+    """
+    token = _MUTED.set(True)
+    try:
+        yield
+    finally:
+        _MUTED.reset(token)
+
+
+def warn_quality(message: str, stacklevel: int) -> None:
+    """Issue ``message`` as a :class:`QualityWarning` unless muted (:func:`quality_warnings_muted`)."""
+    if not _MUTED.get():
+        warnings.warn(message, QualityWarning, stacklevel=stacklevel + 1)
 
 
 @dataclass(frozen=True)

@@ -6,10 +6,9 @@ while the other files of a dataset or pipeline run finish.
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass
 
-from ..decomposition.quality import QualityWarning
+from ..decomposition.quality import quality_warnings_muted
 from ..errors import one_line
 
 __all__ = ["Failure", "Guarded", "Timed", "MAX_ERROR"]
@@ -53,8 +52,7 @@ class Guarded:
             return failed
         start = time.perf_counter()
         try:
-            with warnings.catch_warnings():  # the summary row reports the quality figures instead
-                warnings.simplefilter("ignore", QualityWarning)
+            with quality_warnings_muted():  # the summary row reports the quality figures instead
                 value = self.func(*args, **kwargs)
         except Exception as exc:  # a dataset item must never take the others down
             return Failure(self.step, self.source, one_line(f"{type(exc).__name__}: {exc}", MAX_ERROR))
