@@ -120,6 +120,57 @@ def test_biharmonic_envelope_is_clamped_cubic_spline():
     assert 3.5 < errors[0] / errors[1] < 4.5
 
 
+def tension_spline(knots: np.ndarray, values: np.ndarray, k: float, x: np.ndarray) -> np.ndarray:
+    """The clamped 1-D spline in tension (Schweikert 1966) through ``values``, evaluated at ``x``.
+
+    It minimises ∫ g''² + k² g'² with g' = 0 at both ends: on each interval g solves
+    g'''' = k² g'', so g = a + b t + c e^(−k t) + e e^(−k (h − t)) (t from the interval's left
+    knot), with g, g' and g'' continuous at the knots.  A dense solve of those 4m conditions.
+    """
+    h = np.diff(knots)
+    m = len(h)
+    rows, rhs = [], []
+
+    def basis(i, t, order):  # the derivative of each of interval i's four functions at t
+        p, q = np.exp(-k * t), np.exp(-k * (h[i] - t))
+        row = np.zeros(4 * m)
+        row[4 * i:4 * i + 4] = [(1, t, p, q), (0, 1, -k * p, k * q), (0, 0, k * k * p, k * k * q)][order]
+        return row
+
+    for i in range(m):
+        rows += [basis(i, 0.0, 0), basis(i, h[i], 0)]
+        rhs += [values[i], values[i + 1]]
+    for i in range(m - 1):
+        rows += [basis(i, h[i], order) - basis(i + 1, 0.0, order) for order in (1, 2)]
+        rhs += [0.0, 0.0]
+    rows += [basis(0, 0.0, 1), basis(m - 1, h[-1], 1)]
+    rhs += [0.0, 0.0]
+    coef = np.linalg.solve(np.array(rows), np.array(rhs)).reshape(m, 4)
+    i = np.clip(np.searchsorted(knots, x, side="right") - 1, 0, m - 1)
+    t = x - knots[i]
+    a, b, c, e = coef[i].T
+    return a + b * t + c * np.exp(-k * t) + e * np.exp(-k * (h[i] - t))
+
+
+def test_tension_envelope_is_the_spline_in_tension():
+    # Q_τ = L M⁻¹ L + (τ/d)² L is the energy ∫ (Δg)² + (τ/d)² |∇g|², so on the cylinder a
+    # ring-constant envelope is the clamped 1-D spline in tension with k = τ/d, d = √(A / |C|)
+    # (envelopes.py), up to the O(dz²) discretisation error.  Here k ≈ 23, so k times the knot
+    # gaps is 4.6–16: the envelope is far from the cubic spline (max difference printed).
+    tension, errors = 3.0, []
+    for n_axial in (201, 401):
+        surface, z, rings, values, f, mask = cylinder_knots(n_axial)
+        g = envelope_interpolation(surface, f, mask, envelope="tension", tension=tension).reshape(n_axial, 8)
+        k = tension / np.sqrt(surface.mass_diagonal.sum() / mask.sum())
+        exact = tension_spline(z[rings], values, k, z)
+        errors.append(np.max(np.abs(g[:, 0] - exact)))
+    cubic = CubicSpline(z[rings], values, bc_type="clamped")(z)
+    print(f"tension envelope: errors {errors[0]:.2e}, {errors[1]:.2e}; from the cubic spline "
+          f"{np.max(np.abs(exact - cubic)):.2f}")
+    assert errors[1] < 1e-2 * np.max(np.abs(exact - cubic))
+    assert 3.5 < errors[0] / errors[1] < 4.5
+
+
 def test_harmonic_envelope_is_linear_interpolation():
     surface, z, rings, values, f, mask = cylinder_knots(201)
     g = envelope_interpolation(surface, f, mask, envelope="harmonic").reshape(201, 8)
