@@ -117,8 +117,13 @@ def test_signal_stops_the_run_cleanly_and_it_resumes(job, scheduler, signum, to_
     (os.killpg if to_group else os.kill)(proc.pid, signum)
     _, line = _stopped_cleanly(proc, 128 + signum, out)
     assert f"stopped by {signal.Signals(signum).name}" in line
+    # Done as --resume sees it: recorded and on disk at the recorded size.  A file is recorded just
+    # before its rename, so a worker stopped in between leaves an entry without its file (seen once
+    # in ~20 runs under load); that input is not done and the message must say so.
     recorded = _recorded(out)
-    complete = [k for k in range(4) if {f"s{k}_hht.npz", f"s{k}_hht.png"} <= set(recorded)]
+    on_disk = {name for name, entry in recorded.items()
+               if (out / name).is_file() and (out / name).stat().st_size == entry["size"]}
+    complete = [k for k in range(4) if {f"s{k}_hht.npz", f"s{k}_hht.png"} <= on_disk]
     assert f"{4 - len(complete)} of 4 inputs not done" in line, line
     if scheduler == "threads" and signum == signal.SIGTERM:  # one resume is enough to show it
         resumed = subprocess.run([sys.executable, "-m", "hht3d", "run", str(job / "p.yaml"), "--quiet",
