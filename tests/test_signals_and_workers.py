@@ -224,12 +224,13 @@ def test_a_killed_worker_under_a_nanny_is_replaced_and_the_run_finishes(job, clu
     _wait_for(lambda: cluster.count() == 1, 60, "a worker")
     proc = _start(job, "--address", cluster.address)
     _wait_for(lambda: len(_recorded(job / "out")) >= 1 or proc.poll() is not None, 90, "a first output")
-    (worker,) = [child for child in psutil.Process(nanny.pid).children()  # the nanny's worker process
-                 if "spawn_main" in " ".join(child.cmdline())]
-    worker.kill()
+    children = psutil.Process(nanny.pid).children()
+    workers = [child for child in children if "spawn_main" in " ".join(child.cmdline())]  # the nanny's worker
+    assert len(workers) == 1, [child.cmdline() for child in children]
+    workers[0].kill()
     stdout, stderr = proc.communicate(timeout=180)
     assert proc.returncode == 0, stderr
-    assert stdout.count(": ok") == 4
+    assert stdout.count(": ok") == 4, (stdout, stderr)
     assert not list((job / "out").rglob("*.part"))
 
 
