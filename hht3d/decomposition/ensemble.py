@@ -6,7 +6,6 @@ as tasks of their own, and :func:`combine_eemd` averages them.
 """
 from __future__ import annotations
 
-
 import numpy as np
 
 from ..errors import InputError

@@ -134,7 +134,8 @@ class Quality:
     def as_dict(self) -> dict:
         """Plain numbers and strings, for JSON summaries."""
         return {"energy_ratio": self.energy_ratio, "orthogonality_index": self.orthogonality_index,
-                "io_leaking": self.io_leaking, "io_cancelling": self.io_cancelling, "energy_share": [float(x) for x in self.energy_share], "signal_spike": self.signal_spike,
+                "io_leaking": self.io_leaking, "io_cancelling": self.io_cancelling,
+                "energy_share": [float(x) for x in self.energy_share], "signal_spike": self.signal_spike,
                 "warnings": list(self.warnings)}
 
 
