@@ -24,8 +24,8 @@ def test_leaking_imfs_are_reported_with_both_parts():
     a, b = fluctuation(s, np.cos(np.pi * x)), fluctuation(s, np.cos(np.pi * y))
     b = b - (a @ (mass * b)) / (a @ (mass * a)) * a
     na, nb = a @ (mass * a), b @ (mass * b)
-    # a split in halves over two IMFs (cross +½|a|² twice), b against -b/2 in the residue... written out:
-    # parts a/2, a/2 + 1.5 b, residue -0.5 b: cross terms 2·(¼na) + 2·(¾·(-½)·... ) = na/2 - 1.5 nb
+    # parts a/2, a/2 + 1.5 b and residue -b/2 (a ⟂ b): a is split over two IMFs, ⟨x1, x2⟩ = na/4 > 0,
+    # and 1.5 b cancels against -b/2, ⟨x2, r⟩ = -0.75 nb; each pair counts twice in IO
     q = decomposition_quality(s, a + b, np.vstack([a / 2, a / 2 + 1.5 * b]), -0.5 * b)
     reference = na + nb
     assert q.io_leaking == pytest.approx(0.5 * na / reference, rel=1e-12)

@@ -1,6 +1,7 @@
 """Decomposition quality (hht3d.decomposition.quality) and the EMD defaults held to it on realistic input."""
 from __future__ import annotations
 
+import threading
 import warnings
 
 import numpy as np
@@ -13,7 +14,7 @@ import hht3d
 from hht3d import InputError, Surface, emd, hht
 from hht3d.decomposition import GUARD_TENSIONS, PAPER_OPTIONS, local_extrema
 from hht3d.decomposition import ENERGY_RATIO_LIMIT, ORTHOGONALITY_LIMIT, QualityWarning
-from hht3d.decomposition.quality import decomposition_quality
+from hht3d.decomposition.quality import decomposition_quality, quality_warnings_muted, warn_quality
 from hht3d.geometry.signals import fluctuation
 from hht3d.geometry.signals import mean_curvature
 
@@ -155,37 +156,33 @@ def test_hht_result_reports_the_same_quality(spot):
 
 
 # -- muting, thread by thread ---------------------------------------------------------------------------
-# Under a threaded Dask scheduler one task's muted block must not end another's: with
-# warnings.catch_warnings (which swaps the process-wide filters) thread A's warning below was shown
-# once thread B had left its block, which is how a QualityWarning reached the CLI's stderr
-# (test_signals_and_workers, threads scheduler, 1 run in ~6).
+# Under a threaded Dask scheduler two tasks are muted at once.  With warnings.catch_warnings (which swaps
+# the process-wide filters) the first to leave its block restored the filters of before both, so the
+# other task's warning was shown: that is how a QualityWarning reached the CLI's stderr
+# (test_signals_and_workers, threads scheduler, 1 run in ~6).  Here A leaves while B is still inside.
 def test_quality_warnings_stay_muted_in_a_thread_when_another_thread_unmutes():
-    import threading
-
-    from hht3d.decomposition.quality import quality_warnings_muted, warn_quality
-
-    a_inside, b_done, seen = threading.Event(), threading.Event(), []
+    a_inside, b_inside, a_left = threading.Event(), threading.Event(), threading.Event()
 
     def a():
         with quality_warnings_muted():
             a_inside.set()
-            b_done.wait(10)
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                warn_quality("from A", stacklevel=1)
-            seen.extend(str(w.message) for w in caught)
+            b_inside.wait(10)
+        a_left.set()
 
     def b():
         a_inside.wait(10)
         with quality_warnings_muted():
-            pass
-        b_done.set()
+            b_inside.set()
+            a_left.wait(10)
+            warn_quality("from B", stacklevel=1)
 
-    threads = [threading.Thread(target=a), threading.Thread(target=b)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join(20)
-    assert seen == []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        threads = [threading.Thread(target=a), threading.Thread(target=b)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(20)
+    assert a_left.is_set() and [str(w.message) for w in caught] == []
     with pytest.warns(QualityWarning, match="outside"):
         warn_quality("outside", stacklevel=1)
