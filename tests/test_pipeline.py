@@ -1,5 +1,7 @@
 """YAML pipelines: the examples run, invalid pipelines say what to fix, numbers match the graph API."""
 import json
+import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
@@ -303,6 +305,29 @@ def test_resume_skips_finished_inputs(tmp_path, folder):
     (tmp_path / "out" / "part1_imfs.npz").unlink()
     rows = run_pipeline(plan, scheduler="synchronous", progress=False, resume=True)
     assert [r.status for r in rows] == ["skipped", "ok"]
+
+
+def test_a_worker_killed_mid_write_leaves_no_temporary_file(tmp_path, folder, monkeypatch):
+    """A worker killed while writing (a nanny then restarts it, and its task runs again) leaves
+    its ``.part`` file behind; the run removes it once every task is done."""
+    from hht3d.pipeline import runner
+
+    killed = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                            text=True, check=True)
+    stale = tmp_path / "out" / f".part1_imfs.npz.{int(killed.stdout)}-abcd1234.part"
+    real = runner.compute
+
+    def compute(*args, **kwargs):  # the killed worker's file appears while the run goes on
+        stale.parent.mkdir(exist_ok=True)
+        stale.write_bytes(b"half an output")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(runner, "compute", compute)
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(GOOD.format(mesh=folder, out=tmp_path / "out"))
+    rows = run_pipeline(load_pipeline(path), scheduler="synchronous", progress=False)
+    assert [r.status for r in rows] == ["ok", "ok"]
+    assert not stale.exists() and (tmp_path / "out" / "part1_imfs.npz").is_file()
 
 
 # -- the plan -----------------------------------------------------------------------------------

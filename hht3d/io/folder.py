@@ -76,6 +76,11 @@ class OutputFolder:
         self.check_overwrites(paths, overwrite=overwrite)
         remove_stale_parts(self.part_folders(paths))
 
+    def finish(self, paths) -> None:
+        """After a run: remove the temporary files that workers killed mid-write left (a nanny
+        restarts such a worker and its task runs again elsewhere); a URL folder has none here."""
+        remove_stale_parts(self.part_folders(paths))
+
     def check_overwrites(self, paths, *, overwrite: bool = False) -> None:
         """Locally, refuse to replace a file hht3d did not write (:func:`hht3d.io.manifest.check_overwrites`);
         a URL folder keeps no manifest and checks nothing here.

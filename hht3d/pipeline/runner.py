@@ -138,6 +138,7 @@ def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int |
     folder.prepare(plan.written_paths(), overwrite=overwrite)
     (rows,) = compute(pipeline_graph(plan, resume=resume, folder=folder), scheduler=execution.scheduler,
                       workers=execution.workers, address=execution.address, progress=execution.progress)
+    folder.finish(plan.written_paths())
     if summary and plan.summary:
         write_summary(rows, plan.folder, folder.run, plan.storage_options)
     return rows
