@@ -56,16 +56,16 @@ def systems(surface) -> dict:
     """The envelope system with 10% of the vertices constrained, a mean filter and the smallest shift's."""
     import numpy as np
 
-    from hht3d.decomposition.decompose import _energies
+    from hht3d.decomposition.envelopes import envelope_energies
     from hht3d.spectral.riesz_transform import quadrature_plan, shifted_matrix
 
-    e = _energies(surface)
+    e = envelope_energies(surface)
     q = e.data(3.0, 1.0)
     n = surface.n_vertices
     constrained = np.zeros(n, bool)
     constrained[np.random.default_rng(0).choice(n, n // 10, replace=False)] = True
     diag = q[e.diagonal]
-    data = q * (~constrained[e.rows] & ~constrained[e.indices])
+    data = q * e.free_entries(~constrained)
     data[e.diagonal[constrained]] = np.where(diag > 0, diag, 1.0)[constrained]
     diagonal = float(np.linalg.norm(np.ptp(surface.vertices, axis=0)))
     mean = (0.6 * MEAN_SCALE * diagonal) ** 4 * e.smoothing

@@ -1,6 +1,8 @@
 """EMD on surfaces (hht3d.decomposition.decompose): oracles from 1-D EMD, splines and spherical harmonics."""
 from __future__ import annotations
 
+import gc
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -11,6 +13,7 @@ from scipy.special import sph_harm_y
 
 from hht3d import InputError, Surface, linalg
 from hht3d.decomposition import (PAPER_OPTIONS, EMDOptions, EnsembleOptions, combine_eemd, eemd, eemd_member, emd, envelope_interpolation, envelope_operator, local_extrema)
+from hht3d.decomposition.envelopes import EnvelopeSolver, envelope_energies
 
 # Σ imfs + residue reproduces the signal up to a few ulps of its magnitude.
 SUM_RTOL = 1e-10
@@ -190,6 +193,19 @@ def test_envelope_matches_eliminated_system(small_sphere, backend):
     assert np.max(np.abs(g[mask] - f[mask])) <= 1e-8 * np.max(np.abs(f[mask]))
     assert np.max(np.abs(g[free] - reference)) <= 1e-8 * np.max(np.abs(reference))
     assert envelope_operator(s).nnz >= q.nnz  # diagonal kept as explicit entries
+
+
+def test_envelope_energies_are_shared_while_in_use_and_freed_after(small_sphere):
+    """EMD runs of one surface alive together share its envelope energies, and none outlive them:
+    the Riesz transform after an EMD must not carry them (666 MB at 1M vertices)."""
+    solver = EnvelopeSolver(small_sphere, None)
+    assert envelope_energies(small_sphere) is solver.energies
+    emd(small_sphere, small_sphere.vertices[:, 2], max_imfs=1)
+    held = small_sphere.cache["emd:energies"]
+    assert held() is solver.energies
+    del solver
+    gc.collect()
+    assert held() is None
 
 
 def test_envelope_needs_a_constraint_per_component():

@@ -12,6 +12,7 @@ from ..errors import InputError
 from ..geometry.surface import Surface
 from ..geometry.validation import check_int, check_signal, check_surface
 from .decompose import EMDResult, emd, result_with_quality
+from .envelopes import envelope_energies
 from .options import EMDOptions, EnsembleOptions
 from .quality import quality_warnings_muted
 
@@ -140,7 +141,9 @@ def eemd(surface: Surface, signal, options: EMDOptions | dict | None = None, *,
     """
     options, ensemble = ensemble_settings(options, ensemble, overrides)
     f = check_signal(check_surface(surface), signal)
+    held = envelope_energies(surface)  # the surface caches them weakly: held, the members build them once
     members = [eemd_member(surface, f, i, ensemble, options, backend) for i in range(ensemble.ensemble_size)]
+    del held
     result = combine_eemd(surface, f, members)
     result.info.update(seed=ensemble.seed, noise_std=ensemble.noise_std)
     return result

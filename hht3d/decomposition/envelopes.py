@@ -49,6 +49,7 @@ analogue of the mirrored end extrema of 1-D EMD codes.
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
 import scipy.sparse as sp
@@ -71,7 +72,8 @@ class _EnvelopeEnergies:
     """``L M⁻¹ L`` and the membrane ``L`` stored on one pattern (theirs together, diagonal included).
 
     Every envelope energy ``Q_τ`` is a combination of the two data arrays, so
-    all tensions share one symbolic analysis.
+    all tensions share one symbolic analysis.  The pattern's index arrays are
+    read-only and shared by every matrix built on it (:meth:`matrix`).
     """
 
     def __init__(self, surface: Surface):
@@ -82,17 +84,22 @@ class _EnvelopeEnergies:
         pattern = (abs(bilaplacian) + abs(lap) + sp.eye(n)).tocsr()
         pattern.sort_indices()
         self.indptr, self.indices, self.n = pattern.indptr, pattern.indices, n
-        self.rows = np.repeat(np.arange(n), np.diff(pattern.indptr))
-        self.diagonal = np.flatnonzero(self.indices == self.rows)
-        self.bilaplacian = self._on_pattern(bilaplacian)
+        for index in (self.indptr, self.indices):
+            index.setflags(write=False)
+        self.row_lengths = np.diff(self.indptr)
+        rows = np.repeat(np.arange(n), self.row_lengths)
+        self.diagonal = np.flatnonzero(self.indices == rows)
+        keys = rows.astype(np.int64) * n + self.indices
+        del rows
+        self.bilaplacian = self._on_pattern(keys, bilaplacian)
         membrane = _membrane(lap)
-        self.laplacian = self._on_pattern(membrane)
+        self.laplacian = self._on_pattern(keys, membrane)
         floored = np.maximum(surface.mass_diagonal, MASS_FLOOR * np.median(surface.mass_diagonal))
-        self.smoothing = self._on_pattern(membrane @ sp.diags(1.0 / floored) @ membrane)
+        self.smoothing = self._on_pattern(keys, membrane @ sp.diags(1.0 / floored) @ membrane)
 
-    def _on_pattern(self, a) -> np.ndarray:
-        """The entries of ``a`` at the positions of the shared pattern (zeros elsewhere)."""
-        keys = self.rows.astype(np.int64) * self.n + self.indices
+    def _on_pattern(self, keys: np.ndarray, a) -> np.ndarray:
+        """The entries of ``a`` at the positions of the shared pattern (``keys``: row·n + column; zeros
+        elsewhere)."""
         coo = a.tocoo()
         data = np.zeros(len(keys))
         np.add.at(data, np.searchsorted(keys, coo.row.astype(np.int64) * self.n + coo.col), coo.data)
@@ -106,8 +113,15 @@ class _EnvelopeEnergies:
             return self.bilaplacian
         return self.bilaplacian + (tension / spacing) ** 2 * self.laplacian
 
+    def free_entries(self, free: np.ndarray) -> np.ndarray:
+        """Mask of the stored entries whose row and column are both ``free``."""
+        return np.repeat(free, self.row_lengths) & free[self.indices]
+
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:
-        return sp.csr_matrix((data, self.indices.copy(), self.indptr.copy()), shape=(self.n, self.n))
+        """``data`` on the pattern, sharing its (read-only, sorted) index arrays."""
+        a = sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n), copy=False)
+        a.has_sorted_indices = True
+        return a
 
 
 def _membrane(lap: sp.csr_matrix) -> sp.csr_matrix:
@@ -125,10 +139,19 @@ def _membrane(lap: sp.csr_matrix) -> sp.csr_matrix:
 
 
 def envelope_energies(surface: Surface) -> _EnvelopeEnergies:
+    """The envelope energies of ``surface``, shared by the EMD runs of it alive at once.
+
+    The surface's cache holds them weakly: EEMD members running together build
+    them once, and they are freed with the last run, so the Riesz transform
+    that follows does not carry them (666 MB at 1M vertices).
+    """
     key = "emd:energies"
-    if key not in surface.cache:
-        surface.cache[key] = _EnvelopeEnergies(surface)
-    return surface.cache[key]
+    held = surface.cache.get(key)
+    energies = held() if held is not None else None
+    if energies is None:
+        energies = _EnvelopeEnergies(surface)
+        surface.cache[key] = weakref.ref(energies)
+    return energies
 
 
 def envelope_operator(surface: Surface, envelope: str = "biharmonic", *, tension: float = EMD_DEFAULTS.tension,
@@ -186,8 +209,7 @@ class EnvelopeSolver:
         q = e.data(tension, spacing)
         diag = q[e.diagonal]
         scale = np.where(diag > 0, diag, 1.0)
-        free = ~constrained
-        data = q * (free[e.rows] & free[e.indices])
+        data = q * e.free_entries(~constrained)
         data[e.diagonal[constrained]] = scale[constrained]
         factor = self.factorize(e.matrix(data))
         rhs = -(e.matrix(q) @ np.where(constrained, f, 0.0))

@@ -9,7 +9,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from . import operators as ops
@@ -306,9 +305,10 @@ def fluctuation(surface: Surface, f) -> np.ndarray:
     ``L`` (the per-component constants): the part of ``f`` that EMD
     decomposes and ``L^{-1/2}`` acts on (Sec. 4.2).  The caller checks ``f``.
     """
-    labels, mass, n = surface.component_labels, surface.mass_diagonal, surface.n_vertices
+    labels, mass, k = surface.component_labels, surface.mass_diagonal, surface.n_components
     a = np.atleast_2d(f)
-    indicator = sp.csr_matrix((mass, (np.arange(n), labels)), shape=(n, surface.n_components))
-    means = np.asarray(indicator.T @ a.T).T / np.asarray(indicator.sum(axis=0))  # (k, components)
+    areas = np.bincount(labels, weights=mass, minlength=k)
+    sums = np.array([np.bincount(labels, weights=mass * row, minlength=k) for row in a]).reshape(len(a), k)
+    means = sums / areas
     out = a - means[:, labels]
     return out[0] if np.ndim(f) == 1 else out
