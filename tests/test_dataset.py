@@ -5,7 +5,7 @@ import shutil
 import numpy as np
 import pytest
 from helpers.results import assert_same_hht, hht_arrays_from_ply
-from helpers.folders import produced_names
+from helpers.folders import dead_writers_part, produced_names
 
 from hht3d import Surface, load
 from hht3d.graph.dataset import run_dataset
@@ -65,6 +65,23 @@ def test_resume_skips_complete_items(tmp_path):
                        emd={"max_imfs": 1})
     assert [r.status for r in rows] == ["skipped", "ok"]
     shutil.rmtree(out)
+
+
+def test_a_worker_killed_mid_write_leaves_no_temporary_file(tmp_path, monkeypatch):
+    """As for pipelines: a killed writer's ``.part`` file is gone once the dataset run ends."""
+    import hht3d.graph.dataset as dataset
+
+    inputs = _make_inputs(tmp_path / "in")
+    real, parts = dataset.compute, []
+
+    def compute(*args, **kwargs):
+        parts.append(dead_writers_part(tmp_path / "out", "good0_hht.npz"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(dataset, "compute", compute)
+    run_dataset(inputs / "good0.ply", tmp_path / "out", scheduler="synchronous", progress=False,
+                emd={"max_imfs": 1})
+    assert not parts[0].exists() and (tmp_path / "out" / "good0_hht.npz").is_file()
 
 
 def test_summary_rows_carry_the_quality(tmp_path):

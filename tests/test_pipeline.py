@@ -1,7 +1,5 @@
 """YAML pipelines: the examples run, invalid pipelines say what to fix, numbers match the graph API."""
 import json
-import subprocess
-import sys
 import textwrap
 from pathlib import Path
 
@@ -11,7 +9,7 @@ from helpers.meshes import fibonacci_sphere, icosphere
 
 from helpers.results import assert_same_hht, hht_arrays_from_ply
 from helpers.pages import field_values, page_data
-from helpers.folders import produced_names
+from helpers.folders import dead_writers_part, produced_names
 from hht3d import Surface, graph
 from hht3d.apps import (HighBoost, LowPass, PiecewiseLinear, filter_geometry, filter_signal, hks_features,
                         imf_enhancement, manifold_harmonics_filter, prominent_features, reconstruct)
@@ -312,14 +310,10 @@ def test_a_worker_killed_mid_write_leaves_no_temporary_file(tmp_path, folder, mo
     its ``.part`` file behind; the run removes it once every task is done."""
     from hht3d.pipeline import runner
 
-    killed = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
-                            text=True, check=True)
-    stale = tmp_path / "out" / f".part1_imfs.npz.{int(killed.stdout)}-abcd1234.part"
-    real = runner.compute
+    real, parts = runner.compute, []
 
     def compute(*args, **kwargs):  # the killed worker's file appears while the run goes on
-        stale.parent.mkdir(exist_ok=True)
-        stale.write_bytes(b"half an output")
+        parts.append(dead_writers_part(tmp_path / "out", "part1_imfs.npz"))
         return real(*args, **kwargs)
 
     monkeypatch.setattr(runner, "compute", compute)
@@ -327,7 +321,7 @@ def test_a_worker_killed_mid_write_leaves_no_temporary_file(tmp_path, folder, mo
     path.write_text(GOOD.format(mesh=folder, out=tmp_path / "out"))
     rows = run_pipeline(load_pipeline(path), scheduler="synchronous", progress=False)
     assert [r.status for r in rows] == ["ok", "ok"]
-    assert not stale.exists() and (tmp_path / "out" / "part1_imfs.npz").is_file()
+    assert not parts[0].exists() and (tmp_path / "out" / "part1_imfs.npz").is_file()
 
 
 # -- the plan -----------------------------------------------------------------------------------

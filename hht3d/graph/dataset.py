@@ -172,5 +172,6 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     run = options.pop("run", None) or new_run_id()
     (rows,) = compute(dataset_graph(inputs, out_dir, run=run, **options), scheduler=scheduler, workers=workers,
                       address=address, progress=progress)
+    OutputFolder(out_dir, storage_options=options.get("storage_options"), run=run).finish([])
     write_summary(rows, out_dir, run, options.get("storage_options"))
     return rows
