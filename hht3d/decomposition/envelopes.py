@@ -177,7 +177,7 @@ def envelope_operator(surface: Surface, envelope: str = "biharmonic", *, tension
     if envelope == "tension" and spacing is None:
         raise InputError("the tension envelope needs the extrema spacing d (see extrema_spacing)")
     energies = envelope_energies(check_surface(surface))
-    return energies.matrix(energies.data(start, spacing or 1.0))
+    return energies.matrix(energies.data(start, spacing or 1.0)).copy()  # the caller's own arrays
 
 
 class EnvelopeSolver:
