@@ -58,9 +58,6 @@ class UpperTriangle(Pattern):
         """The upper-triangle values of ``a``."""
         return self.check(a).data[self._mask]
 
-    def csr(self, a: sp.csr_matrix) -> sp.csr_matrix:
-        return sp.csr_matrix((self.data(a), self.indices, self.indptr), shape=(self.n, self.n))
-
 
 class Latest:
     """Backends that keep one factor per analysis: only the latest may solve."""
