@@ -57,7 +57,8 @@ def systems(surface) -> dict:
     import numpy as np
 
     from hht3d.decomposition.envelopes import envelope_energies
-    from hht3d.spectral.riesz_transform import quadrature_plan, shifted_matrix
+    from hht3d.spectral.quadrature import quadrature_plan
+    from hht3d.spectral.shifts import shifted_matrix
 
     e = envelope_energies(surface)
     q = e.data(3.0, 1.0)
