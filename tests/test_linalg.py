@@ -15,6 +15,8 @@ which is small in practice for sparse factors).
 """
 from __future__ import annotations
 
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -222,3 +224,63 @@ def test_a_new_backend_is_one_registry_entry(monkeypatch):
     statuses = {s.name: s for s in linalg.backend_report()[0]}
     assert statuses["dense"].available and "dense Cholesky" in statuses["dense"].detail
     assert statuses["absent"].detail == "pip install absent"
+
+
+class _Occupancy:
+    """A backend library that records how many threads are inside it at once."""
+
+    def __init__(self):
+        self.inside = self.most = 0
+        self._count = threading.Lock()
+
+    def enter(self):
+        with self._count:
+            self.inside += 1
+            self.most = max(self.most, self.inside)
+        time.sleep(0.005)  # long enough for the other thread to arrive if nothing stops it
+        with self._count:
+            self.inside -= 1
+
+
+class _Watched(_DenseCholesky):
+    library = _Occupancy()
+
+    def __init__(self, pattern, module):
+        super().__init__(pattern, module)
+        self.library.enter()
+
+    def factorize(self, a):
+        self.library.enter()
+        factor = super().factorize(a)
+        return linalg.Factor(lambda b: (self.library.enter(), factor.solve(b))[1], self.n)
+
+
+@pytest.mark.parametrize("lock", [None, threading.RLock()], ids=["thread-safe", "locked"])
+def test_a_locked_backend_is_entered_by_one_thread_at_a_time(monkeypatch, lock):
+    """Two threads, each with its own analysis (separate handles), factorize and solve
+    30 times: a backend registered with a lock never has both inside it; one registered
+    without may (the first case shows the check sees overlap when nothing prevents it)."""
+    monkeypatch.setattr(backends, "SOLVER_BACKENDS", dict(backends.SOLVER_BACKENDS))
+    monkeypatch.setattr(_Watched, "library", _Occupancy())
+    linalg.register_backend(linalg.Backend("watched", "scipy", ("scipy.linalg",), "dense Cholesky",
+                                           "never missing", _Watched, lock))
+    a = sp.csr_matrix(np.array([[4.0, 1.0], [1.0, 3.0]]))
+
+    def work():
+        symbolic = linalg.SymbolicFactorization(a, "watched")
+        for _ in range(30):
+            symbolic.factorize(a).solve(np.ones(2))
+
+    threads = [threading.Thread(target=work) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert _Watched.library.most == (1 if lock else 2)
+
+
+def test_backends_not_declared_thread_safe_have_a_lock():
+    """PARDISO (two threads in MKL at once crashed a threads-scheduler run) and CHOLMOD
+    (cvxopt's one process-wide workspace) are locked; SciPy's SuperLU keeps no global state."""
+    locked = {name for name, b in backends.SOLVER_BACKENDS.items() if b.lock is not None}
+    assert locked == {"pardiso", "cholmod"}

@@ -11,17 +11,22 @@ Backends, in order of preference
     Intel MKL PARDISO through the ``pypardiso`` package (extra ``fast``,
     x86-64 only): real SPD mode (``mtype=2``) on the upper triangle, METIS
     nested-dissection ordering and symbolic phase 11 once, numeric phase 22
-    per matrix, solve phase 33.
+    per matrix, solve phase 33.  One thread at a time: two threads in PARDISO
+    at once (on separate handles: EMD's envelopes beside the Riesz bounds'
+    shift-invert Lanczos) crashed or hung a threads-scheduler run inside MKL.
 ``"cholmod"``
     CHOLMOD's supernodal Cholesky ``P A Pᵀ = L Lᵀ`` through ``cvxopt``
     (wheels with their own BLAS for Linux, macOS and Windows; no MKL):
     AMD ordering and supernodal symbolic analysis once
     (``cholmod.symbolic``), numeric factorization per matrix
-    (``cholmod.numeric``).
+    (``cholmod.numeric``).  One thread at a time: cvxopt keeps CHOLMOD's
+    workspace in one process-wide ``cholmod_common``.
 ``"superlu"``
     SciPy's SuperLU, always available (a plain ``pip install hht3d``): used
     as a Cholesky, without pivoting, its minimum-degree ordering computed on
     the first matrix of a pattern and reused (:mod:`hht3d.linalg.superlu`).
+    Thread-safe: SuperLU 5 keeps no global state, and SciPy releases the GIL
+    around it.
 
 The default is the first installed backend of :data:`SOLVER_BACKENDS`,
 unless the environment variable :data:`BACKEND_VARIABLE` names another; a
@@ -33,8 +38,9 @@ Adding a backend
 One :func:`register_backend` call with a :class:`Backend`: its package, the
 modules to import (only when a backend is first needed, so a missing or slow
 package costs nothing until then), a line for ``hht3d info --backends``, an
-install hint, and a class that analyses a pattern and factorizes matrices on
-it (see :class:`Backend`); a fitted cost in
+install hint, a class that analyses a pattern and factorizes matrices on
+it, and a lock unless the library may be entered by several threads at once
+(see :class:`Backend`); a fitted cost in
 :data:`hht3d.linalg.estimate.COSTS` adds its time and memory estimates.  Pipelines (``backend:``), EMD, the Riesz
 transform and ``hht3d info`` read the registry.
 """
@@ -43,12 +49,13 @@ from __future__ import annotations
 import importlib
 import importlib.metadata
 import os
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from ..errors import InputError
-from .cholmod import CholmodPattern
-from .pardiso import PardisoPattern
+from .cholmod import CHOLMOD_LOCK, CholmodPattern
+from .pardiso import PARDISO_LOCK, PardisoPattern
 from .superlu import SuperLUPattern
 
 __all__ = [
@@ -90,6 +97,12 @@ class Backend:
         object whose ``factorize(a)`` gives a :class:`~hht3d.linalg.factor.Factor` of any matrix
         with that pattern; it is called as ``pattern(csr, module)`` with
         :meth:`module`.
+    lock : threading.RLock or None
+        For a library that must not be entered by two threads at once (all its
+        handles included): :class:`~hht3d.linalg.symbolic.SymbolicFactorization`
+        holds it over every analysis, factorization and solve, so the threads
+        scheduler's tasks take turns in it.  ``None`` declares the backend
+        thread-safe.
     """
 
     name: str
@@ -98,6 +111,7 @@ class Backend:
     algorithm: str
     missing: str
     pattern: Callable = field(repr=False)
+    lock: threading.RLock | None = field(default=None, repr=False, compare=False)
 
     def module(self):
         """The first of :attr:`modules`, all imported on first use; ``None`` if one is absent."""
@@ -204,11 +218,12 @@ def check_backend(backend: str | None, where: str = "backend") -> str:
 register_backend(Backend(
     "pardiso", "pypardiso", ("pypardiso",),
     "MKL PARDISO, supernodal, METIS ordering, symbolic analysis reused",
-    "pypardiso is not installed (MKL, x86-64 only): pip install 'hht3d[fast]'", PardisoPattern))
+    "pypardiso is not installed (MKL, x86-64 only): pip install 'hht3d[fast]'", PardisoPattern, PARDISO_LOCK))
 register_backend(Backend(
     "cholmod", "cvxopt", ("cvxopt", "cvxopt.cholmod"),
     "CHOLMOD supernodal Cholesky, AMD ordering, symbolic analysis reused",
-    "cvxopt is not installed (no wheel for this platform?): pip install 'hht3d[fast]'", CholmodPattern))
+    "cvxopt is not installed (no wheel for this platform?): pip install 'hht3d[fast]'", CholmodPattern,
+    CHOLMOD_LOCK))
 register_backend(Backend(
     "superlu", "scipy", ("scipy.sparse.linalg",),
     "SciPy SuperLU without pivoting, MMD ordering once per pattern, then reused",

@@ -9,10 +9,11 @@ import scipy.sparse as sp
 from ..errors import NumericalError
 from .factor import Factor, Latest, UpperTriangle
 
-__all__ = ["CholmodPattern"]
+__all__ = ["CholmodPattern", "CHOLMOD_LOCK"]
 
-#: cvxopt keeps CHOLMOD's workspace in one process-wide ``cholmod_common``.
-_CHOLMOD_LOCK = threading.Lock()
+#: cvxopt keeps CHOLMOD's workspace in one process-wide ``cholmod_common``: one thread at a
+#: time (held by :class:`~hht3d.linalg.symbolic.SymbolicFactorization`, the registry's ``lock``).
+CHOLMOD_LOCK = threading.RLock()
 
 
 class CholmodPattern:
@@ -32,31 +33,28 @@ class CholmodPattern:
                                         self._lower.rows.astype(np.int64), (self.n, self.n))
         if len(self._matrix.V) != len(self._lower.rows):  # pragma: no cover - cvxopt invariant
             raise NumericalError("cvxopt changed the sparsity pattern of the matrix")
-        with _CHOLMOD_LOCK:
-            try:
-                self._factor = self._cholmod.symbolic(self._matrix, uplo="L")
-            except (ValueError, MemoryError) as exc:
-                raise NumericalError(f"CHOLMOD symbolic analysis failed: {exc}") from exc
+        try:
+            self._factor = self._cholmod.symbolic(self._matrix, uplo="L")
+        except (ValueError, MemoryError) as exc:
+            raise NumericalError(f"CHOLMOD symbolic analysis failed: {exc}") from exc
         self._latest = Latest("CHOLMOD")
 
     def factorize(self, a: sp.csr_matrix) -> Factor:
         values = self._cvxopt.matrix(self._lower.data(a))
-        with _CHOLMOD_LOCK:
-            self._matrix.V = values
-            try:
-                self._cholmod.numeric(self._matrix, self._factor)
-            except ArithmeticError as exc:
-                raise NumericalError(f"CHOLMOD: the matrix is not positive definite (pivot {exc.args[0]} "
-                                     "of the permuted matrix)") from exc
-            except (ValueError, MemoryError) as exc:
-                raise NumericalError(f"CHOLMOD factorization failed: {exc}") from exc
+        self._matrix.V = values
+        try:
+            self._cholmod.numeric(self._matrix, self._factor)
+        except ArithmeticError as exc:
+            raise NumericalError(f"CHOLMOD: the matrix is not positive definite (pivot {exc.args[0]} "
+                                 "of the permuted matrix)") from exc
+        except (ValueError, MemoryError) as exc:
+            raise NumericalError(f"CHOLMOD factorization failed: {exc}") from exc
         token = self._latest.claim()
 
         def solve(b: np.ndarray) -> np.ndarray:
             self._latest.check(token)
             x = self._cvxopt.matrix(b)
-            with _CHOLMOD_LOCK:
-                self._cholmod.solve(self._factor, x)
+            self._cholmod.solve(self._factor, x)
             return np.array(x).reshape(b.shape)
 
         return Factor(solve, self.n)

@@ -4,6 +4,7 @@ from __future__ import annotations
 import ctypes
 import functools
 import os
+import threading
 import weakref
 
 import numpy as np
@@ -12,7 +13,12 @@ import scipy.sparse as sp
 from ..errors import NumericalError
 from .factor import Factor, Latest, UpperTriangle
 
-__all__ = ["PardisoPattern"]
+__all__ = ["PardisoPattern", "PARDISO_LOCK"]
+
+#: MKL PARDISO is entered by one thread at a time, whatever the handle: held by
+#: :class:`~hht3d.linalg.symbolic.SymbolicFactorization` (the registry's ``lock``) and by the
+#: finalizer that frees a handle, which the garbage collector may run in any thread.
+PARDISO_LOCK = threading.RLock()
 
 
 @functools.lru_cache(maxsize=1)
@@ -41,7 +47,7 @@ class PardisoPattern:
         self._error = module.pardiso_wrapper.PyPardisoError
         _locate_mkl(module)
         self.solver = module.PyPardisoSolver(mtype=2)  # MKL's SPD defaults
-        weakref.finalize(self, self.solver.free_memory, True)
+        weakref.finalize(self, _free, self.solver)
         self._latest = Latest("PARDISO")
         self._indptr = (self._upper.indptr + 1).astype(np.int32)
         self._indices = (self._upper.indices + 1).astype(np.int32)
@@ -77,6 +83,12 @@ class PardisoPattern:
             return np.ascontiguousarray(self.run(33, upper, columns)).reshape(b.shape)
 
         return Factor(solve, self.n)
+
+
+def _free(solver) -> None:
+    """Release all of MKL's memory for ``solver``'s handle (PARDISO phase -1)."""
+    with PARDISO_LOCK:
+        solver.free_memory(True)
 
 
 def _int32(value: int):

@@ -1,6 +1,8 @@
 """Analyse a sparsity pattern once, factorize many matrices on it, on any registered backend."""
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -34,6 +36,11 @@ class SymbolicFactorization:
     :class:`Factor` of one ``SymbolicFactorization`` is valid (both keep one
     factor per analysis); create one ``SymbolicFactorization`` per factor
     that must stay alive.
+
+    A backend registered with a ``lock`` (:class:`~hht3d.linalg.backends.Backend`:
+    ``pardiso``, ``cholmod``) is entered by one thread at a time: the
+    analysis, every factorization and every solve of its factors hold that
+    lock, so tasks of the threads scheduler may share the process safely.
     """
 
     def __init__(self, pattern, backend: str | None = None):
@@ -42,19 +49,32 @@ class SymbolicFactorization:
         check_memory(pattern.shape[0], self.backend)
         warn_slow_fallback(pattern.shape[0], self.backend)
         entry = backends.SOLVER_BACKENDS[self.backend]
-        self._impl = entry.pattern(pattern, entry.module())
+        self._lock = entry.lock or contextlib.nullcontext()
+        with self._lock:
+            self._impl = entry.pattern(pattern, entry.module())
         self.n_factorizations = 0
 
     def factorize(self, a) -> Factor:
         """Numerically factorize ``a`` (same pattern as analysed)."""
-        factor = self._impl.factorize(_as_square_csr(a))
+        a = _as_square_csr(a)
+        with self._lock:
+            factor = self._impl.factorize(a)
         self.n_factorizations += 1
-        return factor
+        return Factor(_holding(self._lock, factor._solve), factor.n)
 
 
 def factorize(a, backend: str | None = None) -> Factor:
     """Factorize one SPD sparse matrix (analysis and numeric phase)."""
     return SymbolicFactorization(a, backend).factorize(a)
+
+
+def _holding(lock, solve):
+    """``solve`` called with ``lock`` held."""
+    def locked(b: np.ndarray) -> np.ndarray:
+        with lock:
+            return solve(b)
+
+    return locked
 
 
 def _as_square_csr(a) -> sp.csr_matrix:
