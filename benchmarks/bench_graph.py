@@ -55,7 +55,7 @@ def _run(args: list[str], threads: int) -> dict:
 # -- workers (run in subprocesses) ---------------------------------------------------------------
 
 def worker_dataset(workers: int, riesz_tasks: str) -> dict:
-    from hht3d.graph.dataset import run_dataset
+    from hht3d.dataset import run_dataset
 
     inputs = [p for p in map(model_path, DATASET) if p is not None]
     options = {} if riesz_tasks == "default" else {"riesz_tasks": int(riesz_tasks)}
@@ -90,7 +90,7 @@ def worker_riesz(mode: str, tasks: int) -> dict:
     from hht3d import graph
     from hht3d.spectral.monogenic_signal import monogenic
 
-    from hht3d.graph.scheduling import open_client
+    from hht3d.execution import open_client
 
     surface, imfs = _riesz_imfs()
     _ = surface.stiffness, surface.normals, surface.gradient("lsq")  # operators outside the timing
@@ -118,11 +118,11 @@ def _noop(x):
 def worker_overhead(scheduler: str, count: int) -> dict:
     from dask import delayed
 
-    from hht3d.graph.scheduling import compute
+    from hht3d.execution import compute
 
     tasks = [delayed(_noop, pure=True)(i) for i in range(count)]
     if scheduler == "distributed":
-        from hht3d.graph.scheduling import open_client
+        from hht3d.execution import open_client
 
         with open_client(2, log=None) as client:
             compute(tasks[:2], client=client, progress=False)

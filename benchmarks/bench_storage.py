@@ -55,7 +55,7 @@ def _peak_mb() -> float:
 
 
 def _timed(client, inputs, out, options) -> dict:
-    from hht3d.graph.dataset import run_dataset
+    from hht3d.dataset import run_dataset
 
     client.run(_reset_peak)
     start = time.perf_counter()
@@ -91,7 +91,7 @@ def main() -> None:
         fs.mkdir(BUCKET)
         for path in paths:
             fs.put_file(str(path), f"{BUCKET}/scans/{path.name}")
-        from hht3d.graph.dataset import run_dataset
+        from hht3d.dataset import run_dataset
 
         run_dataset([paths[1]], local_out, address=address, progress=False)  # warm-up: imports on the workers
         order = [name for i in range(args.repeats) for name in (("local", "s3") if i % 2 == 0 else ("s3", "local"))]

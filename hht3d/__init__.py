@@ -23,7 +23,7 @@ from .decomposition import EMDResult, eemd, emd
 from .errors import HHT3DError, InputError, NumericalError, PipelineError
 from .geometry import Surface
 from .io import data_path, load
-from .io.results import load_result
+from .results import load_result
 from .spectral import HilbertSpectrum, MonogenicSignal, fractional_laplacian, monogenic, riesz
 from .transform import HHTResult, hht
 from .version import __version__

@@ -24,7 +24,7 @@ from pathlib import Path
 from .errors import HHT3DError, PipelineError, one_line, shown
 from .redaction import redact
 from .io.read import data_path
-from .graph.scheduling import SCHEDULERS
+from .execution import SCHEDULERS
 from .viz.render import UP_AXES, VIEWS
 from .viz.viewer import VERTEX_BUDGET
 
@@ -76,8 +76,8 @@ def _not_done(plan, folder) -> str:
 
 
 def _execute(plan, args) -> int:
-    from .graph.dataset import summary_paths, write_summary
-    from .graph.scheduling import ClusterLost
+    from .dataset.summary import summary_paths, write_summary
+    from .execution import ClusterLost
     from .pipeline import failures, run_pipeline
     from .pipeline.resources import check_resources, resource_lines
     from .pipeline.runner import output_folder

@@ -100,7 +100,7 @@ class HHTResult:
         vertex properties.  ``.npz``: arrays ``vertices``, ``faces`` (meshes),
         ``normals``, ``laplacian``, ``n_neighbors``, ``signal``, ``imfs``,
         ``residue``, ``riesz``, ``amplitude``, ``phase``, ``frequency`` and
-        ``area`` (vertex areas); :func:`hht3d.io.results.load_result` reads it back.
+        ``area`` (vertex areas); :func:`hht3d.results.load_result` reads it back.
         ``path`` may be an fsspec URL, with ``storage_options`` (:mod:`hht3d.io.storage`).
         """
         if io.storage.is_url(path):  # object storage: written locally, then uploaded

@@ -15,7 +15,8 @@ import hht3d
 PACKAGE = Path(hht3d.__file__).parent
 LAYERS = [("hht3d.redaction", "hht3d.open3d_quiet"), ("hht3d.errors", "hht3d.version"), ("hht3d.records",), ("hht3d.linalg",), ("hht3d.geometry",),
           ("hht3d.io",), ("hht3d.decomposition",), ("hht3d.spectral",), ("hht3d.transform",),
-          ("hht3d.io.results", "hht3d.apps", "hht3d.viz"), ("hht3d.graph",), ("hht3d.pipeline",), ("hht3d.stopping",), ("hht3d.cli",), ("hht3d.__main__",)]
+          ("hht3d.results", "hht3d.apps", "hht3d.viz"), ("hht3d.execution",), ("hht3d.graph",), ("hht3d.dataset",),
+          ("hht3d.pipeline",), ("hht3d.stopping",), ("hht3d.cli",), ("hht3d.__main__",)]
 #: Upward imports inside a function: (importing module, imported module).
 DELEGATES = {("hht3d.transform", "hht3d.viz.viewer")}  # HHTResult.to_html
 MAX_LINES = 400
@@ -50,7 +51,7 @@ def _rank(name: str) -> int:
 
 
 def _group(name: str) -> str:
-    return "hht3d.io.results" if name.startswith("hht3d.io.results") else ".".join(name.split(".")[:2])
+    return ".".join(name.split(".")[:2])
 
 
 GRAPH = {name: _imports(name, path, _modules()) for name, path in _modules().items() if name != "hht3d"}

@@ -2,7 +2,7 @@
 
 Only the output folder moves to a temporary one.  Each run is a separate
 ``hht3d run`` process with a time limit, so a hang fails the test instead of
-stalling the suite.  ``tests/test_pipeline.py`` checks the examples' outputs
+stalling the suite.  ``tests/pipeline/test_runner.py`` checks the examples' outputs
 on small inputs with the synchronous scheduler; this file checks what a user
 gets from the files as written (``pipelines/point_cloud.yaml`` under the
 threads scheduler crashed or hung inside MKL PARDISO before the solver

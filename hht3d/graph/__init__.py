@@ -1,11 +1,11 @@
-"""The lazy Dask layer: one task per stage over the core, the dataset fan-out and the schedulers.
+"""The lazy Dask layer: one task per stage over the core.
 
 Data flow: :mod:`.tasks` (how tasks are made and surfaces shared) →
-:mod:`.stages` (the lazy twins of the core functions) → :mod:`.dataset`
-(many files) → :mod:`.scheduling` (run on threads, processes or a cluster).
+:mod:`.stages` (the lazy twins of the core functions).  Many files fan out in
+:mod:`hht3d.dataset`; graphs run on the schedulers of :mod:`hht3d.execution`
+(:func:`compute` is re-exported here).
 """
-from .dataset import RESULT_SUFFIXES, ItemSummary, dataset_graph, run_dataset, write_summary
-from .scheduling import SCHEDULERS, compute, open_client, worker_count
+from ..execution import SCHEDULERS, compute, open_client, worker_count
 from .stages import (eemd, emd, filter_geometry, filter_signal, hht, hks_features, imf_enhancement, load,
                      manifold_harmonics_filter, mirror, monogenic, monogenic_from_potential, operators,
                      prominent_features, reconstruct, save, signal, transform, transform_file)
@@ -15,6 +15,5 @@ __all__ = [
     "Builder", "mirror", "compute", "load", "from_surface", "as_key", "resident", "operators", "signal", "emd",
     "eemd", "riesz_potential", "monogenic", "monogenic_from_potential", "hht", "save", "transform",
     "transform_file", "filter_signal", "filter_geometry", "reconstruct", "prominent_features", "hks_features",
-    "imf_enhancement", "manifold_harmonics_filter", "RESULT_SUFFIXES", "ItemSummary", "dataset_graph", "run_dataset",
-    "write_summary", "SCHEDULERS", "open_client", "worker_count",
+    "imf_enhancement", "manifold_harmonics_filter", "SCHEDULERS", "open_client", "worker_count",
 ]

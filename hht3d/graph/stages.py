@@ -5,7 +5,7 @@ here with the same name, signature and docstring (as dask-image mirrors
 SciPy's ndimage): ``graph.emd(surface, signal, max_imfs=3)`` takes what
 :func:`hht3d.decomposition.decompose.emd` takes, Delayed values included, and returns a
 ``Delayed``.  :func:`mirror` makes such a twin from any core function.
-Stages compose freely and run on any scheduler of :mod:`hht3d.graph.scheduling`.
+Stages compose freely and run on any scheduler of :mod:`hht3d.execution`.
 
 Examples
 --------
@@ -24,12 +24,12 @@ Parallelism follows the method:
 * the Riesz transform of all IMFs is a sum over quadrature shifts
   (:mod:`hht3d.spectral.riesz_transform`): one task finds the spectral bounds and shifts, then
   ``riesz_tasks`` independent *shift-group* tasks (default: one per worker,
-  :func:`hht3d.graph.scheduling.worker_count`) each factorize their shifts once and
+  :func:`hht3d.execution.workers.worker_count`) each factorize their shifts once and
   solve all IMFs as one multi-column right-hand side; they depend only on the
   EMD task and the surface, and factorizations never leave a task.  (One task
   per IMF would repeat every factorization once per IMF.)  :func:`monogenic`
   and :func:`hht` take ``riesz_tasks`` beyond the eager signature;
-* the files of a dataset are independent subgraphs (:mod:`hht3d.graph.dataset`).
+* the files of a dataset are independent subgraphs (:mod:`hht3d.dataset.run`).
 
 How the tasks are made, and how workers keep each surface's operators, is
 :mod:`hht3d.graph.tasks`.  Settings are checked when the graph is built:
@@ -54,7 +54,7 @@ from ..io.read import load as _load
 from ..spectral.monogenic_signal import monogenic_from_potential as _monogenic_from_potential
 from ..spectral.options import RieszOptions
 from ..transform import HHTResult, decomposition_stage, hht_stages
-from .scheduling import compute
+from ..execution import compute
 from .tasks import Builder, as_key, from_surface, resident, riesz_potential
 
 __all__ = [

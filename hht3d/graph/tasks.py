@@ -32,7 +32,7 @@ from ..spectral.options import RIESZ_DEFAULTS, RieszOptions
 from ..spectral.quadrature import combine_quadrature_parts, quadrature_part, quadrature_plan
 from ..spectral.riesz_transform import fractional_laplacian
 from ..spectral.shifts import shift_analysis
-from .scheduling import worker_count
+from ..execution.workers import worker_count
 
 __all__ = ["Builder", "resident", "as_key", "from_surface", "riesz_potential", "RESIDENT_SURFACES",
            "ARRAY_KEY_SIZE"]
@@ -50,7 +50,7 @@ class Builder:
     guard : callable, optional
         ``guard(step, func) -> callable`` wrapping every task's function; the
         dataset runner uses it to isolate failures per file
-        (:class:`hht3d.graph.dataset.Failure`).  Default: tasks raise normally.
+        (:class:`hht3d.dataset.guard.Failure`).  Default: tasks raise normally.
     riesz_tasks : int, optional
         Shift-group tasks of the Riesz quadrature (:func:`riesz_potential`).
     """
@@ -179,7 +179,7 @@ def riesz_potential(surface, imfs, *, method: str = RIESZ_DEFAULTS.method, tol: 
 
     ``method="quadrature"``: a bounds task, ``riesz_tasks`` shift-group tasks
     (:func:`hht3d.spectral.quadrature_part`; default one per worker of the
-    scheduler, :func:`hht3d.graph.scheduling.worker_count`) and a summing task.
+    scheduler, :func:`hht3d.execution.workers.worker_count`) and a summing task.
     Other methods: one task (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`).
     """
     builder = Builder() if builder is None else builder

@@ -1,4 +1,4 @@
-"""Reading and writing surfaces and results, and where files may be read and written.
+"""Reading and writing surfaces and result arrays, and where files may be read and written.
 
 * :mod:`~hht3d.io.read` — meshes, point clouds, PLY and NPZ headers;
 * :mod:`~hht3d.io.write` — PLY, NPZ and coloured PLY writers;
@@ -9,8 +9,7 @@
 * :mod:`~hht3d.io.atomic` — atomic writes and their stale temporary files;
 * :mod:`~hht3d.io.manifest` — what hht3d wrote in an output folder (overwrite and resume rules);
 * :mod:`~hht3d.io.folder` — an output folder's rules, local (manifest, lock, confinement) or URL;
-* :mod:`~hht3d.io.storage` — fsspec URLs (``s3://``, ``gs://``, ...): reading, atomic uploads, listing;
-* :mod:`~hht3d.io.results` — reading back a saved result.
+* :mod:`~hht3d.io.storage` — fsspec URLs (``s3://``, ``gs://``, ...): reading, atomic uploads, listing.
 """
 from .atomic import atomic_path, check_output_paths, remove_stale_parts
 from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS, check_regular_file

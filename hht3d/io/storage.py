@@ -34,7 +34,7 @@ from .atomic import atomic_path, check_output_paths
 from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS
 from .paths import resolve_inputs
 
-__all__ = ["EXTRAS", "is_url", "filesystem", "name", "stem", "parent_name", "join", "resolve_locations",
+__all__ = ["EXTRAS", "is_url", "filesystem", "file_name", "stem", "parent_name", "join", "resolve_locations",
            "exists", "local_copy", "load_url", "atomic_location", "write_via", "check_outputs"]
 
 #: The hht3d extra that installs each protocol's back-end.
@@ -83,14 +83,14 @@ def _key(url: str) -> str:
     return urlsplit(url.split("::")[-1]).path
 
 
-def name(location) -> str:
+def file_name(location) -> str:
     """File name of a path or URL (a URL's query string left out)."""
     return PurePosixPath(_key(location)).name if is_url(location) else Path(location).name
 
 
 def stem(location) -> str:
     """File name without its suffix."""
-    return PurePosixPath(name(location)).stem
+    return PurePosixPath(file_name(location)).stem
 
 
 def parent_name(location) -> str:
@@ -190,7 +190,7 @@ def local_copy(location, storage_options: dict | None = None, *, head: int | Non
         return
     fs, path = filesystem(location, storage_options)
     with tempfile.TemporaryDirectory(prefix="hht3d-") as folder:
-        local = Path(folder) / (name(location) or "object")
+        local = Path(folder) / (file_name(location) or "object")
         try:
             if head is None:
                 fs.get_file(path, str(local))
@@ -228,7 +228,7 @@ def atomic_location(location, storage_options: dict | None = None):
         return
     fs, path = filesystem(location, storage_options)
     with tempfile.TemporaryDirectory(prefix="hht3d-") as folder:
-        local = Path(folder) / name(location)
+        local = Path(folder) / file_name(location)
         yield local
         _upload(fs, str(local), path, location)
 

@@ -1,11 +1,11 @@
 """Declarative YAML pipelines: load → process → export, validated before anything runs.
 
-A pipeline file (schema in :mod:`hht3d.pipeline.schema`) names its inputs,
+A pipeline file (schema in :mod:`hht3d.pipeline.validation`) names its inputs,
 a list of steps (operations of :data:`~hht3d.pipeline.registry.OPERATIONS`
 with parameters and references to earlier steps) and the files to write.
 :func:`load_pipeline` validates it into a typed :class:`Pipeline`;
 :func:`run_pipeline` compiles that to the lazy graph of :mod:`hht3d.graph.stages`
-and runs it on any scheduler of :mod:`hht3d.graph.scheduling`.
+and runs it on any scheduler of :mod:`hht3d.execution`.
 
 >>> from hht3d import data_path
 >>> from hht3d.pipeline import load_pipeline
@@ -25,7 +25,7 @@ from .plan import Execution, Output, Pipeline, Step
 from .registry import OPERATIONS, Operation, Slot
 from .runner import failures, pipeline_graph, run_pipeline
 from .document import apply_overrides
-from .schema import VERSION, builtin_models, load_pipeline, parse_pipeline
+from .validation import VERSION, builtin_models, load_pipeline, parse_pipeline
 
 __all__ = [
     "VERSION", "load_pipeline", "parse_pipeline", "apply_overrides", "builtin_models",

@@ -2,7 +2,7 @@
 
 :func:`read_yaml` parses a document into plain dicts and lists whose
 mappings (:class:`YAMLMapping`) remember ``file:line`` of each key, so that
-:mod:`hht3d.pipeline.schema` can say where a problem is; :func:`at` gives
+:mod:`hht3d.pipeline.validation` can say where a problem is; :func:`at` gives
 that place.  :func:`apply_overrides` applies the CLI's ``--set KEY.PATH=VALUE``
 to a read document, recording ``--set ...`` as the place of what it sets.
 Nothing here knows what a pipeline contains.

@@ -11,7 +11,7 @@ The schema says what the types can say: the keys of every block, each
 operation's parameters with their types, ranges, choices and defaults, the
 gains, the output formats and their options.  What needs the pipeline as a
 whole (references between steps, the kind a step makes, vertex counts,
-writable outputs) is left to :class:`~hht3d.pipeline.schema.Validator`,
+writable outputs) is left to :class:`~hht3d.pipeline.validation.Validator`,
 which ``hht3d validate`` runs.
 
 Examples
@@ -34,7 +34,7 @@ from ..apps.filters import GAINS
 from .outputs import FORMATS
 from .params import Param
 from .registry import OPERATIONS
-from .schema import EXECUTION, MAX_ID, VERSION, builtin_models
+from .validation import EXECUTION, MAX_ID, VERSION, builtin_models
 
 __all__ = ["pipeline_schema", "schema_text", "param_schema"]
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..graph.dataset import summary_paths
+from ..dataset.summary import summary_paths
 from ..io.storage import join, parent_name, stem
 from .outputs import Format
 from .params import yaml_text
@@ -26,7 +26,7 @@ PLACEHOLDERS = ("stem", "parent", "name")
 
 @dataclass(frozen=True)
 class Execution:
-    """Where and how the graph runs (:func:`hht3d.graph.scheduling.compute`)."""
+    """Where and how the graph runs (:func:`hht3d.execution.schedulers.compute`)."""
 
     scheduler: str = "threads"
     workers: int | None = None

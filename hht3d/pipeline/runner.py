@@ -2,13 +2,13 @@
 
 Every input file becomes an independent subgraph of its steps' tasks
 (:mod:`hht3d.graph.stages`) and output writes.  Every task is guarded as in
-:mod:`hht3d.graph.guard`: an exception becomes a record of the step and the
+:mod:`hht3d.dataset.guard`: an exception becomes a record of the step and the
 input file that the item's later tasks pass along, so one bad file is
 reported while the others finish.  An output is written once the step it
 comes from is done, atomically: a failed item may have the outputs of its
 earlier steps, which its summary row lists, never a half-written file.
 Inputs are skipped on resume by the loop shared with
-:func:`hht3d.graph.dataset.run_dataset`, and outputs checked, written and
+:func:`hht3d.dataset.run_dataset`, and outputs checked, written and
 recorded through :class:`hht3d.io.folder.OutputFolder`: in a local folder,
 before anything is computed, a file hht3d did not write is refused unless
 ``overwrite`` and temporary files of killed runs are removed, and every
@@ -23,13 +23,15 @@ from pathlib import Path
 from dask import delayed
 from dask.base import tokenize
 
-from ..graph.dataset import Guarded, ItemSummary, item_summary, items_graph, quality_fields, write_summary
-from ..graph.scheduling import compute
+from ..dataset.guard import Guarded
+from ..dataset.run import items_graph
+from ..dataset.summary import ItemSummary, item_summary, quality_fields, write_summary
+from ..execution import compute
 from ..graph.stages import Builder
 from ..io.folder import OutputFolder
-from ..io.storage import name as file_name
+from ..io.storage import file_name
 from .plan import FILE, Pipeline
-from .schema import EXECUTION
+from .validation import EXECUTION
 
 __all__ = ["output_folder", "pipeline_graph", "run_pipeline", "failures"]
 
@@ -40,7 +42,7 @@ def _guarded(source: Path, label):
 
 
 def _item(plan: Pipeline, folder: OutputFolder, source: Path, paths: list[Path]):
-    """The lazy :class:`~hht3d.graph.summary.ItemSummary` of one input file."""
+    """The lazy :class:`~hht3d.dataset.summary.ItemSummary` of one input file."""
     results, parts = {}, {}
     for step in plan.steps:
         builder = _guarded(source, lambda task, s=step: s.id if task in (s.op.name, s.id) else f"{s.id} ({task})")
@@ -75,7 +77,7 @@ def output_folder(plan: Pipeline, run: str | None = None) -> OutputFolder:
 
 
 def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder | None = None):
-    """The pipeline as one lazy list of :class:`~hht3d.graph.summary.ItemSummary`, one per input file.
+    """The pipeline as one lazy list of :class:`~hht3d.dataset.summary.ItemSummary`, one per input file.
 
     Parameters
     ----------
@@ -96,7 +98,7 @@ def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int |
                  address: str | None = None, progress: bool | None = None,
                  resume: bool = False, overwrite: bool = False, summary: bool = True,
                  run: str | None = None) -> list[ItemSummary]:
-    """Run a pipeline; return one :class:`~hht3d.graph.summary.ItemSummary` per input file.
+    """Run a pipeline; return one :class:`~hht3d.dataset.summary.ItemSummary` per input file.
 
     Arguments left as ``None`` take the pipeline's ``execution`` block and
     are checked like it.  The output locations are checked first, so a run

@@ -7,6 +7,11 @@ import re
 
 import numpy as np
 
+from hht3d import HilbertSpectrum, Surface
+from hht3d.viz.viewer import write_page
+from helpers.meshes import fibonacci_sphere
+
+
 def page_data(path) -> dict:
     """The JSON the page's script reads."""
     text = path.read_text(encoding="utf-8")
@@ -21,3 +26,19 @@ def decoded(spec) -> np.ndarray:
 
 def field_values(data: dict, name: str, copy: int = 0) -> np.ndarray:
     return decoded(next(f for f in data["fields"] if f["name"] == name)["values"][copy])
+
+
+class _Limited(HilbertSpectrum):
+    """A spectrum that reports the frequency above which its surface resolves nothing."""
+
+    @property
+    def resolvable_frequency(self):
+        return 12.0
+
+
+def cloud_with_spectrum(tmp_path):
+    points = fibonacci_sphere(4000)
+    cloud = Surface(points, name="cloud")
+    frequency = np.vstack([20 + 5 * points[:, 0], 4 + points[:, 1]])
+    spectrum = _Limited(frequency, np.ones_like(frequency), np.full(len(points), 1 / len(points)))
+    return write_page(tmp_path / "cloud.html", [cloud], {"z": points[:, 2]}, title="cloud", spectrum=spectrum)

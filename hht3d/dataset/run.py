@@ -1,0 +1,177 @@
+"""Datasets of many surfaces: one independent subgraph per file, failures isolated, outputs safe.
+
+:func:`dataset_graph` builds, for every input file, the subgraph
+load → signal → EMD → Riesz shift groups → spectra → export, every task
+*guarded* (:mod:`hht3d.dataset.guard`): one unreadable or degenerate file is
+reported with its step and reason while the other files finish.  Outputs are
+written atomically, one task each, and recorded in the output folder's
+manifest (:mod:`hht3d.io.manifest`) once complete.
+
+:func:`items_graph` is shared with the pipeline runner
+(:mod:`hht3d.pipeline.runner`): the one loop that skips finished inputs on
+resume.  What "finished", "writable" and "written" mean for a local folder
+or an fsspec URL is decided in one place, :class:`hht3d.io.folder.OutputFolder`.
+
+:func:`run_dataset` computes the graph on any scheduler of
+:mod:`hht3d.execution` and writes ``summary.json`` and ``summary.csv``
+(:mod:`hht3d.dataset.summary`).
+"""
+from __future__ import annotations
+
+from dask import delayed
+from dask.base import tokenize
+
+from ..graph import stages as graph
+from ..errors import InputError
+from ..geometry.signals import SIGNALS
+from ..io.folder import OutputFolder, check_locations
+from ..io.manifest import new_run_id
+from ..io.storage import file_name, join, resolve_locations, stem
+from ..transform import HHTResult
+from .guard import MAX_ERROR, Failure, Guarded
+from ..execution import compute
+from .summary import (SUMMARY_FILES, ItemSummary, item_summary, quality_fields, skipped_summary, summary_paths,
+                      write_summary)
+
+__all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary",
+           "summary_paths", "item_summary", "skipped_summary", "quality_fields", "SUMMARY_FILES", "MAX_ERROR",
+           "RESULT_SUFFIXES", "items_graph"]
+
+#: The files a dataset item's result can be saved as (:meth:`HHTResult.save`); a pipeline's
+#: output formats per kind of result are :data:`hht3d.pipeline.FORMATS`.
+RESULT_SUFFIXES = (".ply", ".npz")
+
+
+def output_paths(source, out_dir, formats=RESULT_SUFFIXES, pattern: str = "{stem}_hht") -> list:
+    """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format (paths or URLs)."""
+    base = pattern.format(stem=stem(source))
+    return [join(out_dir, f"{base}{suffix}") for suffix in formats]
+
+
+def items_graph(items: dict, folder: OutputFolder, make_item, *, resume: bool = False):
+    """One lazy :class:`ItemSummary` per input, in a delayed list: the one resume loop.
+
+    ``items`` maps each input to its output paths; ``make_item(source, paths)``
+    builds an input's lazy row.  With ``resume``, an input that ``folder``
+    finds done (:meth:`~hht3d.io.folder.OutputFolder.done`: locally, outputs the
+    manifest records as complete with the same size and checksum; for a URL,
+    outputs that exist) is a ``"skipped"`` row instead.
+    """
+    rows = []
+    for source, paths in items.items():
+        if resume and folder.done(paths):
+            rows.append(skipped_summary(source, paths, folder.storage_options))
+        else:
+            rows.append(make_item(source, paths))
+    return delayed(list, pure=True)(rows)
+
+
+def _check_options(signal: str, formats) -> None:
+    """An invalid option is the caller's error, found before any task is made."""
+    if signal not in SIGNALS:
+        raise InputError(f"unknown signal {signal!r}; run_dataset takes one of {sorted(SIGNALS)}")
+    for suffix in formats:
+        if suffix not in RESULT_SUFFIXES:
+            raise InputError(f"unknown output format {suffix!r}; run_dataset writes {', '.join(RESULT_SUFFIXES)}")
+
+
+def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=RESULT_SUFFIXES,
+                  pattern: str = "{stem}_hht", resume: bool = False, overwrite: bool = False,
+                  load_options: dict | None = None, run: str | None = None, storage_options: dict | None = None,
+                  **hht_options):
+    """Lazy HHT of every input file; returns a delayed list of :class:`ItemSummary`.
+
+    Parameters
+    ----------
+    inputs : path, glob, folder or list of them
+        Local or fsspec URLs (``s3://bucket/scans/*.ply``), resolved by
+        :func:`hht3d.io.storage.resolve_locations` (local files hht3d wrote are never inputs).
+    out_dir : path or URL
+        Where the per-item outputs go (see :func:`output_paths`); a local
+        folder keeps a manifest, a URL does not (:mod:`hht3d.io.folder`).
+    signal : str
+        One of :data:`hht3d.geometry.signals.SIGNALS`.
+    formats : sequence of {".ply", ".npz"}
+    resume : bool
+        Skip items whose outputs are done: recorded complete in a local folder's
+        manifest, or existing in a URL folder.
+    overwrite : bool
+        Replace existing files hht3d did not write (refused otherwise; local folders).
+    load_options : dict, optional
+        Passed to :func:`hht3d.io.load`.
+    run : str, optional
+        The run id recorded in the manifest (default: a new one).
+    storage_options : dict, optional
+        Options of the fsspec back-end of URL inputs and outputs; the workers
+        receive them with the URLs and read and write the files themselves.
+    **hht_options
+        Passed to :func:`hht3d.graph.stages.transform` (EMD and Riesz options).
+
+    Raises
+    ------
+    InputError
+        An unknown ``signal`` or format, or bad inputs.
+    OutputError
+        An output cannot be written there, is an input, or would replace a
+        file hht3d did not write (checked before any task is made).
+    """
+    _check_options(signal, formats)
+    sources = resolve_locations(inputs, storage_options)
+    items = {source: output_paths(source, out_dir, formats, pattern) for source in sources}
+    check_locations(items, out_dir)
+    folder = OutputFolder(out_dir, storage_options=storage_options, run=run)
+    folder.prepare([p for paths in items.values() for p in paths] + summary_paths(out_dir), overwrite=overwrite)
+    save = folder.writer(HHTResult.save)
+    load_options = {**(load_options or {}), **({"storage_options": storage_options} if storage_options else {})}
+
+    def item(source, paths):
+        tasks = graph.Builder(guard=lambda step, func, src=str(source): Guarded(step, func, src))
+        stages = graph.transform_file(tasks, source, signal, load_options, **hht_options)
+        quality = tasks.task("quality", quality_fields)(stages["hht"], stages["load"])
+        writes = [tasks.task(f"write {file_name(p)}", save)(stages["hht"], str(p)) for p in paths]
+        return delayed(item_summary, pure=True, name=f"summary-{tokenize(str(source), paths)}")(
+            str(source), paths, stages["load"], stages["hht"], quality, [*stages.values(), quality], writes)
+
+    return items_graph(items, folder, item, resume=resume)
+
+
+def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int | None = None,
+                address: str | None = None, progress: bool = True, **options) -> list[ItemSummary]:
+    """Build :func:`dataset_graph`, compute it, write the summary, return its rows.
+
+    Parameters
+    ----------
+    inputs, out_dir
+        As for :func:`dataset_graph`: paths or fsspec URLs.
+    scheduler, workers, address, progress
+        As for :func:`hht3d.execution.schedulers.compute`.
+    **options
+        Those of :func:`dataset_graph` (``signal``, ``formats``, ``resume``,
+        ``overwrite``, ``load_options``, ``storage_options``) and the HHT options of
+        :func:`hht3d.graph.stages.transform`.
+
+    Returns
+    -------
+    list of ItemSummary
+        One per input file; a failed file is a row with ``status="failed"``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d import data_path
+    >>> from hht3d.dataset import run_dataset
+    >>> out = Path(tempfile.mkdtemp())
+    >>> rows = run_dataset([data_path("spot.ply")], out, scheduler="synchronous", progress=False,
+    ...                    emd={"max_imfs": 2})
+    >>> [(row.status, row.vertices, row.imfs) for row in rows]
+    [('ok', 2930, 2)]
+    >>> sorted(path.name for path in out.iterdir() if not path.name.startswith("."))
+    ['spot_hht.npz', 'spot_hht.ply', 'summary.csv', 'summary.json']
+    """
+    run = options.pop("run", None) or new_run_id()
+    (rows,) = compute(dataset_graph(inputs, out_dir, run=run, **options), scheduler=scheduler, workers=workers,
+                      address=address, progress=progress)
+    OutputFolder(out_dir, storage_options=options.get("storage_options"), run=run).finish([])
+    write_summary(rows, out_dir, run, options.get("storage_options"))
+    return rows

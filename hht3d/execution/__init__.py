@@ -1,0 +1,15 @@
+"""Running task graphs: the schedulers, their workers, progress and lost clusters.
+
+* :mod:`~hht3d.execution.schedulers` — :func:`compute` on ``synchronous``, ``threads``,
+  ``processes`` or ``distributed``, and :func:`open_client`;
+* :mod:`~hht3d.execution.workers` — how many workers, their BLAS threads and SIGINT;
+* :mod:`~hht3d.execution.progress` — progress bars and plain progress lines;
+* :mod:`~hht3d.execution.cluster` — gathering results from a cluster that may lose its workers.
+"""
+from .cluster import ClusterLost
+from .progress import PROGRESS_INTERVAL, ProgressLines
+from .schedulers import MAX_WORKERS, SCHEDULERS, compute, open_client
+from .workers import worker_count
+
+__all__ = ["SCHEDULERS", "MAX_WORKERS", "compute", "open_client", "worker_count", "PROGRESS_INTERVAL",
+           "ProgressLines", "ClusterLost"]

@@ -1,0 +1,63 @@
+"""Progress of a local scheduler on stderr: a redrawn bar on a terminal, rate-limited plain lines otherwise."""
+from __future__ import annotations
+
+import sys
+import time
+
+from dask.callbacks import Callback
+
+__all__ = ["PROGRESS_INTERVAL", "ProgressLines", "local_progress", "is_terminal"]
+
+#: Seconds between progress lines when stderr is not a terminal.
+PROGRESS_INTERVAL = 10.0
+
+
+def is_terminal(stream) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):  # no isatty, or closed
+        return False
+
+
+def local_progress():
+    """A redrawn bar on a terminal; rate-limited plain lines otherwise."""
+    if is_terminal(sys.stderr):
+        from dask.diagnostics import ProgressBar
+
+        return ProgressBar(minimum=1.0, out=sys.stderr)
+    return ProgressLines(sys.stderr)
+
+
+class ProgressLines(Callback):
+    """Progress of a local scheduler as plain lines, ``hht3d: 40% of 125 tasks done, 12 s``.
+
+    At most one line per ``interval`` seconds (default
+    :data:`PROGRESS_INTERVAL`), and a last one when the run took longer than
+    that: a log of a long run gets a few lines, not a redrawn bar's thousands
+    of updates.
+    """
+
+    def __init__(self, out, interval: float | None = None):
+        super().__init__()
+        self.out, self.interval = out, PROGRESS_INTERVAL if interval is None else interval
+        self.start = self.last = time.monotonic()
+
+    def _start_state(self, dsk, state):
+        self.start = self.last = time.monotonic()
+
+    def _posttask(self, key, result, dsk, state, worker_id):
+        now = time.monotonic()
+        if now - self.last >= self.interval:
+            self.last = now
+            self._line(state, now)
+
+    def _finish(self, dsk, state, errored):
+        now = time.monotonic()
+        if now - self.start >= self.interval and not errored:
+            self._line(state, now)
+
+    def _line(self, state, now: float) -> None:
+        done = len(state["finished"])
+        total = done + sum(len(state[k]) for k in ("ready", "waiting", "running"))
+        print(f"hht3d: {100 * done // max(total, 1)}% of {total} tasks done, {now - self.start:.0f} s",
+              file=self.out, flush=True)

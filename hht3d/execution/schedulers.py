@@ -1,0 +1,137 @@
+"""Running hht3d task graphs on a Dask scheduler.
+
+Graph construction (:mod:`hht3d.graph.stages`) and execution are separate: any
+graph runs unchanged on
+
+* ``"synchronous"``: one thread, for debugging (pdb works inside tasks);
+* ``"threads"``: a local thread pool;
+* ``"processes"``: a local process pool (BLAS limited to one thread per
+  process so the pool does not oversubscribe the cores);
+* ``"distributed"``: a ``dask.distributed`` cluster, either a
+  ``LocalCluster`` started on demand with ``workers`` single-threaded worker
+  processes, or an existing scheduler given by ``address``
+  (``"tcp://host:8786"``).
+
+Progress goes to stderr (:mod:`hht3d.execution.progress`); local workers are
+set up by :mod:`hht3d.execution.workers`.
+"""
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import sys
+
+import dask
+
+from ..errors import InputError, one_line
+from .cluster import gather_bounded
+from .progress import is_terminal, local_progress
+from .workers import limit_blas_threads, sigint_ignored_by_children
+
+__all__ = ["SCHEDULERS", "MAX_WORKERS", "compute", "open_client"]
+
+SCHEDULERS = ("synchronous", "threads", "processes", "distributed")
+#: The most workers a run may ask for: threads, processes or local-cluster workers.
+MAX_WORKERS = 256
+
+
+@contextlib.contextmanager
+def open_client(workers: int | None = None, address: str | None = None, *, log=sys.stderr):
+    """A ``distributed.Client``: to ``address`` if given, else to a new ``LocalCluster``.
+
+    The local cluster has ``workers`` single-threaded worker processes
+    (default: one per core); both are closed on exit.  The dashboard link is
+    written to ``log``.
+    """
+    from distributed import Client, LocalCluster
+
+    if address:
+        try:
+            client = Client(address, timeout="10s")
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            raise InputError(f"cannot reach the Dask scheduler at {address!r}: {one_line(exc)}") from None
+        cluster = None
+    else:
+        with sigint_ignored_by_children():
+            # Only critical logs: a worker stopped mid-heartbeat (SIGTERM, Ctrl-C) logs an ERROR with a
+            # traceback; task errors reach the client and the summary rows anyway.
+            cluster = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1,
+                                   processes=True, dashboard_address=":0", silence_logs=logging.CRITICAL)
+        client = Client(cluster)
+    try:
+        if log is not None:
+            print(f"hht3d: Dask dashboard at {client.dashboard_link}", file=log)
+        yield client
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def compute(*graphs, scheduler: str = "threads", workers: int | None = None, address: str | None = None,
+            progress: bool = True, client=None):
+    """Compute Dask objects and return their values (a tuple, like ``dask.compute``).
+
+    Parameters
+    ----------
+    graphs
+        ``dask.delayed`` objects or collections of them.
+    scheduler : {"synchronous", "threads", "processes", "distributed"}
+    workers : int, optional
+        Threads, processes or local-cluster workers; default one per core.
+    address : str, optional
+        Scheduler address of an existing cluster (implies ``"distributed"``).
+    progress : bool
+        Show progress on stderr (a bar, or plain lines when it is not a terminal).
+    client : distributed.Client, optional
+        Reuse a client instead of opening one.
+    """
+    if address or client is not None:
+        scheduler = "distributed"
+    if scheduler not in SCHEDULERS:
+        raise InputError(f"unknown scheduler {scheduler!r}; choose one of {SCHEDULERS}")
+    if workers is not None and not 1 <= workers <= MAX_WORKERS:
+        raise InputError(f"workers must be in [1, {MAX_WORKERS}], got {workers}")
+    if scheduler == "distributed":
+        if client is not None:
+            return _compute_distributed(client, graphs, progress)
+        with open_client(workers, address) as opened:
+            return _compute_distributed(opened, graphs, progress, address or "a local cluster")
+    options = {"scheduler": scheduler}
+    if scheduler == "threads" and workers:
+        options["num_workers"] = workers
+    bar = local_progress() if progress else contextlib.nullcontext()
+    with bar, (_process_pool(workers) if scheduler == "processes" else contextlib.nullcontext()) as pool:
+        return dask.compute(*graphs, **options, **({"pool": pool} if pool is not None else {}))
+
+
+@contextlib.contextmanager
+def _process_pool(workers: int | None):
+    """A pool of ``workers`` processes (default one per core) with BLAS limited to one thread, all
+    started at once with SIGINT ignored (so that Ctrl-C, sent to the whole process group, reaches the
+    main process only, even while a worker is still starting)."""
+    from concurrent.futures import ProcessPoolExecutor
+    import multiprocessing
+
+    count = workers or os.cpu_count() or 1
+    context = multiprocessing.get_context(dask.config.get("multiprocessing.context", "spawn"))
+    with sigint_ignored_by_children():
+        pool = ProcessPoolExecutor(count, mp_context=context, initializer=limit_blas_threads)
+        for _ in range(count):  # each submission finding no idle worker starts one
+            pool.submit(os.getpid)
+    try:
+        yield pool
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
+
+
+
+def _compute_distributed(client, graphs, progress: bool, where: str = "the given client"):
+    from distributed import progress as show_progress
+
+    futures = client.compute(list(graphs))
+    if progress and is_terminal(sys.stderr):
+        show_progress(futures, notebook=False)
+        print(file=sys.stderr)
+    return tuple(gather_bounded(client, futures, where))

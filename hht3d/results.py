@@ -1,0 +1,60 @@
+"""Reading back an HHT result saved by :meth:`HHTResult.save <hht3d.transform.HHTResult.save>`.
+
+The partner of ``result.save("x.npz")``: :func:`load_result` rebuilds the
+surface (vertices, faces, normals and Laplacian choice as saved), the IMFs,
+the residue and the monogenic signal, so that its spectrum, quality figures,
+figures and pages equal those of the result that was saved.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .errors import InputError
+from .geometry.surface import Surface
+from .io.read import read_npz
+from .spectral.monogenic_signal import MonogenicSignal
+from .transform import HHTResult
+
+__all__ = ["load_result", "RESULT_ARRAYS"]
+
+#: The arrays every saved result holds (meshes add ``faces``).
+RESULT_ARRAYS = ("vertices", "normals", "laplacian", "n_neighbors", "signal", "imfs", "residue", "riesz",
+                 "amplitude", "phase", "frequency", "area")
+
+
+def load_result(path) -> HHTResult:
+    """The :class:`~hht3d.transform.HHTResult` saved as ``path`` (a ``.npz`` of ``HHTResult.save``).
+
+    ``info`` holds ``{"source": path}``: the diagnostics of the run are not saved.
+
+    Raises
+    ------
+    InputError
+        Not a ``.npz`` (a PLY keeps no Riesz vectors), unreadable, or without the arrays of a result.
+
+    Examples
+    --------
+    >>> import tempfile, numpy as np
+    >>> from pathlib import Path
+    >>> from hht3d import data_path, hht, load
+    >>> from hht3d.geometry.signals import mean_curvature
+    >>> from hht3d.results import load_result
+    >>> spot = load(data_path("spot.ply"))
+    >>> result = hht(spot, mean_curvature(spot), emd={"max_imfs": 2})
+    >>> again = load_result(result.save(Path(tempfile.mkdtemp()) / "spot_hht.npz"))
+    >>> np.array_equal(again.imfs, result.imfs), np.allclose(again.spectrum.mean_frequency(), result.spectrum.mean_frequency(), rtol=1e-12)
+    (True, True)
+    """
+    path = Path(path)
+    if path.suffix.lower() != ".npz":
+        raise InputError(f"{path}: load_result reads the .npz of HHTResult.save (a .ply keeps no Riesz vectors)")
+    arrays = read_npz(path)
+    missing = [name for name in RESULT_ARRAYS if name not in arrays]
+    if missing:
+        raise InputError(f"{path}: no {', '.join(missing)}; expected a file written by HHTResult.save")
+    surface = Surface(arrays["vertices"], arrays.get("faces"), normals=arrays["normals"],
+                      laplacian=str(arrays["laplacian"]), n_neighbors=int(arrays["n_neighbors"]), name=path.stem)
+    mono = MonogenicSignal(imfs=arrays["imfs"], riesz=arrays["riesz"], amplitude=arrays["amplitude"],
+                           phase=arrays["phase"], frequency=arrays["frequency"], area=arrays["area"])
+    return HHTResult(surface=surface, signal=arrays["signal"], imfs=arrays["imfs"], residue=arrays["residue"],
+                     monogenic=mono, info={"source": str(path)})

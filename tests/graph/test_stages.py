@@ -1,0 +1,112 @@
+"""The lazy graph's stages (hht3d.graph.stages): the shape of the graph, the same numbers as the eager functions,
+the eager signatures, settings checked while the graph is built."""
+import numpy as np
+import pytest
+from dask.core import get_dependencies
+
+from hht3d import InputError, graph
+from hht3d.transform import hht as eager_hht
+from hht3d.geometry.signals import mean_curvature
+from hht3d.io import load
+from helpers.graphs import OPTIONS, _prefix, _surfaces
+
+
+def test_riesz_stage_is_independent_shift_group_tasks():
+    surface = graph.from_surface(_surfaces()[0])
+    result = graph.hht(surface, graph.signal(surface, "mean_curvature"), **OPTIONS)
+    tasks = dict(result.__dask_graph__())
+    by_prefix = {}
+    for key in tasks:
+        by_prefix.setdefault(_prefix(key), []).append(key)
+    groups = by_prefix["_quadrature_part"]
+    assert len(groups) == OPTIONS["riesz_tasks"]
+    (emd_key,) = by_prefix["emd"]
+    (imfs_key,) = by_prefix["_imfs"]
+    (plan_key,) = by_prefix["_quadrature_plan"]
+    (surface_key,) = [k for k in tasks if _prefix(k).startswith("surface")]
+    for key in groups:
+        deps = get_dependencies(tasks, key)
+        # a group needs only the surface (its operators), the IMFs and the shifts
+        assert deps == {surface_key, imfs_key, plan_key}
+        assert not deps & set(groups)
+    assert get_dependencies(tasks, imfs_key) == {emd_key}
+    assert get_dependencies(tasks, plan_key) == {surface_key}  # bounds do not wait for EMD
+
+
+def test_graph_equals_eager_hht():
+    surface = _surfaces()[0]
+    s = graph.from_surface(surface)
+    (lazy,) = graph.compute(graph.hht(s, graph.signal(s, "mean_curvature"), **OPTIONS),
+                            scheduler="synchronous", progress=False)
+    eager = eager_hht(surface, mean_curvature(surface), emd=OPTIONS["emd"])
+    np.testing.assert_array_equal(lazy.imfs, eager.imfs)
+    # shifts summed in groups instead of one loop: only the summation order differs
+    np.testing.assert_allclose(lazy.monogenic.riesz, eager.monogenic.riesz, rtol=0,
+                               atol=1e-12 * np.abs(eager.monogenic.riesz).max())
+
+
+def test_eemd_members_are_tasks():
+    s = graph.from_surface(_surfaces()[0])
+    lazy = graph.eemd(s, graph.signal(s, "mean_curvature"), ensemble_size=4, seed=3, max_imfs=2)
+    members = [k for k in dict(lazy.__dask_graph__()) if _prefix(k) == "eemd_member"]
+    assert len(members) == 4
+    (a,) = graph.compute(lazy, scheduler="synchronous", progress=False)
+    (b,) = graph.compute(lazy, scheduler="threads", progress=False)
+    np.testing.assert_array_equal(a.imfs, b.imfs)
+
+
+def test_lazy_twins_have_the_eager_signatures_and_docstrings():
+    import inspect
+
+    from hht3d import apps
+    from hht3d.decomposition import eemd, emd
+    from hht3d.io import load
+    from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
+    from hht3d.geometry.signals import signal
+
+    mirrored = [load, signal, emd, eemd, monogenic_from_potential, apps.filter_signal, apps.filter_geometry,
+                apps.reconstruct, apps.prominent_features, apps.hks_features, apps.imf_enhancement,
+                apps.manifold_harmonics_filter]
+    for func in mirrored:
+        twin = getattr(graph, func.__name__)
+        assert inspect.signature(twin).parameters == inspect.signature(func).parameters, func.__name__
+        assert twin.__doc__.startswith(f"Lazy :func:`{func.__module__}.{func.__name__}`")
+        assert inspect.cleandoc(func.__doc__).split("\nExamples\n")[0].rstrip() in twin.__doc__
+    for func in (monogenic, eager_hht):  # plus the scheduling parameter riesz_tasks, keyword-only
+        lazy, core = inspect.signature(getattr(graph, func.__name__)).parameters, inspect.signature(func).parameters
+        assert {k: v for k, v in lazy.items() if k != "riesz_tasks"} == dict(core), func.__name__
+        assert lazy["riesz_tasks"].kind is inspect.Parameter.KEYWORD_ONLY
+
+
+@pytest.mark.parametrize("build", [
+    lambda s, f: graph.emd(s, f, max_imf=2),
+    lambda s, f: graph.eemd(s, f, ensemble_sise=3),
+    lambda s, f: graph.hht(s, f, emd={"max_imf": 2}),
+    lambda s, f: graph.hht(s, f, riesz={"method": "quadratur"}),
+    lambda s, f: graph.monogenic(s, f, tol=0),
+])
+def test_wrong_settings_raise_while_the_graph_is_built(build):
+    """A misspelled or out-of-range setting is the caller's error before any task exists, with a hint."""
+    surface = _surfaces()[0]
+    with pytest.raises(InputError, match="max_imfs|ensemble_size|quadrature|tol"):
+        build(graph.from_surface(surface), np.zeros(surface.n_vertices))
+
+
+def test_lazy_monogenic_takes_the_eager_arguments():
+    from hht3d.spectral.monogenic_signal import monogenic
+
+    surface = _surfaces()[0]
+    imfs = np.stack([mean_curvature(surface), surface.vertices[:, 0]])
+    (lazy,) = graph.compute(graph.monogenic(graph.from_surface(surface), imfs, gradient="fem", riesz_tasks=2),
+                            scheduler="synchronous", progress=False)
+    eager = monogenic(surface, imfs, gradient="fem")
+    np.testing.assert_allclose(lazy.riesz, eager.riesz, rtol=0, atol=1e-12 * np.abs(eager.riesz).max())
+
+
+def test_riesz_tasks_zero_is_named(inputs):
+    from hht3d import graph
+    from hht3d.errors import InputError
+
+    surface = load(inputs / "good.ply")
+    with pytest.raises(InputError, match="riesz_tasks must be an integer >= 1, got 0"):
+        graph.hht(surface, surface.vertices[:, 0], riesz_tasks=0)

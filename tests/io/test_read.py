@@ -1,0 +1,83 @@
+"""Loading files (hht3d.io.read): every format Open3D writes, one clear error per bad file, headers read
+without the data."""
+import numpy as np
+import open3d as o3d
+import pytest
+from scipy.spatial import cKDTree
+
+from hht3d import InputError, load
+from hht3d.io import read_npz_shapes, read_ply_header, write_npz, write_ply
+from helpers.meshes import gltf_to_glb, icosphere
+
+
+def canonical_faces(faces) -> set:
+    """Faces as a set of index triples rotated to start at their smallest index (orientation kept)."""
+    faces = np.asarray(faces)
+    start = np.argmin(faces, axis=1)
+    return {tuple(np.roll(face, -k)) for face, k in zip(faces.tolist(), start)}
+
+
+#: Largest position error each format allows for coordinates in [-1, 1]: text with 6 decimals
+#: (half a unit of 1e-6 per coordinate, times √3), float32 (2^-24 relative per coordinate, times
+#: √3), or Open3D's 10-decimal text.
+POSITION_ATOL = {".obj": 8.7e-7, ".off": 8.7e-7, ".stl": 1.1e-7, ".gltf": 1.1e-7, ".glb": 1.1e-7,
+                 ".pcd": 1.1e-7, ".xyz": 1e-9, ".xyzn": 1e-9, ".pts": 1e-9}
+
+
+@pytest.mark.parametrize("ext", [".obj", ".off", ".stl", ".gltf", ".glb"])
+def test_open3d_mesh_formats(tmp_path, ext):
+    v, f = icosphere(2)
+    mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(v), o3d.utility.Vector3iVector(f))
+    mesh.compute_vertex_normals()
+    path = tmp_path / f"m{ext}"
+    assert o3d.io.write_triangle_mesh(str(path.with_suffix(".gltf" if ext == ".glb" else ext)), mesh)
+    if ext == ".glb":
+        gltf_to_glb(path.with_suffix(".gltf"), path)
+    surface = load(path)
+    # STL stores one vertex per corner: cleaning welds them back to the original count.  The order
+    # may change: match every vertex to its nearest loaded one, then compare the faces through
+    # that map, orientation included.
+    assert surface.n_vertices == len(v) and len(surface.faces) == len(f)
+    distance, index = cKDTree(surface.vertices).query(v)
+    assert distance.max() <= POSITION_ATOL[ext]
+    assert len(set(index)) == len(v)
+    assert canonical_faces(index[f]) == canonical_faces(surface.faces)
+
+
+@pytest.mark.parametrize("ext", [".pcd", ".xyz", ".xyzn", ".pts"])
+def test_open3d_point_formats(tmp_path, ext):
+    pts = icosphere(2)[0]
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts))
+    pcd.normals = o3d.utility.Vector3dVector(pts)
+    path = str(tmp_path / f"p{ext}")
+    assert o3d.io.write_point_cloud(path, pcd)
+    surface = load(path)
+    assert not surface.is_mesh and surface.n_vertices == len(pts)
+    np.testing.assert_allclose(surface.vertices, pts, rtol=0, atol=POSITION_ATOL[ext])
+    if ext in (".pcd", ".xyzn"):  # formats that store normals: they are read, not re-estimated
+        np.testing.assert_allclose(surface.normals, pts, rtol=0, atol=POSITION_ATOL[ext])
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda p: p / "missing.ply", "no such file"),
+    (lambda p: (p / "m.dae").write_text("x") and p / "m.dae", "unknown extension"),
+    (lambda p: (p / "bad.ply").write_bytes(b"ply\nformat nonsense\n") and p / "bad.ply", "not a readable PLY"),
+    (lambda p: (p / "e.xyz").write_text("") or p / "e.xyz", "no vertices"),
+])
+def test_bad_files_give_one_clear_error(tmp_path, make, message):
+    path = make(tmp_path)
+    with pytest.raises(InputError, match=message) as info:
+        load(path)
+    assert str(path.name) in str(info.value)
+
+
+def test_headers_give_sizes_without_the_data(tmp_path, sphere):
+    write_ply(tmp_path / "s.ply", sphere, {"height": sphere.vertices[:, 2]})
+    header = read_ply_header(tmp_path / "s.ply")
+    assert header.counts == {"vertex": 162, "face": 320} and header.vertex_properties[-1] == "height"
+    write_npz(tmp_path / "s.npz", {"imfs": np.zeros((3, 162)), "faces": sphere.faces})
+    assert read_npz_shapes(tmp_path / "s.npz") == {"imfs": (3, 162), "faces": (320, 3)}
+    with pytest.raises(InputError, match="not a PLY file"):
+        read_ply_header(tmp_path / "s.npz")
+    with pytest.raises(InputError, match="not a readable .npz file"):
+        read_npz_shapes(tmp_path / "s.ply")

@@ -1,0 +1,73 @@
+"""Stops with real processes (issue 23): signals to the CLI under every scheduler.
+
+Every case asserts the exit code, the one line on stderr (no traceback from any process), the files left
+(no temporary ``.part`` file; complete outputs recorded, so ``--resume`` finishes the run) and that no
+process of the run is left.  Each wait is bounded.
+"""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from helpers.processes import STOP_WITHIN, _env, _recorded, _start, _wait_for
+
+pytestmark = pytest.mark.slow  # real CLI processes, schedulers and workers
+
+
+def _group_gone(pgid: int) -> bool:
+    try:
+        os.killpg(pgid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+def _stopped_cleanly(proc: subprocess.Popen, code: int, out: Path) -> tuple[str, str]:
+    stdout, stderr = proc.communicate(timeout=STOP_WITHIN)
+    assert proc.returncode == code, stderr
+    assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr, stderr
+    stops = [line for line in stderr.splitlines() if line.startswith("hht3d: stopped by")]
+    others = [line for line in stderr.splitlines() if line and not line.startswith("hht3d: Dask dashboard")]
+    assert len(stops) == 1 and others == stops, stderr
+    assert "run again with --resume" in stops[0]
+    assert not list(out.rglob("*.part")), list(out.rglob("*.part"))
+    _wait_for(lambda: _group_gone(proc.pid), 10, "the run's worker processes to end")
+    return stdout, stops[0]
+
+
+@pytest.mark.parametrize("scheduler, signum, to_group", [
+    ("synchronous", signal.SIGTERM, False),
+    ("threads", signal.SIGTERM, False),
+    ("threads", signal.SIGINT, True),
+    ("processes", signal.SIGINT, True),
+    ("processes", signal.SIGTERM, False),
+    ("distributed", signal.SIGTERM, False),
+])
+def test_signal_stops_the_run_cleanly_and_it_resumes(job, scheduler, signum, to_group):
+    out = job / "out"
+    proc = _start(job, "--scheduler", scheduler, "--workers", "2")
+    _wait_for(lambda: len(_recorded(out)) >= 1 or proc.poll() is not None, 90, "a first complete output")
+    (os.killpg if to_group else os.kill)(proc.pid, signum)
+    _, line = _stopped_cleanly(proc, 128 + signum, out)
+    assert f"stopped by {signal.Signals(signum).name}" in line
+    # Done as --resume sees it: recorded and on disk at the recorded size.  A file is recorded just
+    # before its rename, so a worker stopped in between leaves an entry without its file (seen once
+    # in ~20 runs under load); that input is not done and the message must say so.
+    recorded = _recorded(out)
+    on_disk = {name for name, entry in recorded.items()
+               if (out / name).is_file() and (out / name).stat().st_size == entry["size"]}
+    complete = [k for k in range(4) if {f"s{k}_hht.npz", f"s{k}_hht.png"} <= on_disk]
+    assert f"{4 - len(complete)} of 4 inputs not done" in line, line
+    if scheduler == "threads" and signum == signal.SIGTERM:  # one resume is enough to show it
+        resumed = subprocess.run([sys.executable, "-m", "hht3d", "run", str(job / "p.yaml"), "--quiet",
+                                  "--resume", "--scheduler", "threads"], capture_output=True, text=True,
+                                 cwd=job, env=_env(), timeout=120)
+        assert resumed.returncode == 0, resumed.stderr
+        assert resumed.stdout.count("skipped (outputs complete)") == len(complete), resumed.stdout
+        assert sorted(p.name for p in out.glob("*_hht.*")) == sorted(
+            f"s{k}_hht.{suffix}" for k in range(4) for suffix in ("npz", "png"))
