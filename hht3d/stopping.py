@@ -23,7 +23,8 @@ from .io.atomic import stop_writes
 
 __all__ = ["SIGNALS", "Stopped", "stop_on_signals", "clean_stop"]
 
-SIGNALS = (signal.SIGTERM, signal.SIGINT)
+#: The signals that stop a run: SIGTERM where the platform has it (POSIX, and Windows' ``signal.raise_signal``), and SIGINT.
+SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGINT") if hasattr(signal, name))
 #: Seconds a worker process is given to end after SIGTERM before it is killed.
 WORKER_GRACE = 3.0
 

@@ -15,6 +15,8 @@ import tempfile
 import threading
 from pathlib import Path
 
+import psutil
+
 from ..errors import OutputError, one_line
 from .formats import NAME_MAX, short
 
@@ -97,13 +99,8 @@ def _record(tmp, path) -> None:
 
 
 def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:  # exists, owned by someone else
-        return True
-    return True
+    """Whether process ``pid`` exists (``psutil``: on Windows ``os.kill(pid, 0)`` would end it)."""
+    return psutil.pid_exists(pid)
 
 
 def remove_stale_parts(folders, own=()) -> list[Path]:

@@ -16,14 +16,23 @@ what makes a folder safe to reuse:
 from __future__ import annotations
 
 import contextlib
-import fcntl
-import threading
+import errno
 import hashlib
 import json
 import os
+import threading
 import time
 import uuid
 from pathlib import Path
+
+try:  # POSIX
+    import fcntl
+except ImportError:  # Windows
+    fcntl = None
+try:  # Windows
+    import msvcrt
+except ImportError:  # POSIX
+    msvcrt = None
 
 from ..errors import OutputError, one_line
 from .atomic import atomic_path, before_rename
@@ -58,14 +67,41 @@ def folder_lock(folder):
         handle = open(folder / LOCK, "a+b")
     except OSError as exc:
         raise OutputError(f"{folder}: cannot lock the output folder ({exc.strerror or one_line(exc)})") from None
-    with handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
+    with handle, _exclusive(handle):
         held.add(key)
         try:
             yield
         finally:
             held.discard(key)
+
+
+@contextlib.contextmanager
+def _exclusive(handle):
+    """Hold the operating system's exclusive lock on the open file ``handle``, waiting until it is
+    free: ``flock`` on POSIX, ``msvcrt.locking`` of its first byte on Windows.  Either is released
+    when the holding process ends, however it ends."""
+    if fcntl is not None:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
             fcntl.flock(handle, fcntl.LOCK_UN)
+        return
+    if msvcrt is None:
+        raise OutputError("this platform has neither fcntl nor msvcrt: output folders cannot be locked")
+    handle.seek(0)
+    while True:
+        try:
+            msvcrt.locking(handle.fileno(), msvcrt.LK_LOCK, 1)  # tries for 10 s, then raises EDEADLOCK
+            break
+        except OSError as exc:
+            if exc.errno != errno.EDEADLOCK:
+                raise
+    try:
+        yield
+    finally:
+        handle.seek(0)
+        msvcrt.locking(handle.fileno(), msvcrt.LK_UNLCK, 1)
 
 
 def _key(path, folder) -> str:
