@@ -6,7 +6,8 @@
 ``hht3d info FILE``               what a mesh or point cloud holds;
 ``hht3d view FILE.npz|FILE.ply``  write the interactive HTML page of a saved result and print its path;
 ``hht3d info --backends``         which sparse solver runs, and why;
-``hht3d demo``                    run the demo pipeline shipped in the package.
+``hht3d demo``                    run the demo pipeline shipped in the package;
+``hht3d --version``               the version (:mod:`hht3d.version`).
 
 Exit codes: 0 on success; 1 with a one-line ``hht3d: error: ...`` reason for
 an invalid pipeline, bad input or a failed step; 2 for bad command-line usage;
@@ -25,6 +26,7 @@ from .errors import HHT3DError, PipelineError, one_line, shown
 from .redaction import redact
 from .io.read import data_path
 from .execution import SCHEDULERS
+from .version import __version__
 from .viz.render import UP_AXES, VIEWS
 from .viz.viewer import VERTEX_BUDGET
 
@@ -239,6 +241,7 @@ def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="hht3d", description="Hilbert–Huang transform on 3D surfaces")
+    parser.add_argument("--version", action="version", version=f"hht3d {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     run = sub.add_parser("run", help="validate and run a YAML pipeline")
