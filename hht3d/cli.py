@@ -9,6 +9,11 @@
 ``hht3d demo``                    run the demo pipeline shipped in the package;
 ``hht3d --version``               the version (:mod:`hht3d.version`).
 
+Every command takes ``-v``/``--verbose``, ``-q``/``--quiet`` and ``--log-level``: the
+least important of hht3d's messages shown (:mod:`hht3d.logs`).  Informational ones (memory
+and time estimates, the dashboard address) go to stdout beside the results; progress lines,
+warnings and errors to stderr, so that a failed run says one line there.
+
 Exit codes: 0 on success; 1 with a one-line ``hht3d: error: ...`` reason for
 an invalid pipeline, bad input or a failed step; 2 for bad command-line usage;
 130 on SIGINT (Ctrl-C) and 143 on SIGTERM, after a clean stop
@@ -18,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import os
 import sys
 from pathlib import Path
@@ -26,6 +32,7 @@ from .errors import HHT3DError, PipelineError, one_line, shown
 from .redaction import redact
 from .io.read import data_path
 from .execution import SCHEDULERS
+from .logs import LEVELS, get_logger, showing
 from .version import __version__
 from .viz.render import UP_AXES, VIEWS
 from .viz.viewer import VERTEX_BUDGET
@@ -36,6 +43,7 @@ DEMO_MODEL = "spot.ply"
 DEMO_PIPELINE = "demo.yaml"
 #: Characters of an error message printed (the values it echoes are cut shorter already).
 MAX_MESSAGE = 2000
+_LOG = get_logger("hht3d.cli")
 
 
 def demo_model_path() -> Path:
@@ -87,9 +95,8 @@ def _execute(plan, args) -> int:
 
     folder = output_folder(plan)
     check_resources(plan)
-    if not args.quiet:
-        for line in resource_lines(plan):
-            print(redact(line), flush=True)
+    for line in resource_lines(plan):
+        _LOG.info(line)
     try:
         rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
                             progress=False if args.quiet else None, resume=args.resume,
@@ -98,7 +105,7 @@ def _execute(plan, args) -> int:
             print(redact("\n".join(_row_lines(row))), flush=True)
         slow = [row for row in rows if row.solver_advice]
         if slow:  # once per run, for its largest input
-            print(f"hht3d: warning: {max(slow, key=lambda row: row.vertices).solver_advice}", file=sys.stderr)
+            _LOG.warning(max(slow, key=lambda row: row.vertices).solver_advice)
         if plan.summary:
             write_summary(rows, plan.folder, folder.run, plan.storage_options)
             print(redact(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}"))
@@ -236,13 +243,31 @@ def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -
                         "manifest, or existing in a URL folder")
     parser.add_argument("--overwrite", action="store_true",
                         help="replace existing local output files that hht3d did not write (kept otherwise)")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _logging_options() -> argparse.ArgumentParser:
+    """``-v``, ``-q`` and ``--log-level``, which every command takes."""
+    common = argparse.ArgumentParser(add_help=False)
+    loudness = common.add_mutually_exclusive_group()
+    loudness.add_argument("-v", "--verbose", action="store_true", help="also debugging messages")
+    loudness.add_argument("-q", "--quiet", action="store_true",
+                          help="warnings and errors only: no progress, estimates or dashboard address")
+    loudness.add_argument("--log-level", choices=LEVELS, default=None, help="the least important messages shown "
+                          "on stderr (default: info)")
+    return common
+
+
+def log_level(args) -> int:
+    """The level of hht3d's messages on stderr that ``-v``, ``-q`` or ``--log-level`` ask for."""
+    if args.log_level:
+        return getattr(logging, args.log_level.upper())
+    return logging.DEBUG if args.verbose else logging.WARNING if args.quiet else logging.INFO
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="hht3d", description="Hilbert–Huang transform on 3D surfaces")
     parser.add_argument("--version", action="version", version=f"hht3d {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = _Subcommands(parser.add_subparsers(dest="command", required=True), _logging_options())
 
     run = sub.add_parser("run", help="validate and run a YAML pipeline")
     run.add_argument("pipeline", help="a pipeline YAML file (see pipelines/)")
@@ -293,6 +318,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _Subcommands:
+    """The subparsers, each made with the logging options."""
+
+    def __init__(self, subparsers, common: argparse.ArgumentParser):
+        self._subparsers, self._common = subparsers, common
+
+    def add_parser(self, name: str, **kwargs) -> argparse.ArgumentParser:
+        return self._subparsers.add_parser(name, parents=[self._common], **kwargs)
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -301,7 +336,7 @@ def main(argv=None) -> int:
     from .stopping import Stopped, stop_on_signals
 
     try:
-        with stop_on_signals():
+        with stop_on_signals(), showing(log_level(args), info=sys.stdout, force=True):
             return args.run(args)
     except HHT3DError as exc:
         print(f"hht3d: error: {one_line(exc, MAX_MESSAGE)}", file=sys.stderr)

@@ -15,7 +15,6 @@ time:
 from __future__ import annotations
 
 import asyncio
-import logging
 import time
 from concurrent.futures import CancelledError
 
@@ -48,7 +47,6 @@ def gather_bounded(client, futures, where: str) -> list:
 
     patience = float(dask.config.get("hht3d.no-workers-timeout", NO_WORKERS_TIMEOUT))
     alone_since = None
-    logging.getLogger("distributed.client").setLevel(logging.CRITICAL)  # reconnect attempts: reported below
     while True:
         try:
             wait(futures, timeout=POLL)

@@ -1,4 +1,9 @@
-"""Progress of a local scheduler on stderr: a redrawn bar on a terminal, rate-limited plain lines otherwise."""
+"""Progress of a local scheduler: a redrawn bar on a terminal, rate-limited plain lines otherwise.
+
+The plain lines are records of the ``hht3d.progress`` logger (:mod:`hht3d.logs`):
+:func:`hht3d.execution.compute` shows them on stderr unless the application has
+configured logging.
+"""
 from __future__ import annotations
 
 import sys
@@ -6,10 +11,13 @@ import time
 
 from dask.callbacks import Callback
 
+from ..logs import PROGRESS, get_logger
+
 __all__ = ["PROGRESS_INTERVAL", "ProgressLines", "local_progress", "is_terminal"]
 
 #: Seconds between progress lines when stderr is not a terminal.
 PROGRESS_INTERVAL = 10.0
+_LOG = get_logger(PROGRESS)
 
 
 def is_terminal(stream) -> bool:
@@ -25,11 +33,11 @@ def local_progress():
         from dask.diagnostics import ProgressBar
 
         return ProgressBar(minimum=1.0, out=sys.stderr)
-    return ProgressLines(sys.stderr)
+    return ProgressLines()
 
 
 class ProgressLines(Callback):
-    """Progress of a local scheduler as plain lines, ``hht3d: 40% of 125 tasks done, 12 s``.
+    """Progress of a local scheduler as plain log lines, ``hht3d: 40% of 125 tasks done, 12 s``.
 
     At most one line per ``interval`` seconds (default
     :data:`PROGRESS_INTERVAL`), and a last one when the run took longer than
@@ -37,9 +45,9 @@ class ProgressLines(Callback):
     of updates.
     """
 
-    def __init__(self, out, interval: float | None = None):
+    def __init__(self, interval: float | None = None):
         super().__init__()
-        self.out, self.interval = out, PROGRESS_INTERVAL if interval is None else interval
+        self.interval = PROGRESS_INTERVAL if interval is None else interval
         self.start = self.last = time.monotonic()
 
     def _start_state(self, dsk, state):
@@ -59,5 +67,4 @@ class ProgressLines(Callback):
     def _line(self, state, now: float) -> None:
         done = len(state["finished"])
         total = done + sum(len(state[k]) for k in ("ready", "waiting", "running"))
-        print(f"hht3d: {100 * done // max(total, 1)}% of {total} tasks done, {now - self.start:.0f} s",
-              file=self.out, flush=True)
+        _LOG.info("%d%% of %d tasks done, %.0f s", 100 * done // max(total, 1), total, now - self.start)

@@ -25,6 +25,7 @@ import sys
 import dask
 
 from ..errors import InputError, one_line
+from ..logs import get_logger, quieted, showing
 from .cluster import gather_bounded
 from .progress import is_terminal, local_progress
 from .workers import limit_blas_threads, sigint_ignored_by_children
@@ -34,15 +35,16 @@ __all__ = ["SCHEDULERS", "MAX_WORKERS", "compute", "open_client"]
 SCHEDULERS = ("synchronous", "threads", "processes", "distributed")
 #: The most workers a run may ask for: threads, processes or local-cluster workers.
 MAX_WORKERS = 256
+_LOG = get_logger("hht3d.execution")
 
 
 @contextlib.contextmanager
-def open_client(workers: int | None = None, address: str | None = None, *, log=sys.stderr):
+def open_client(workers: int | None = None, address: str | None = None, *, announce: bool = True):
     """A ``distributed.Client``: to ``address`` if given, else to a new ``LocalCluster``.
 
     The local cluster has ``workers`` single-threaded worker processes
-    (default: one per core); both are closed on exit.  The dashboard link is
-    written to ``log``.
+    (default: one per core); both are closed on exit.  With ``announce``, the
+    dashboard link is logged (``hht3d.execution``, :mod:`hht3d.logs`).
     """
     from distributed import Client, LocalCluster
 
@@ -60,8 +62,8 @@ def open_client(workers: int | None = None, address: str | None = None, *, log=s
                                    processes=True, dashboard_address=":0", silence_logs=logging.CRITICAL)
         client = Client(cluster)
     try:
-        if log is not None:
-            print(f"hht3d: Dask dashboard at {client.dashboard_link}", file=log)
+        if announce:
+            _LOG.info("Dask dashboard at %s", client.dashboard_link)
         yield client
     finally:
         client.close()
@@ -83,7 +85,8 @@ def compute(*graphs, scheduler: str = "threads", workers: int | None = None, add
     address : str, optional
         Scheduler address of an existing cluster (implies ``"distributed"``).
     progress : bool
-        Show progress on stderr (a bar, or plain lines when it is not a terminal).
+        Show progress on stderr: a bar, or when stderr is not a terminal plain lines through the
+        ``hht3d.progress`` logger (shown unless the application configured logging).
     client : distributed.Client, optional
         Reuse a client instead of opening one.
     """
@@ -93,17 +96,21 @@ def compute(*graphs, scheduler: str = "threads", workers: int | None = None, add
         raise InputError(f"unknown scheduler {scheduler!r}; choose one of {SCHEDULERS}")
     if workers is not None and not 1 <= workers <= MAX_WORKERS:
         raise InputError(f"workers must be in [1, {MAX_WORKERS}], got {workers}")
-    if scheduler == "distributed":
-        if client is not None:
-            return _compute_distributed(client, graphs, progress)
-        with open_client(workers, address) as opened:
-            return _compute_distributed(opened, graphs, progress, address or "a local cluster")
-    options = {"scheduler": scheduler}
-    if scheduler == "threads" and workers:
-        options["num_workers"] = workers
-    bar = local_progress() if progress else contextlib.nullcontext()
-    with bar, (_process_pool(workers) if scheduler == "processes" else contextlib.nullcontext()) as pool:
-        return dask.compute(*graphs, **options, **({"pool": pool} if pool is not None else {}))
+    with showing() if progress else contextlib.nullcontext():
+        if scheduler == "distributed":
+            # the client's reconnect attempts: a lost cluster is reported as ClusterLost instead
+            with quieted("distributed.client"):
+                if client is not None:
+                    return _compute_distributed(client, graphs, progress)
+                with open_client(workers, address) as opened:
+                    return _compute_distributed(opened, graphs, progress, address or "a local cluster")
+        options = {"scheduler": scheduler}
+        if scheduler == "threads" and workers:
+            options["num_workers"] = workers
+        bar = local_progress() if progress else contextlib.nullcontext()
+        pool = _process_pool(workers) if scheduler == "processes" else contextlib.nullcontext()
+        with bar, pool as pool:
+            return dask.compute(*graphs, **options, **({"pool": pool} if pool is not None else {}))
 
 
 @contextlib.contextmanager
