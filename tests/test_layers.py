@@ -13,7 +13,7 @@ import pytest
 import hht3d
 
 PACKAGE = Path(hht3d.__file__).parent
-LAYERS = [("hht3d.redaction", "hht3d.open3d_quiet"), ("hht3d.errors", "hht3d.version"), ("hht3d.records",), ("hht3d.linalg",), ("hht3d.geometry",),
+LAYERS = [("hht3d.redaction", "hht3d.open3d_quiet"), ("hht3d.logs",), ("hht3d.errors", "hht3d.version"), ("hht3d.records",), ("hht3d.linalg",), ("hht3d.geometry",),
           ("hht3d.io",), ("hht3d.decomposition",), ("hht3d.spectral",), ("hht3d.transform",),
           ("hht3d.results", "hht3d.apps", "hht3d.viz"), ("hht3d.execution",), ("hht3d.graph",), ("hht3d.dataset",),
           ("hht3d.pipeline",), ("hht3d.stopping",), ("hht3d.cli",), ("hht3d.__main__",)]
