@@ -39,9 +39,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
-import resource
-import subprocess
 import sys
 import tempfile
 import time
@@ -49,26 +46,18 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data"
-RESULTS = ROOT / "benchmarks" / "results"
-MODELS = ["sphere_oct4098", "spot", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti"]
+from benchmarks.common import (MESHES, fixed, machine_meta, mkl_environment, model_or_skip, model_path,
+                               peak_rss_mb, table, worker_json, write_results)
+
 NOISE = 0.15
 SEED = 0
 HKS_EIGENPAIRS = 100
-
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-
-def _peak_rss_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
 
 
 def _load(name: str):
     import hht3d
 
-    return hht3d.load(DATA / f"{name}.ply")
+    return hht3d.load(model_path(name))
 
 
 def _mean_edge(surface) -> float:
@@ -89,7 +78,7 @@ def stage_hht(name: str, scratch: Path) -> dict:
 
     surface = _load(name)
     signal = mean_curvature(surface)
-    baseline = _peak_rss_mb()
+    baseline = peak_rss_mb()
     t0 = time.perf_counter()
     result = hht(surface, signal)
     seconds = time.perf_counter() - t0
@@ -97,7 +86,7 @@ def stage_hht(name: str, scratch: Path) -> dict:
     return {"vertices": surface.n_vertices, "boundary_vertices": int(surface.boundary_vertices.sum()),
             "imfs": result.n_imfs, "seconds": seconds, "emd_seconds": result.info["seconds"]["emd"],
             "spectra_seconds": result.info["seconds"]["spectra"], "baseline_rss_mb": baseline,
-            "peak_rss_mb": _peak_rss_mb()}
+            "peak_rss_mb": peak_rss_mb()}
 
 
 def _cutoff(result) -> float:
@@ -112,7 +101,7 @@ def stage_filter(name: str, scratch: Path) -> dict:
     surface = result.surface
     _ = surface.stiffness, surface.normals  # operators are part of loading, not of the filter
     cutoff = _cutoff(result)
-    baseline = _peak_rss_mb()
+    baseline = peak_rss_mb()
     record = {"cutoff": cutoff, "baseline_rss_mb": baseline}
     for label, gain in (("low_pass", LowPass(cutoff=cutoff, width=cutoff / 4)),
                         ("high_boost", HighBoost(cutoff=cutoff, factor=2.5, width=cutoff / 4))):
@@ -121,7 +110,7 @@ def stage_filter(name: str, scratch: Path) -> dict:
         record[f"{label}_seconds"] = time.perf_counter() - t0
         moved = np.sqrt(np.mean(np.sum((out.vertices - surface.vertices) ** 2, axis=1)))
         record[f"{label}_rms_displacement_per_diagonal"] = float(moved / surface.bounding_box_diagonal)
-    record["peak_rss_mb"] = _peak_rss_mb()
+    record["peak_rss_mb"] = peak_rss_mb()
     return record
 
 
@@ -132,7 +121,7 @@ def stage_features(name: str, scratch: Path) -> dict:
     surface = result.surface
     _ = surface.ring(2)  # the 2-ring is a cached surface operator, built once per mesh
     h = _mean_edge(surface)
-    baseline = _peak_rss_mb()
+    baseline = peak_rss_mb()
     t0 = time.perf_counter()
     plain = prominent_features(surface, result.imfs)
     t1 = time.perf_counter()
@@ -140,7 +129,7 @@ def stage_features(name: str, scratch: Path) -> dict:
     t2 = time.perf_counter()
     return {"seconds": t1 - t0, "merged_seconds": t2 - t1, "features": plain.n_features,
             "merged_features": merged.n_features, "min_count": plain.min_count,
-            "baseline_rss_mb": baseline, "peak_rss_mb": _peak_rss_mb()}
+            "baseline_rss_mb": baseline, "peak_rss_mb": peak_rss_mb()}
 
 
 def stage_noise(name: str, scratch: Path) -> dict:
@@ -154,11 +143,11 @@ def stage_noise(name: str, scratch: Path) -> dict:
     result = _load_result(name, scratch)
     surface = result.surface
     _ = surface.stiffness, surface.ring(2)
-    baseline = _peak_rss_mb()
+    baseline = peak_rss_mb()
     t0 = time.perf_counter()
     hks_clean = hks_features(surface, eigenpairs=HKS_EIGENPAIRS)
     hks_seconds = time.perf_counter() - t0
-    hks_peak = _peak_rss_mb()
+    hks_peak = peak_rss_mb()
     h = _mean_edge(surface)
     noise = np.random.default_rng(SEED).normal(scale=NOISE * h, size=surface.vertices.shape)
     noisy = Surface(surface.vertices + noise, surface.faces, name=f"{name}_noisy")
@@ -185,10 +174,6 @@ def stage_noise(name: str, scratch: Path) -> dict:
 STAGES = {"hht": stage_hht, "filter": stage_filter, "features": stage_features, "noise": stage_noise}
 
 
-def _f(x, digits: int = 2) -> str:
-    return "n/a" if x is None or (isinstance(x, float) and np.isnan(x)) else f"{x:.{digits}f}"
-
-
 def markdown(records: list[dict], meta: dict) -> str:
     lines = [
         "# Applications benchmark: Hilbert-spectrum filtering + reconstruction, prominent features",
@@ -206,20 +191,16 @@ def markdown(records: list[dict], meta: dict) -> str:
         "Eq. 27 for the 3 coordinates).  Features s: `prominent_features` from the IMFs (2-ring extrema "
         "per IMF and counting); HKS s: 100 smallest eigenpairs (shift-invert ARPACK) plus the HKS maxima.",
         "",
-        "| model | #V | #IMFs | HHT s (EMD + spectra) | low-pass s | 2.5x boost s | filter MB baseline/peak | "
-        "features s | #features (merged 2h) | features MB baseline/peak | HKS s | HKS MB baseline/peak |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for r in records:
-        hh, fi, fe, no = r["hht"], r["filter"], r["features"], r["noise"]
-        lines.append(
-            f"| {r['model']} | {hh['vertices']:,} | {hh['imfs']} | {hh['seconds']:.1f} "
-            f"({hh['emd_seconds']:.1f} + {hh['spectra_seconds']:.1f}) | {fi['low_pass_seconds']:.2f} | "
-            f"{fi['high_boost_seconds']:.2f} | {fi['baseline_rss_mb']:.0f}/{fi['peak_rss_mb']:.0f} | "
-            f"{fe['seconds']:.3f} | {fe['features']} ({fe['merged_features']}) | "
-            f"{fe['baseline_rss_mb']:.0f}/{fe['peak_rss_mb']:.0f} | {no['hks_seconds']:.1f} | "
-            f"{no['hks_baseline_rss_mb']:.0f}/{no['hks_peak_rss_mb']:.0f} |")
-    lines += [
+        table(["model", "#V", "#IMFs", "HHT s (EMD + spectra)", "low-pass s", "2.5x boost s",
+               "filter MB baseline/peak", "features s", "#features (merged 2h)", "features MB baseline/peak",
+               "HKS s", "HKS MB baseline/peak"],
+              [[r["model"], f"{hh['vertices']:,}", hh["imfs"],
+                f"{hh['seconds']:.1f} ({hh['emd_seconds']:.1f} + {hh['spectra_seconds']:.1f})",
+                f"{fi['low_pass_seconds']:.2f}", f"{fi['high_boost_seconds']:.2f}",
+                f"{fi['baseline_rss_mb']:.0f}/{fi['peak_rss_mb']:.0f}", f"{fe['seconds']:.3f}",
+                f"{fe['features']} ({fe['merged_features']})", f"{fe['baseline_rss_mb']:.0f}/{fe['peak_rss_mb']:.0f}",
+                f"{no['hks_seconds']:.1f}", f"{no['hks_baseline_rss_mb']:.0f}/{no['hks_peak_rss_mb']:.0f}"]
+               for r in records for hh, fi, fe, no in [(r["hht"], r["filter"], r["features"], r["noise"])]]),
         "",
         "## Repeatability under noise (paper Fig. 8)",
         "",
@@ -228,30 +209,15 @@ def markdown(records: list[dict], meta: dict) -> str:
         "the model; clean→noisy: the reverse.  Chance: the noisy→clean score of features placed at random "
         "(fraction of all vertices within 2 mean edge lengths of a clean feature).",
         "",
-        "| model | #IMFs clean/noisy | ours #features clean/noisy | ours noisy→clean (chance) | "
-        "ours clean→noisy | HKS #features clean/noisy | HKS noisy→clean (chance) | HKS clean→noisy |",
-        "|---|---|---|---|---|---|---|---|",
+        table(["model", "#IMFs clean/noisy", "ours #features clean/noisy", "ours noisy→clean (chance)",
+               "ours clean→noisy", "HKS #features clean/noisy", "HKS noisy→clean (chance)", "HKS clean→noisy"],
+              [[r["model"], f"{r['hht']['imfs']}/{no['noisy_imfs']}", f"{o['clean_features']}/{o['noisy_features']}",
+                f"{fixed(o['noisy_to_clean'])} ({fixed(o['chance'])})", fixed(o["clean_to_noisy"]),
+                f"{k['clean_features']}/{k['noisy_features']}", f"{fixed(k['noisy_to_clean'])} ({fixed(k['chance'])})",
+                fixed(k["clean_to_noisy"])]
+               for r in records for no in [r["noise"]] for o, k in [(no["ours"], no["hks"])]]),
     ]
-    for r in records:
-        no = r["noise"]
-        o, k = no["ours"], no["hks"]
-        lines.append(
-            f"| {r['model']} | {r['hht']['imfs']}/{no['noisy_imfs']} | {o['clean_features']}/{o['noisy_features']} | "
-            f"{_f(o['noisy_to_clean'])} ({_f(o['chance'])}) | {_f(o['clean_to_noisy'])} | "
-            f"{k['clean_features']}/{k['noisy_features']} | {_f(k['noisy_to_clean'])} ({_f(k['chance'])}) | "
-            f"{_f(k['clean_to_noisy'])} |")
     return "\n".join(lines) + "\n"
-
-
-def _environment() -> dict:
-    """Worker environment with ``PYPARDISO_MKL_RT`` looked up once (see bench_emd)."""
-    env = dict(os.environ)
-    try:
-        import pypardiso
-    except ImportError:
-        return env
-    env.setdefault("PYPARDISO_MKL_RT", pypardiso.PyPardisoSolver().libmkl._name)
-    return env
 
 
 def main(argv=None) -> int:
@@ -263,34 +229,24 @@ def main(argv=None) -> int:
         stage, name, scratch = args.worker
         json.dump(STAGES[stage](name, Path(scratch)), sys.stdout)
         return 0
-    from hht3d import linalg
-
-    env = _environment()
+    env, _ = mkl_environment()
     load_before = os.getloadavg()[0]
     records = []
     with tempfile.TemporaryDirectory(prefix="bench_apps_") as scratch:
-        for name in args.models or MODELS:
-            if not (DATA / f"{name}.ply").is_file():
-                print(f"skip {name}: {DATA / (name + '.ply')} not present", file=sys.stderr)
+        for name in args.models or MESHES:
+            if model_or_skip(name) is None:
                 continue
             record = {"model": name}
             for stage in STAGES:
-                done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--worker", stage, name,
-                                       scratch], capture_output=True, text=True, env=env)
-                if done.returncode:
-                    raise RuntimeError(f"{name}, stage {stage} failed:\n{done.stderr}")
-                record[stage] = json.loads(done.stdout)
+                record[stage] = worker_json(__file__, ["--worker", stage, name, scratch], env=env)
             records.append(record)
             print(f"{name}: HHT {record['hht']['seconds']:.1f} s, filter {record['filter']['low_pass_seconds']:.2f} s, "
                   f"features {record['features']['seconds']:.3f} s, repeatability ours "
                   f"{record['noise']['ours']['noisy_to_clean']:.2f} / HKS {record['noise']['hks']['noisy_to_clean']:.2f}",
                   file=sys.stderr)
-    meta = {"machine": platform.platform(), "cpus": os.cpu_count(),
-            "load_average_1min": [load_before, os.getloadavg()[0]], "backend": linalg.default_backend(),
-            "python": platform.python_version(), "noise": NOISE, "seed": SEED, "hks_eigenpairs": HKS_EIGENPAIRS}
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / "apps.json").write_text(json.dumps({"meta": meta, "models": records}, indent=1))
-    (RESULTS / "apps.md").write_text(markdown(records, meta))
+    meta = machine_meta(load_average_1min=[load_before, os.getloadavg()[0]], noise=NOISE, seed=SEED,
+                        hks_eigenpairs=HKS_EIGENPAIRS)
+    write_results("apps", {"meta": meta, "models": records}, markdown(records, meta), indent=1)
     return 0
 
 

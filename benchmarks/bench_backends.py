@@ -23,7 +23,7 @@ Two parts, both on nefertiti (50k vertices) and igea (134k):
 The whole-HHT rows calibrate :data:`hht3d.linalg.estimate.COSTS`: the fitted
 constants are printed and stored with the results.
 
-Run: ``python benchmarks/bench_backends.py [--models nefertiti igea] [--skip-factorizations]``.
+Run: ``python -m benchmarks.bench_backends [--models nefertiti igea] [--skip-factorizations]``.
 Writes ``results/backends.json`` and ``results/backends.md``.
 """
 from __future__ import annotations
@@ -35,7 +35,8 @@ import subprocess
 import sys
 import time
 
-from common import machine, mkl_environment, model_path, status_mb, write_results
+from benchmarks.common import (log, machine, mkl_environment, model_path, run_worker, status_mb, table, timed,
+                               worker_answer, write_results)
 
 MODELS = ("nefertiti", "igea")
 TARGETS = {"nefertiti": (5.0, 2.0), "igea": (6.0, 4.0)}  # (x PARDISO, GB)
@@ -44,12 +45,6 @@ TARGETS = {"nefertiti": (5.0, 2.0), "igea": (6.0, 4.0)}  # (x PARDISO, GB)
 MEAN_SCALE = 0.015
 #: The slow "before" SuperLU (pivoting) is timed only below this many vertices: minutes per factorization above.
 BEFORE_MAX_VERTICES = 60_000
-
-
-def _timed(fn):
-    start = time.perf_counter()
-    out = fn()
-    return out, time.perf_counter() - start
 
 
 def systems(surface) -> dict:
@@ -145,14 +140,14 @@ def factorization_part(name: str) -> list[dict]:
         b = np.random.default_rng(1).standard_normal(a.shape[0])
         reference = None
         for cand, (first, again) in candidates(a).items():
-            solve, t_first = _timed(first)
-            solve, t_again = _timed(again)
-            x, t_solve = _timed(lambda solve=solve: solve(b))
+            solve, t_first = timed(first)
+            solve, t_again = timed(again)
+            x, t_solve = timed(lambda solve=solve: solve(b))
             reference = x if reference is None else reference
             diff = float(np.max(np.abs(x - reference)) / np.max(np.abs(reference)))
             rows.append({"model": name, "vertices": surface.n_vertices, "system": kind, "solver": cand,
                          "first_s": t_first, "refactor_s": t_again, "solve_s": t_solve, "max_rel_diff": diff})
-            _log(f"{name} {kind} {cand}: first {t_first:.2f} s, again {t_again:.2f} s, diff {diff:.1e}")
+            log(f"{name} {kind} {cand}: first {t_first:.2f} s, again {t_again:.2f} s, diff {diff:.1e}")
             del solve
     return rows
 
@@ -182,17 +177,16 @@ def whole_part(name: str, backends: list[str], timeout: float) -> list[dict]:
     for backend in backends:
         run_env = {**env, "HHT3D_BACKEND": backend}
         try:
-            done = subprocess.run([sys.executable, __file__, "--worker", name], env=run_env, capture_output=True,
-                                  text=True, timeout=timeout)
+            done = run_worker(__file__, ["--worker", name], env=run_env, timeout=timeout)
         except subprocess.TimeoutExpired:
             rows.append({"model": name, "backend": backend, "error": f"over {timeout:.0f} s"})
             continue
         if done.returncode:
             rows.append({"model": name, "backend": backend, "error": done.stderr.strip().splitlines()[-1]})
             continue
-        row = {"model": name, **json.loads(done.stdout.strip().splitlines()[-1])}
+        row = {"model": name, **worker_answer(done)}
         rows.append(row)
-        _log(f"{name} whole HHT {backend}: {row['total_s']:.1f} s, peak {row['peak_mb']:.0f} MB")
+        log(f"{name} whole HHT {backend}: {row['total_s']:.1f} s, peak {row['peak_mb']:.0f} MB")
     return rows
 
 
@@ -229,18 +223,15 @@ def markdown(record: dict) -> str:
              f"Machine: {record['machine']}", ""]
     if record["factorizations"]:
         lines += ["## Factorizations", "",
-                  "| model | #V | system | solver | first s | refactorization s | solve s | max rel. diff |",
-                  "|---|---|---|---|---|---|---|---|"]
-        lines += [f"| {r['model']} | {r['vertices']:,} | {r['system']} | {r['solver']} | {r['first_s']:.2f} | "
-                  f"{r['refactor_s']:.2f} | {r['solve_s']:.3f} | {r['max_rel_diff']:.1e} |"
-                  for r in record["factorizations"]]
-        lines.append("")
-    lines += ["## Whole HHT from the file", "",
-              "| model | #V | backend | #IMFs | factorizations | EMD s | spectra s | total s | / PARDISO | "
-              "peak MB | target |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+                  table(["model", "#V", "system", "solver", "first s", "refactorization s", "solve s",
+                         "max rel. diff"],
+                        [[r["model"], f"{r['vertices']:,}", r["system"], r["solver"], f"{r['first_s']:.2f}",
+                          f"{r['refactor_s']:.2f}", f"{r['solve_s']:.3f}", f"{r['max_rel_diff']:.1e}"]
+                         for r in record["factorizations"]]), ""]
+    rows = []
     for r in record["whole"]:
         if "error" in r:
-            lines.append(f"| {r['model']} | | {r['backend']} | | | | | {r['error']} | | | |")
+            rows.append([r["model"], "", r["backend"], "", "", "", "", r["error"], "", "", ""])
             continue
         base = next((p["total_s"] for p in record["whole"]
                      if p["model"] == r["model"] and p.get("backend") == "pardiso" and "error" not in p), None)
@@ -250,16 +241,15 @@ def markdown(record: dict) -> str:
             x, gb = TARGETS[r["model"]]
             met = ratio <= x and r["peak_mb"] <= gb * 1000
             target = f"<= {x:g}x and <= {gb:g} GB: {'met' if met else '**missed**'}"
-        lines.append(f"| {r['model']} | {r['vertices']:,} | {r['backend']} | {r['imfs']} | {r['factorizations']} | "
-                     f"{r['emd_s']:.1f} | {r['spectra_s']:.1f} | {r['total_s']:.1f} | {ratio:.2f}x | "
-                     f"{r['peak_mb']:,.0f} | {target} |")
+        rows.append([r["model"], f"{r['vertices']:,}", r["backend"], r["imfs"], r["factorizations"],
+                     f"{r['emd_s']:.1f}", f"{r['spectra_s']:.1f}", f"{r['total_s']:.1f}", f"{ratio:.2f}x",
+                     f"{r['peak_mb']:,.0f}", target])
+    lines += ["## Whole HHT from the file", "",
+              table(["model", "#V", "backend", "#IMFs", "factorizations", "EMD s", "spectra s", "total s",
+                     "/ PARDISO", "peak MB", "target"], rows)]
     lines += ["", "## Fitted costs (hht3d.linalg.estimate.COSTS)", "", "```",
               json.dumps(record["costs"], indent=2), "```", ""]
     return "\n".join(lines)
-
-
-def _log(msg: str) -> None:
-    print(f"[{time.strftime('%H:%M:%S')}] {msg}", file=sys.stderr, flush=True)
 
 
 def main(argv=None) -> int:

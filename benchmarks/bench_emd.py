@@ -28,31 +28,18 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
-import resource
-import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data"
-RESULTS = ROOT / "benchmarks" / "results"
-MODELS = ["sphere_oct4098", "spot", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti"]
+from benchmarks.common import (MESHES, PAPER_EMD, PAPER_IMFS, PAPER_VERTICES, fixed, machine_meta, mkl_environment,
+                               model_or_skip, model_path, paper_columns, paper_interpolated, peak_rss_mb, table,
+                               worker_json, write_results)
+
 LARGE = ["igea"]
 #: Paper Table 1, EMD column: (vertices, IMFs, seconds), MATLAB 2014 on a 4-core i7.
-PAPER = [(4098, 3, 0.6), (13424, 5, 3.8), (31124, 8, 10.9), (61563, 13, 38.2), (100003, 15, 101.83)]
-
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from benchmarks.common import mkl_environment  # noqa: E402
-
-
-def _peak_rss_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # kB on Linux
+PAPER = paper_columns(PAPER_VERTICES, PAPER_IMFS, PAPER_EMD)
 
 
 def _replay_first_imf(surface, signal, backend: str) -> dict:
@@ -121,10 +108,10 @@ def run_model(name: str) -> dict:
     from hht3d.geometry.signals import mean_curvature
 
     t0 = time.perf_counter()
-    surface = hht3d.load(DATA / f"{name}.ply")
+    surface = hht3d.load(model_path(name))
     signal = mean_curvature(surface)
     load_seconds = time.perf_counter() - t0
-    rss_before = _peak_rss_mb()
+    rss_before = peak_rss_mb()
     result = emd(surface, signal)
     info = result.info
     record = {
@@ -143,7 +130,7 @@ def run_model(name: str) -> dict:
         "backend": info["backend"],
         "load_and_operators_seconds": load_seconds,
         "peak_rss_mb_before_emd": rss_before,
-        "peak_rss_mb": _peak_rss_mb(),
+        "peak_rss_mb": peak_rss_mb(),
     }
     replay = _replay_first_imf(surface, signal, linalg.default_backend())
     record["first_imf_replay"] = replay
@@ -152,16 +139,6 @@ def run_model(name: str) -> dict:
         info["seconds"] - replay["seconds"]["symbolic"]
         + (replay["baseline_seconds_per_envelope"] - ours_per_envelope) * info["factorizations"])
     return record
-
-
-def _fmt(seconds) -> str:
-    return "n/a" if seconds is None else f"{seconds:.2f}"
-
-
-def paper_seconds(vertices: int) -> float:
-    """Paper Table 1 EMD time interpolated log-log in the vertex count."""
-    v, _, s = np.array(PAPER).T
-    return float(np.exp(np.interp(np.log(vertices), np.log(v), np.log(s))))
 
 
 def markdown(records: list[dict], meta: dict) -> str:
@@ -176,41 +153,34 @@ def markdown(records: list[dict], meta: dict) -> str:
         "",
         "EMD seconds: `emd()` wall time with the surface operators already built, including "
         "building `Q = L M^-1 L` and the one symbolic analysis.  Not included: pypardiso's "
-        f"search for the MKL library ({_fmt(meta['pypardiso_mkl_lookup_seconds'])} s per solver "
+        f"search for the MKL library ({fixed(meta['pypardiso_mkl_lookup_seconds'])} s per solver "
         "unless `PYPARDISO_MKL_RT` is set; set here once for all workers).",
         "",
-        "| model | #V | #IMFs | sifts | factorizations | EMD s | s/IMF | peak RSS MB | "
-        "paper s at this #V | paper s/IMF |",
-        "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    v, k, s = np.array(PAPER).T
+    v, k, _ = np.array(PAPER).T
+    rows = []
     for r in records:
-        paper = paper_seconds(r["vertices"])
+        paper = paper_interpolated(r["vertices"], PAPER_EMD)
         paper_imfs = float(np.interp(np.log(r["vertices"]), np.log(v), k))
-        lines.append(
-            f"| {r['model']} | {r['vertices']:,} | {r['imfs']} | {r['sifts']} | {r['factorizations']} | "
-            f"{r['seconds']:.2f} | {r['seconds_per_imf']:.2f} | {r['peak_rss_mb']:.0f} | "
-            f"{paper:.1f} | {paper / paper_imfs:.2f} |")
-    lines += [
-        "",
-        "First IMF replayed: every envelope of its sifts solved by our fixed-pattern "
-        "solver (symbolic analysis timed apart), by the same formulation on SciPy SuperLU, "
-        "and from scratch with `scipy.sparse.linalg.spsolve` on the eliminated system "
-        "(baseline).",
-        "",
-        "| model | envelopes | symbolic s | ours s | SuperLU-pattern s | baseline s | "
-        "speedup incl. symbolic | speedup per envelope | max rel. diff | whole EMD: ours s | "
-        "whole EMD: baseline s (projected) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for r in records:
-        p = r["first_imf_replay"]
-        t = p["seconds"]
-        lines.append(
-            f"| {r['model']} | {p['envelopes']} | {t['symbolic']:.2f} | {t['ours']:.2f} | "
-            f"{t['superlu_pattern']:.2f} | {t['baseline']:.2f} | {p['speedup_with_symbolic']:.1f}x | "
-            f"{p['speedup_per_envelope']:.1f}x | {p['max_relative_difference']:.1e} | {r['seconds']:.1f} | "
-            f"{r['baseline_projected_seconds']:.1f} |")
+        rows.append([r["model"], f"{r['vertices']:,}", r["imfs"], r["sifts"], r["factorizations"],
+                     f"{r['seconds']:.2f}", f"{r['seconds_per_imf']:.2f}", f"{r['peak_rss_mb']:.0f}", f"{paper:.1f}",
+                     f"{paper / paper_imfs:.2f}"])
+    lines += [table(["model", "#V", "#IMFs", "sifts", "factorizations", "EMD s", "s/IMF", "peak RSS MB",
+                     "paper s at this #V", "paper s/IMF"], rows),
+              "",
+              "First IMF replayed: every envelope of its sifts solved by our fixed-pattern "
+              "solver (symbolic analysis timed apart), by the same formulation on SciPy SuperLU, "
+              "and from scratch with `scipy.sparse.linalg.spsolve` on the eliminated system "
+              "(baseline).",
+              "",
+              table(["model", "envelopes", "symbolic s", "ours s", "SuperLU-pattern s", "baseline s",
+                     "speedup incl. symbolic", "speedup per envelope", "max rel. diff", "whole EMD: ours s",
+                     "whole EMD: baseline s (projected)"],
+                    [[r["model"], p["envelopes"], f"{t['symbolic']:.2f}", f"{t['ours']:.2f}",
+                      f"{t['superlu_pattern']:.2f}", f"{t['baseline']:.2f}", f"{p['speedup_with_symbolic']:.1f}x",
+                      f"{p['speedup_per_envelope']:.1f}x", f"{p['max_relative_difference']:.1e}",
+                      f"{r['seconds']:.1f}", f"{r['baseline_projected_seconds']:.1f}"]
+                     for r in records for p in [r["first_imf_replay"]] for t in [p["seconds"]]])]
     lines += ["", "Projected baseline: the EMD time with each of its envelopes costing the replay's "
               "mean baseline envelope instead of ours (and no symbolic analysis)."]
     lines += ["", "Paper columns: Table 1 EMD time (and IMF count) interpolated log-log in the "
@@ -229,30 +199,21 @@ def main(argv=None) -> int:
     if args.worker:
         json.dump(run_model(args.worker), sys.stdout)
         return 0
-    from hht3d import linalg
-
     env, lookup = mkl_environment()
     load_before = os.getloadavg()[0]
-    names = args.models or MODELS + (LARGE if args.with_igea else [])
+    names = args.models or MESHES + (LARGE if args.with_igea else [])
     records = []
     for name in names:
-        if not (DATA / f"{name}.ply").is_file():
-            print(f"skip {name}: {DATA / (name + '.ply')} not present", file=sys.stderr)
+        if model_or_skip(name) is None:
             continue
-        done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--worker", name],
-                              capture_output=True, text=True, check=True, env=env)
-        records.append(json.loads(done.stdout))
+        records.append(worker_json(__file__, ["--worker", name], env=env))
         r = records[-1]
         print(f"{name}: {r['vertices']} V, {r['imfs']} IMFs, {r['factorizations']} factorizations, "
               f"{r['seconds']:.2f} s, replay speedup {r['first_imf_replay']['speedup_per_envelope']:.1f}x",
               file=sys.stderr)
-    meta = {"machine": platform.platform(), "cpus": os.cpu_count(),
-            "load_average_1min": [load_before, os.getloadavg()[0]],
-            "backend": linalg.default_backend(), "python": platform.python_version(),
-            "paper_table1_emd": PAPER, "pypardiso_mkl_lookup_seconds": lookup}
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / "emd.json").write_text(json.dumps({"meta": meta, "models": records}, indent=1))
-    (RESULTS / "emd.md").write_text(markdown(records, meta))
+    meta = machine_meta(load_average_1min=[load_before, os.getloadavg()[0]], paper_table1_emd=PAPER,
+                        pypardiso_mkl_lookup_seconds=lookup)
+    write_results("emd", {"meta": meta, "models": records}, markdown(records, meta), indent=1)
     return 0
 
 

@@ -11,7 +11,7 @@ Parts (``--parts``):
 ``models``     every model of ../shared/data: IMFs, energy ratio, IO, signal
                spike, factorizations and EMD seconds per IMF (targets: energy
                ratio <= 1.5 and IO >= -0.25 everywhere; per-IMF time).
-``slivers``    unit spheres with 200 needle vertices (tests/meshes.py
+``slivers``    unit spheres with 200 needle vertices (``benchmarks/meshes.py``
                ``sliver_sphere``): largest error of 2H and K against 2 and 1,
                Gauss–Bonnet, and the decomposition's energy ratio.
 ``bumps``      unit sphere with 60 random Gaussian bumps (σ 0.05–0.12, peaks
@@ -19,7 +19,7 @@ Parts (``--parts``):
                to the clean sphere (radial, and to the best-fitting sphere,
                since curvature cannot see a translation) and volume change
                (target: >= 3x closer, volume within 1%); and the mixed-width
-               sphere of tests/meshes.py ``random_bump_sphere``.
+               sphere of ``benchmarks/meshes.py`` ``random_bump_sphere``.
 ``noise``      white noise on an icosphere (10,242 vertices) and a 128x128
                grid: drop of the extrema count from IMF to IMF (target 2.5-5).
 ``eigen``      the sum of two Laplacian eigenfunctions with eigenvalue ratio
@@ -36,7 +36,7 @@ Parts (``--parts``):
 
 Run from the repository root::
 
-    python benchmarks/bench_quality.py [--parts models slivers ...] [--models spot igea ...]
+    python -m benchmarks.bench_quality [--parts models slivers ...] [--models spot igea ...]
 
 Writes ``benchmarks/results/quality.json`` and ``quality.md``.
 """
@@ -44,26 +44,20 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import sys
 import time
 import warnings
 
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from common import DATA, ROOT, machine, table, write_results
-
-sys.path.insert(0, str(ROOT / "tests"))
-
-import recovery  # noqa: E402
-
-from helpers.meshes import grid, icosphere, open_cylinder, random_bump_sphere, sliver_sphere  # noqa: E402
-
-import hht3d  # noqa: E402
-from hht3d import Surface, emd, hht  # noqa: E402
-from hht3d.apps import LowPass, filter_geometry  # noqa: E402
-from hht3d.decomposition import EMD_DEFAULTS, PAPER_OPTIONS, local_extrema  # noqa: E402
-from hht3d.geometry.signals import gaussian_curvature, mean_curvature  # noqa: E402
+import hht3d
+from benchmarks import recovery
+from benchmarks.common import DATA, SPOT, machine, model_or_skip, table, write_results
+from benchmarks.meshes import grid, icosphere, open_cylinder, random_bump_sphere, sliver_sphere
+from hht3d import Surface, emd, hht
+from hht3d.apps import LowPass, filter_geometry
+from hht3d.decomposition import EMD_DEFAULTS, PAPER_OPTIONS, local_extrema
+from hht3d.geometry.signals import gaussian_curvature, mean_curvature
 
 MODELS = ["spot", "sphere_oct4098", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti",
           "office_kinect_colored", "igea", "dragon_vrip", "bunny_scan_bun000", "bunny_scans_merged"]
@@ -86,9 +80,8 @@ def decompose(surface: Surface, signal, config: str, **options):
 def part_models(names) -> list[dict]:
     rows = []
     for name in names:
-        path = DATA / f"{name}.ply"
-        if not path.is_file():
-            print(f"skip {name}: not in {DATA}", flush=True)
+        path = model_or_skip(name)
+        if path is None:
             continue
         surface = hht3d.load(path)
         for config in CONFIGS:
@@ -207,7 +200,7 @@ def part_noise() -> list[dict]:
 
 def part_eigen() -> list[dict]:
     rows = []
-    for name, path, pairs in (("spot", ROOT / "hht3d" / "data" / "spot.ply", [(3, 40), (5, 100)]),
+    for name, path, pairs in (("spot", SPOT, [(3, 40), (5, 100)]),
                               ("spacetime_face_neutral", DATA / "spacetime_face_neutral.ply", [(3, 40), (6, 110)])):
         if not path.is_file():
             continue
@@ -291,7 +284,7 @@ def main() -> None:
     records = {"machine": machine()}
     parts = {"models": lambda: part_models(args.models), "slivers": part_slivers, "bumps": part_bumps,
              "noise": part_noise, "eigen": part_eigen, "strip": part_strip,
-             "recovery": lambda: recovery.part_recovery(ROOT / "hht3d" / "data" / "spot.ply",
+             "recovery": lambda: recovery.part_recovery(SPOT,
                                                         DATA / "spacetime_face_neutral.ply")}
     for name in args.parts:
         records[name] = parts[name]()

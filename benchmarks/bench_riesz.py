@@ -30,25 +30,21 @@ set size during the timed part (``/proc/self/clear_refs`` resets it).
 
 Usage::
 
-    python benchmarks/bench_riesz.py [--models NAME ...] [--without-igea] [--skip-fig2]
+    python -m benchmarks.bench_riesz [--models NAME ...] [--without-igea] [--skip-fig2]
 """
 from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
-import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data"
-RESULTS = ROOT / "benchmarks" / "results"
-SCRATCH = RESULTS / "scratch"
+from benchmarks.common import (PAPER_IMFS, PAPER_RT, PAPER_VERTICES, SCRATCH, load_average, machine_meta,
+                               mean_adjacent_distance, mkl_environment, model_or_skip, model_path, paper_columns,
+                               paper_interpolated, reset_peak, short, status_mb, table, worker_json, write_results)
+
 MODELS = ["spot", "sphere_oct4098", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti",
           "igea"]
 FIG2_EIGENPAIRS = [50, 150, 300, 600, 1500]
@@ -58,25 +54,10 @@ REFERENCE_TOL = 1e-12
 #: Quadrature tolerances whose shift counts and true errors are reported.
 TOLERANCES = [1e-4, 1e-6, 1e-8, 1e-10]
 #: Paper Table 1, RT column: (vertices, IMFs, seconds), MATLAB 2014 on a 4-core i7.
-PAPER_RT = [(4098, 3, 5.13), (13424, 5, 24.37), (31124, 8, 110.81), (61563, 13, 238.76),
-            (100003, 15, 356.13)]
-
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-from benchmarks.common import mkl_environment, status_mb  # noqa: E402
+PAPER_TABLE1_RT = paper_columns(PAPER_VERTICES, PAPER_IMFS, PAPER_RT)
 
 
 # -- measurement helpers ---------------------------------------------------------------------------
-
-def _reset_peak() -> float:
-    """Reset the peak RSS (VmHWM) to the current RSS; return the current RSS in MB."""
-    try:
-        Path("/proc/self/clear_refs").write_text("5")
-    except OSError:
-        pass
-    return status_mb("VmRSS")
-
 
 def _m_error(mass, approx, exact) -> np.ndarray:
     """Relative M-norm error per signal (last axes summed)."""
@@ -97,7 +78,7 @@ def run_fig2() -> dict:
     from hht3d.spectral import fractional_laplacian, vertex_gradient
     from hht3d.geometry.signals import centroid_distance
 
-    sphere = hht3d.load(DATA / "sphere_oct4098.ply")
+    sphere = hht3d.load(model_path("sphere_oct4098"))
     v = sphere.vertices / np.abs(sphere.vertices).sum(axis=1, keepdims=True)
     surface = hht3d.Surface(v, sphere.faces, name="octahedron4098")
     f = centroid_distance(surface)
@@ -140,8 +121,7 @@ def band_signals(surface) -> np.ndarray:
     from hht3d.geometry.signals import mean_curvature
 
     h = mean_curvature(surface)
-    coo = surface.adjacency.tocoo()
-    edge = np.linalg.norm(surface.vertices[coo.row] - surface.vertices[coo.col], axis=1).mean()
+    edge = mean_adjacent_distance(surface)
     times = np.geomspace(edge ** 2, (surface.bounding_box_diagonal / 4) ** 2, N_SIGNALS + 1)
     mass = surface.mass_diagonal
     smooth = [h] + [linalg.factorize(surface.mass + t * surface.stiffness).solve(mass * h) for t in times]
@@ -152,19 +132,20 @@ def _load(name: str):
     import hht3d
 
     t0 = time.perf_counter()
-    surface = hht3d.load(DATA / f"{name}.ply")
+    surface = hht3d.load(model_path(name))
     surface.stiffness, surface.gradient("lsq")
     operators = time.perf_counter() - t0
     return surface, operators
 
 
-def run_worker(name: str, method: str) -> dict:
+def run_ladder_case(name: str, method: str) -> dict:
     from hht3d.spectral import fractional_laplacian, quadrature_nodes, smallest_eigenpairs, spectral_bounds
     from hht3d.spectral.monogenic_signal import monogenic
 
     surface, operators = _load(name)
     signals = band_signals(surface)
-    baseline = _reset_peak()
+    reset_peak()
+    baseline = status_mb("VmRSS")
     t0 = time.perf_counter()
     if method == "quadrature":
         spectral_bounds(surface)
@@ -229,46 +210,24 @@ def errors(name: str, method: str) -> dict:
 
 # -- reporting ----------------------------------------------------------------------------------------
 
-def _fmt(x, digits=2) -> str:
-    return f"{x:.{digits}f}" if abs(x) >= 0.01 else f"{x:.1e}"
-
-
-def paper_rt(vertices: int) -> float:
-    """Paper Table 1 RT seconds interpolated log-log in the vertex count (clamped)."""
-    v = np.log([p[0] for p in PAPER_RT])
-    s = np.log([p[2] for p in PAPER_RT])
-    return float(np.exp(np.interp(np.log(vertices), v, s)))
-
-
 def markdown(fig2: dict | None, ladder: list[dict], meta: dict) -> str:
     out = ["# Riesz transform and monogenic signal benchmark", "",
            f"Machine: {meta['machine']}; {meta['cpus']} CPUs (shared with other jobs, load average "
            f"{meta['load_average']}); backend `{meta['backend']}`; OpenBLAS threads "
            f"{meta['openblas_threads']}; Python {meta['python']}.  "
-           "Generated by `python benchmarks/bench_riesz.py`; the method is in its docstring.", ""]
+           "Generated by `python -m benchmarks.bench_riesz`; the method is in its docstring.", ""]
     if fig2:
         out += ["## Fig. 2(h): truncated eigen-expansion vs. the exact transform", "",
                 f"{fig2['model']} ({fig2['vertices']} vertices), signal: {fig2['signal']}; reference "
-                f"`dense` ({_fmt(fig2['dense_seconds'])} s).  Magnitude error = mean over vertices of "
+                f"`dense` ({short(fig2['dense_seconds'])} s).  Magnitude error = mean over vertices of "
                 "| |Rf| − |Rf|_dense |, as in the paper's plot, also relative to the mean |Rf|_dense.", "",
-                "| method | seconds | mean magnitude error | relative | max magnitude error "
-                "| rel. M-norm error of L^-1/2 f |", "|---|---|---|---|---|---|"]
-        for r in fig2["rows"]:
-            out.append(f"| {r['method']} | {_fmt(r['seconds'])} | {r['mean_magnitude_error']:.2e} | "
-                       f"{r['relative_mean_magnitude_error']:.2e} | {r['max_magnitude_error']:.2e} | "
-                       f"{r['relative_m_error_L-1/2']:.2e} |")
-        out.append("")
+                table(["method", "seconds", "mean magnitude error", "relative", "max magnitude error",
+                       "rel. M-norm error of L^-1/2 f"],
+                      [[r["method"], short(r["seconds"]), f"{r['mean_magnitude_error']:.2e}",
+                        f"{r['relative_mean_magnitude_error']:.2e}", f"{r['max_magnitude_error']:.2e}",
+                        f"{r['relative_m_error_L-1/2']:.2e}"] for r in fig2["rows"]]), ""]
     if ladder:
-        out += ["## Model ladder: 15 band-passed mean-curvature signals, Riesz + monogenic", "",
-                "Seconds: bounds or eigenpairs + `monogenic()` of all 15 signals (operators L, M, "
-                "gradient built beforehand, `ops s`).  Errors: largest over the 15 signals, relative, "
-                f"against `quadrature` at tol {REFERENCE_TOL:g} — M-norm for L^-1/2 f, Riesz vectors and "
-                "amplitude; energy-weighted mean |Δω|/ω for the frequency.  Peak RSS during the timed "
-                "part.  Paper: Table 1 RT column interpolated at this vertex count (their IMF counts, "
-                "3–15, MATLAB, 300 eigenpairs).", "",
-                "| model | #V | ops s | method | shifts / κ | seconds | peak RSS MB | err L^-1/2 | err Riesz "
-                "| err amplitude | err frequency | speed-up | error ratio | paper RT s |",
-                "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        rows = []
         for q, s in ladder:
             for r in (q, s):
                 e = r["errors"]
@@ -276,45 +235,39 @@ def markdown(fig2: dict | None, ladder: list[dict], meta: dict) -> str:
                          else str(SPECTRAL_EIGENPAIRS) + " pairs")
                 speed = f"{s['seconds'] / q['seconds']:.1f}x" if r is q else ""
                 ratio = f"{s['errors']['riesz'] / max(q['errors']['riesz'], 1e-300):.1e}x" if r is q else ""
-                out.append(f"| {r['model']} | {r['vertices']:,} | {_fmt(r['operators_seconds'])} "
-                           f"| {r['method']} "
-                           f"| {extra} | {_fmt(r['seconds'])} | {r['peak_rss_mb']:.0f} | {e['L-1/2']:.1e} "
-                           f"| {e['riesz']:.1e} | {e['amplitude']:.1e} | {e['frequency']:.1e} | {speed} "
-                           f"| {ratio} | {_fmt(paper_rt(r['vertices']), 1) if r is q else ''} |")
-        out += ["", "Speed-up: spectral(300) seconds / quadrature seconds in the same run.  Error ratio: "
+                paper = short(paper_interpolated(r["vertices"], PAPER_RT), 1) if r is q else ""
+                rows.append([r["model"], f"{r['vertices']:,}", short(r["operators_seconds"]), r["method"], extra,
+                             short(r["seconds"]), f"{r['peak_rss_mb']:.0f}", f"{e['L-1/2']:.1e}", f"{e['riesz']:.1e}",
+                             f"{e['amplitude']:.1e}", f"{e['frequency']:.1e}", speed, ratio, paper])
+        out += ["## Model ladder: 15 band-passed mean-curvature signals, Riesz + monogenic", "",
+                "Seconds: bounds or eigenpairs + `monogenic()` of all 15 signals (operators L, M, "
+                "gradient built beforehand, `ops s`).  Errors: largest over the 15 signals, relative, "
+                f"against `quadrature` at tol {REFERENCE_TOL:g} — M-norm for L^-1/2 f, Riesz vectors and "
+                "amplitude; energy-weighted mean |Δω|/ω for the frequency.  Peak RSS during the timed "
+                "part.  Paper: Table 1 RT column interpolated at this vertex count (their IMF counts, "
+                "3–15, MATLAB, 300 eigenpairs).", "",
+                table(["model", "#V", "ops s", "method", "shifts / κ", "seconds", "peak RSS MB", "err L^-1/2",
+                       "err Riesz", "err amplitude", "err frequency", "speed-up", "error ratio", "paper RT s"], rows),
+                "", "Speed-up: spectral(300) seconds / quadrature seconds in the same run.  Error ratio: "
                 "spectral(300) Riesz error / quadrature Riesz error.", "",
                 "Relative Riesz error of spectral(300) per band, finest to coarsest:", "",
-                "| model | " + " | ".join(str(i + 1) for i in range(N_SIGNALS)) + " |",
-                "|---|" + "---|" * N_SIGNALS]
-        for _, s in ladder:
-            bands = s["errors"]["riesz_per_signal_fine_to_coarse"]
-            out.append(f"| {s['model']} | " + " | ".join(f"{x:.0e}" for x in bands) + " |")
+                table(["model"] + [str(i + 1) for i in range(N_SIGNALS)],
+                      [[s["model"]] + [f"{x:.0e}" for x in s["errors"]["riesz_per_signal_fine_to_coarse"]]
+                       for _, s in ladder])]
         out += ["", "Shifts against the tolerance: shifted solves with Gershgorin's upper bound "
                 "max_i Σ_j|L_ij|/M_ii and with today's (Collatz–Wielandt, power-iterated), and the true "
                 f"largest relative M-norm error of L^-1/2 over the 15 signals against tol {REFERENCE_TOL:g}; "
                 "seconds of `fractional_laplacian` at that tolerance (bounds cached).", "",
-                "| model | M̄ / Gershgorin | " + " | ".join(f"tol {x:g}: shifts (Gershgorin → now), error, s"
-                                                        for x in TOLERANCES) + " |",
-                "|---|---|" + "---|" * len(TOLERANCES)]
-        for q, _ in ladder:
-            rows = q.get("tolerances", [])
-            if rows:
-                out.append(f"| {q['model']} | {rows[0]['upper_bound'] / rows[0]['gershgorin']:.2f} | " + " | ".join(
-                    f"{r['shifts_gershgorin']} → {r['shifts']}, {r['error']:.1e}, {_fmt(r['seconds'])}"
-                    for r in rows) + " |")
-        out.append("")
+                table(["model", "M̄ / Gershgorin"] + [f"tol {x:g}: shifts (Gershgorin → now), error, s"
+                                                      for x in TOLERANCES],
+                      [[q["model"], f"{rows[0]['upper_bound'] / rows[0]['gershgorin']:.2f}"]
+                       + [f"{r['shifts_gershgorin']} → {r['shifts']}, {r['error']:.1e}, {short(r['seconds'])}"
+                          for r in rows]
+                       for q, _ in ladder for rows in [q.get("tolerances", [])] if rows]), ""]
     return "\n".join(out)
 
 
 # -- driver -------------------------------------------------------------------------------------------
-
-def _worker(args: list[str], env: dict) -> dict:
-    done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--worker", *args],
-                          capture_output=True, text=True, env=env)
-    if done.returncode != 0:
-        raise RuntimeError(f"worker {args} failed:\n{done.stderr}")
-    return json.loads(done.stdout)
-
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -325,24 +278,21 @@ def main(argv=None) -> int:
     parser.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
-        record = run_fig2() if args.worker == ["fig2"] else run_worker(*args.worker)
+        record = run_fig2() if args.worker == ["fig2"] else run_ladder_case(*args.worker)
         json.dump(record, sys.stdout)
         return 0
-    from hht3d import linalg
-
     env, lookup = mkl_environment()
     env["OPENBLAS_NUM_THREADS"] = str(args.blas_threads)
     fig2 = None
-    if not args.skip_fig2 and (DATA / "sphere_oct4098.ply").is_file():
-        fig2 = _worker(["fig2"], env)
+    if not args.skip_fig2 and model_path("sphere_oct4098") is not None:
+        fig2 = worker_json(__file__, ["--worker", "fig2"], env=env)
         print("fig2 done", file=sys.stderr)
     names = args.models or [m for m in MODELS if not (args.without_igea and m == "igea")]
     ladder = []
     for name in names:
-        if not (DATA / f"{name}.ply").is_file():
-            print(f"skip {name}: {DATA / (name + '.ply')} not present", file=sys.stderr)
+        if model_or_skip(name) is None:
             continue
-        pair = [_worker([name, method], env) for method in ("quadrature", "spectral")]
+        pair = [worker_json(__file__, ["--worker", name, method], env=env) for method in ("quadrature", "spectral")]
         for r in pair:
             r["errors"] = errors(name, r["method"])
         for r in pair:
@@ -351,13 +301,9 @@ def main(argv=None) -> int:
         q, s = pair
         print(f"{name}: {q['vertices']} V, quadrature {q['seconds']:.2f} s (err {q['errors']['riesz']:.1e}), "
               f"spectral {s['seconds']:.2f} s (err {s['errors']['riesz']:.1e})", file=sys.stderr)
-    meta = {"machine": platform.platform(), "cpus": os.cpu_count(), "backend": linalg.default_backend(),
-            "python": platform.python_version(), "load_average": [round(x, 1) for x in os.getloadavg()],
-            "pypardiso_mkl_lookup_seconds": lookup, "openblas_threads": args.blas_threads,
-            "paper_table1_rt": PAPER_RT}
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / "riesz.json").write_text(json.dumps({"meta": meta, "fig2": fig2, "ladder": ladder}, indent=1))
-    (RESULTS / "riesz.md").write_text(markdown(fig2, ladder, meta))
+    meta = machine_meta(load_average=load_average(1), pypardiso_mkl_lookup_seconds=lookup,
+                        openblas_threads=args.blas_threads, paper_table1_rt=PAPER_TABLE1_RT)
+    write_results("riesz", {"meta": meta, "fig2": fig2, "ladder": ladder}, markdown(fig2, ladder, meta), indent=1)
     return 0
 
 

@@ -3,7 +3,7 @@
 Cases: spot (2,930 vertices, shipped in the package), igea decimated to 100k
 vertices (the size of the first budget), igea (134,345 vertices, the paper's
 Hygeia, from ../shared/data) and igea Loop-subdivided to 1M vertices
-(``bench_hht.generate``, kept in ``results/scratch/``).  The fields are those
+(``benchmarks.meshes.generate``, kept in ``results/scratch/``).  The fields are those
 of ``bench_render.synthetic_result`` (5 IMFs: 22 fields); a page's cost
 depends on the numbers of vertices, triangles and fields, not on the values.
 
@@ -26,7 +26,7 @@ vertices.  A screenshot of every page goes to ``results/scratch/``.
 
 Usage::
 
-    python benchmarks/bench_viewer.py [--cases 3k 100k 134k 1m] [--loads 3]
+    python -m benchmarks.bench_viewer [--cases 3k 100k 134k 1m] [--loads 3]
 """
 from __future__ import annotations
 
@@ -38,14 +38,12 @@ import sys
 import time
 from pathlib import Path
 
-from bench_hht import generate
-from bench_render import synthetic_result
-from common import RESULTS, machine, model_path, write_results
-
 import hht3d
+from benchmarks.bench_render import synthetic_result
+from benchmarks.common import SCRATCH, machine, model_path, table, write_results
+from benchmarks.meshes import generate
 from hht3d.viz.viewer import PAGE_BUDGETS, VERTEX_BUDGET, shown_copy
 
-SCRATCH = RESULTS / "scratch"
 CASES = ("3k", "100k", "134k", "1m")
 CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update", "--disable-sync"]
@@ -117,14 +115,14 @@ def run_case(case: str, browser, loads: int) -> dict | None:
     return record
 
 
-def budget_rows(records: list[dict]) -> list[str]:
+def budget_rows(records: list[dict]) -> list[list]:
     rows = []
     for vertices, (mb, seconds) in PAGE_BUDGETS.items():
         near = [r for r in records if 0.75 * vertices <= r["vertices"] <= 1.25 * vertices]
         for r in near:
             met = r["page_mb"] <= mb and r["load_s_median"] <= seconds
-            rows.append(f"| {vertices:,} | ≤ {mb:g} MB, ≤ {seconds:g} s | {r['case']}: {r['page_mb']:.1f} MB, "
-                        f"{r['load_s_median']:.1f} s | {'met' if met else 'MISSED'} |")
+            rows.append([f"{vertices:,}", f"≤ {mb:g} MB, ≤ {seconds:g} s",
+                         f"{r['case']}: {r['page_mb']:.1f} MB, {r['load_s_median']:.1f} s", "met" if met else "MISSED"])
     return rows
 
 
@@ -133,14 +131,13 @@ def markdown(records: list[dict], info: dict) -> str:
            f"Machine: {info['platform']}, {info['cpus']} CPUs, load average at start {info['load_average']}. "
            f"Headless Debian chromium, software WebGL. Vertex budget {VERTEX_BUDGET:,}: larger meshes are shown "
            "decimated. Fields: a synthetic 5-IMF result (22 fields).", "",
-           "| case | vertices | shown | MB (plotly.js) | write s | decimate s | load s best / median | switch s |",
-           "|---|---|---|---|---|---|---|---|"]
-    for r in records:
-        out.append(f"| {r['case']} | {r['vertices']:,} | {r['shown_vertices']:,} | {r['page_mb']:.1f} "
-                   f"({r['plotly_js_mb']:.1f}) | {r['write_s']:.1f} | {r['decimate_s']:.1f} | "
-                   f"{r['load_s_best']:.1f} / {r['load_s_median']:.1f} | {r['switch_s']:.2f} |")
-    out += ["", "## Budgets (hht3d.viz.viewer.PAGE_BUDGETS)", "", "| vertices | budget | measured | |", "|---|---|---|---|",
-            *budget_rows(records), ""]
+           table(["case", "vertices", "shown", "MB (plotly.js)", "write s", "decimate s", "load s best / median",
+                  "switch s"],
+                 [[r["case"], f"{r['vertices']:,}", f"{r['shown_vertices']:,}",
+                   f"{r['page_mb']:.1f} ({r['plotly_js_mb']:.1f})", f"{r['write_s']:.1f}", f"{r['decimate_s']:.1f}",
+                   f"{r['load_s_best']:.1f} / {r['load_s_median']:.1f}", f"{r['switch_s']:.2f}"] for r in records]),
+           "", "## Budgets (hht3d.viz.viewer.PAGE_BUDGETS)", "",
+           table(["vertices", "budget", "measured", ""], budget_rows(records)), ""]
     errors = [f"{r['case']}: {e}" for r in records for e in r["js_errors"]]
     out.append("JavaScript errors: " + ("; ".join(errors) if errors else "none") + ".")
     return "\n".join(out) + "\n"

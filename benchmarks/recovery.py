@@ -9,7 +9,7 @@ fluctuations about the mean.  Strips (600 × 3 vertices on ``[0, 1] × [0,
 CEEMDAN, cubic splines, mirrored ends) on the 600 samples is the reference
 that knows nothing of surfaces.
 
-Used by ``bench_quality.py --parts recovery``.
+Used by ``python -m benchmarks.bench_quality --parts recovery``.
 """
 from __future__ import annotations
 
@@ -19,9 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from helpers.meshes import grid, icosphere
-
 import hht3d
+from benchmarks.meshes import grid, icosphere
 from hht3d import Surface, eemd, emd
 from hht3d.decomposition import EMD_DEFAULTS, PAPER_OPTIONS
 from hht3d.geometry.signals import fluctuation, mean_curvature
