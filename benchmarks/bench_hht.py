@@ -271,7 +271,7 @@ def main(argv=None) -> int:
             for backend in backends:  # interleaved per model: every ratio comes from one run
                 log(f"backends {name} {backend} ...")
                 r = _case(results, "backends", {"case": name, "backend": backend},
-                          [name, str(model_path(name)), "none"], env | {BACKEND_VARIABLE: backend}, out)
+                          [name, str(model_path(name)), "none", "paper"], env | {BACKEND_VARIABLE: backend}, out)
                 if r is not None:
                     log(f"  EMD {r['seconds']['emd']:.1f} s, RT {r['seconds']['rt']:.1f} s, total "
                         f"{r['seconds']['total']:.1f} s, peak {r['peak_rss_mb']:.0f} MB")
