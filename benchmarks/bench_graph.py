@@ -91,7 +91,7 @@ def worker_riesz(mode: str, tasks: int) -> dict:
         result = monogenic(surface, imfs)
         seconds = time.perf_counter() - start
     else:
-        with open_client(2, log=None) as client:  # started, and hht3d imported, before the timing
+        with open_client(2, announce=False) as client:  # started, and hht3d imported, before the timing
             client.run(importlib.import_module, "hht3d.spectral.monogenic_signal")
             start = time.perf_counter()
             s = graph.from_surface(surface)
@@ -116,7 +116,7 @@ def worker_overhead(scheduler: str, count: int) -> dict:
     if scheduler == "distributed":
         from hht3d.execution import open_client
 
-        with open_client(2, log=None) as client:
+        with open_client(2, announce=False) as client:
             compute(tasks[:2], client=client, progress=False)
             start = time.perf_counter()
             compute(tasks, client=client, progress=False)

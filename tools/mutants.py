@@ -1,8 +1,8 @@
 """Mutation check: does the test suite catch single-line faults in the core numerics?
 
-    python tools/mutants.py                 # every mutant (about 10-20 minutes here)
-    python tools/mutants.py --only eq27-sign quadrature-nodes
-    python tools/mutants.py --list          # the mutants and whether their snippets still match
+    python -m tools.mutants                 # every mutant (about 10-20 minutes here)
+    python -m tools.mutants --only eq27-sign quadrature-nodes
+    python -m tools.mutants --list          # the mutants and whether their snippets still match
 
 Each mutant replaces one exact snippet of one file of ``hht3d/`` by a faulty
 version.  It is applied to a copy of the package and the tests in a temporary
@@ -30,9 +30,7 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-if __package__ in (None, ""):
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from benchmarks.common import ROOT, machine, table, write_results  # noqa: E402
+from benchmarks.common import ROOT, machine, table, write_results
 
 #: Longest run of one mutant's tests; a mutant that hangs the suite counts as caught (by timeout).
 TIMEOUT = 900
@@ -279,7 +277,7 @@ def main(argv=None) -> int:
     print(summary)
     markdown = "\n".join([
         "# Mutation check", "",
-        "`python tools/mutants.py`: single-line faults in the core numerics, each applied to a "
+        "`python -m tools.mutants`: single-line faults in the core numerics, each applied to a "
         "temporary copy of the package and run against its test files (`pytest -x`, strict xfails "
         "deselected).", "",
         summary, "",
