@@ -57,9 +57,15 @@ def demo_pipeline_path() -> Path:
 
 
 def _plan(path, overrides):
+    """The validated pipeline; a ``memory://`` output folder is refused, since its results would
+    vanish with this process (from Python, :func:`hht3d.pipeline.run_pipeline` takes one)."""
     from .pipeline import load_pipeline
 
-    return load_pipeline(path, overrides)
+    plan = load_pipeline(path, overrides)
+    if str(plan.folder).lower().startswith("memory://"):
+        raise PipelineError(f"{path}: outputs.folder {shown(str(plan.folder))} is in this process's memory and "
+                            "would vanish when the command ends; give a local folder or a bucket")
+    return plan
 
 
 def _row_lines(row) -> list[str]:

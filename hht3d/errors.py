@@ -63,9 +63,11 @@ def shown(value, limit: int = MAX_SHOWN) -> str:
 
     Nested containers are abbreviated while they are formatted
     (:mod:`reprlib`), so an alias-expanded YAML value of millions of items
-    costs no more than a short one.
+    costs no more than a short one.  A string is redacted before it is cut,
+    so that cutting cannot separate a URL's password from the ``@`` that
+    marks it.
     """
-    return _cut(_REPR.repr(value), limit)
+    return _cut(_REPR.repr(redact(value) if isinstance(value, str) else value), limit)
 
 
 def one_line(text, limit: int = 4 * MAX_SHOWN) -> str:

@@ -7,11 +7,13 @@ figures and pages equal those of the result that was saved.
 """
 from __future__ import annotations
 
-from pathlib import Path
+from pathlib import PurePosixPath
 
 from .errors import InputError
 from .geometry.surface import Surface
+from .io import storage
 from .io.read import read_npz
+from .redaction import redact
 from .spectral.monogenic_signal import MonogenicSignal
 from .transform import HHTResult
 
@@ -22,10 +24,12 @@ RESULT_ARRAYS = ("vertices", "normals", "laplacian", "n_neighbors", "signal", "i
                  "amplitude", "phase", "frequency", "area")
 
 
-def load_result(path) -> HHTResult:
+def load_result(path, *, storage_options: dict | None = None) -> HHTResult:
     """The :class:`~hht3d.transform.HHTResult` saved as ``path`` (a ``.npz`` of ``HHTResult.save``).
 
-    ``info`` holds ``{"source": path}``: the diagnostics of the run are not saved.
+    ``path`` may be an fsspec URL (``s3://bucket/out/x_hht.npz``), read with
+    ``storage_options`` (:mod:`hht3d.io.storage`).  ``info`` holds
+    ``{"source": path}``: the diagnostics of the run are not saved.
 
     Raises
     ------
@@ -45,15 +49,20 @@ def load_result(path) -> HHTResult:
     >>> np.array_equal(again.imfs, result.imfs), np.allclose(again.spectrum.mean_frequency(), result.spectrum.mean_frequency(), rtol=1e-12)
     (True, True)
     """
-    path = Path(path)
-    if path.suffix.lower() != ".npz":
-        raise InputError(f"{path}: load_result reads the .npz of HHTResult.save (a .ply keeps no Riesz vectors)")
-    arrays = read_npz(path)
+    shown = redact(str(path))
+    if PurePosixPath(storage.file_name(path)).suffix.lower() != ".npz":
+        raise InputError(f"{shown}: load_result reads the .npz of HHTResult.save (a .ply keeps no Riesz vectors)")
+    with storage.local_copy(path, storage_options) as local:
+        try:
+            arrays = read_npz(local)
+        except InputError as exc:
+            raise InputError(str(exc).replace(str(local), shown)) from None
     missing = [name for name in RESULT_ARRAYS if name not in arrays]
     if missing:
-        raise InputError(f"{path}: no {', '.join(missing)}; expected a file written by HHTResult.save")
+        raise InputError(f"{shown}: no {', '.join(missing)}; expected a file written by HHTResult.save")
     surface = Surface(arrays["vertices"], arrays.get("faces"), normals=arrays["normals"],
-                      laplacian=str(arrays["laplacian"]), n_neighbors=int(arrays["n_neighbors"]), name=path.stem)
+                      laplacian=str(arrays["laplacian"]), n_neighbors=int(arrays["n_neighbors"]),
+                      name=storage.stem(path))
     mono = MonogenicSignal(imfs=arrays["imfs"], riesz=arrays["riesz"], amplitude=arrays["amplitude"],
                            phase=arrays["phase"], frequency=arrays["frequency"], area=arrays["area"])
     return HHTResult(surface=surface, signal=arrays["signal"], imfs=arrays["imfs"], residue=arrays["residue"],

@@ -18,8 +18,11 @@ import os
 import signal
 import threading
 
+import psutil
+
 from .io import remove_stale_parts
 from .io.atomic import stop_writes
+from .io.storage import remove_temporary_folders
 
 __all__ = ["SIGNALS", "Stopped", "stop_on_signals", "clean_stop"]
 
@@ -65,8 +68,11 @@ def stop_on_signals():
 
 
 def clean_stop(folders) -> list:
-    """End this process's worker processes and remove the temporary files left in ``folders``."""
+    """End this process's worker processes and remove the temporary files left in ``folders``, and
+    the temporary folders of downloads and uploads of this process and of its ended workers (their
+    ``with`` blocks never finish: the stop ends with ``os._exit``)."""
     stop_writes()
+    pids = {os.getpid(), *(p.pid for p in psutil.Process().children(recursive=True))}
     children = multiprocessing.active_children()
     for child in children:
         with contextlib.suppress(Exception):
@@ -76,4 +82,4 @@ def clean_stop(folders) -> list:
         if child.is_alive():
             child.kill()
             child.join(WORKER_GRACE)
-    return remove_stale_parts(folders, own={os.getpid()})
+    return remove_stale_parts(folders, own={os.getpid()}) + remove_temporary_folders(pids)

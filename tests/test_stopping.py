@@ -71,3 +71,19 @@ def test_signal_stops_the_run_cleanly_and_it_resumes(job, scheduler, signum, to_
         assert resumed.stdout.count("skipped (outputs complete)") == len(complete), resumed.stdout
         assert sorted(p.name for p in out.glob("*_hht.*")) == sorted(
             f"s{k}_hht.{suffix}" for k in range(4) for suffix in ("npz", "png"))
+
+
+def test_a_stop_removes_the_temporary_folders_of_downloads(tmp_path, monkeypatch):
+    """A stop ends with os._exit, so a download's ``with`` block never removes its folder: the stop
+    removes every temporary folder of this process (and of its ended workers) itself."""
+    import fsspec
+
+    from hht3d.io import storage
+    from hht3d.stopping import clean_stop
+
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    fsspec.filesystem("memory").pipe_file("/stop/scan.ply", b"ply")
+    with storage.local_copy("memory://stop/scan.ply") as local:
+        assert local.is_file() and local.parent.name.startswith(f"hht3d-{os.getpid()}-")
+        clean_stop([])
+        assert not local.parent.exists()

@@ -22,7 +22,7 @@ from dask import delayed
 from dask.base import tokenize
 
 from ..graph import stages as graph
-from ..errors import InputError
+from ..errors import InputError, shown
 from ..geometry.signals import SIGNALS
 from ..io.folder import OutputFolder, check_locations
 from ..io.manifest import new_run_id
@@ -44,7 +44,11 @@ RESULT_SUFFIXES = (".ply", ".npz")
 
 def output_paths(source, out_dir, formats=RESULT_SUFFIXES, pattern: str = "{stem}_hht") -> list:
     """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format (paths or URLs)."""
-    base = pattern.format(stem=stem(source))
+    try:
+        base = str(pattern).format(stem=stem(source))
+    except (IndexError, KeyError, ValueError, AttributeError):  # "{0}", "{name}", "{", "{stem.x}"
+        raise InputError(f"output pattern {shown(pattern)}: the only field is {{stem}}, the input's file name "
+                         "without its suffix (write {{ and }} for literal braces)") from None
     return [join(out_dir, f"{base}{suffix}") for suffix in formats]
 
 

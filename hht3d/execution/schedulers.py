@@ -124,7 +124,8 @@ def _process_pool(workers: int | None):
     count = workers or os.cpu_count() or 1
     context = multiprocessing.get_context(dask.config.get("multiprocessing.context", "spawn"))
     with sigint_ignored_by_children():
-        pool = ProcessPoolExecutor(count, mp_context=context, initializer=limit_blas_threads)
+        pool = ProcessPoolExecutor(count, mp_context=context, initializer=limit_blas_threads,
+                                   initargs=(os.getpid(),))
         for _ in range(count):  # each submission finding no idle worker starts one
             pool.submit(os.getpid)
     try:

@@ -8,6 +8,7 @@ import stat
 from pathlib import Path
 
 from ..errors import MAX_SHOWN, InputError, one_line
+from ..errors import shown as shown_value
 
 __all__ = ["MESH_EXTENSIONS", "POINT_CLOUD_EXTENSIONS", "PLY_RESERVED", "check_extension", "check_regular_file",
            "checked_name", "usable_name", "NAME_MAX", "PATH_MAX", "short"]
@@ -52,6 +53,9 @@ def check_regular_file(path: Path, what: str = "a mesh or point-cloud file") -> 
                          "check the path") from None
     except OSError as exc:
         raise InputError(f"{shown}: cannot read ({exc.strerror or one_line(exc)})") from None
+    except ValueError:  # an embedded NUL, which no file system takes
+        raise InputError(f"{shown_value(os.fspath(path))}: the path holds a NUL character; give the file's real "
+                         "name") from None
     if stat.S_ISDIR(mode):
         raise InputError(f"{shown}: is a folder, not {what}; give one file (pipeline inputs take folders)")
     if not stat.S_ISREG(mode):

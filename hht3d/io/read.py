@@ -83,6 +83,7 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
     path = Path(path)
     check_regular_file(path)
     check_extension(path)
+    check_declared(path)
     ext = path.suffix.lower()
     if ext == ".ply":
         data = _read_ply(path)
@@ -129,10 +130,11 @@ def _read_ply(path: Path) -> dict:
 
 @dataclass(frozen=True)
 class PlyHeader:
-    """What the header of a PLY file declares: element counts and vertex property names."""
+    """What the header of a PLY file declares: element counts, vertex property names, properties per element."""
 
     counts: dict
     vertex_properties: tuple[str, ...]
+    property_counts: dict
 
 
 #: The longest PLY header :func:`read_ply_header` reads.
@@ -149,7 +151,7 @@ def read_ply_header(path) -> PlyHeader:
     """
     path = Path(path)
     check_regular_file(path, "a PLY file")
-    counts, properties, element = {}, [], None
+    counts, properties, per_element, element = {}, [], {}, None
     try:
         with open(path, "rb") as handle:
             lines = handle.read(_MAX_HEADER).split(b"\n")
@@ -160,13 +162,77 @@ def read_ply_header(path) -> PlyHeader:
     for line in lines[1:]:
         words = line.decode("ascii", "replace").split()
         if words[:1] == ["end_header"]:
-            return PlyHeader(counts, tuple(properties))
+            return PlyHeader(counts, tuple(properties), per_element)
         if words[:1] == ["element"] and len(words) == 3 and words[2].isdigit():
             element = words[1]
             counts[element] = int(words[2])
-        elif words[:1] == ["property"] and element == "vertex" and len(words) >= 3:
-            properties.append(words[-1])
+        elif words[:1] == ["property"] and element is not None and len(words) >= 3:
+            per_element[element] = per_element.get(element, 0) + 1
+            if element == "vertex":
+                properties.append(words[-1])
     raise InputError(f"{path}: not a readable PLY file (no end_header)")
+
+
+#: Properties one PLY element may declare (scans carry a few dozen; plyfile builds a dtype of all).
+MAX_PLY_PROPERTIES = 10_000
+#: Bytes of a PCD header :func:`check_declared` reads.
+_MAX_PCD_HEADER = 1 << 16
+
+
+def check_declared(path: Path) -> None:
+    """Refuse a PLY or PCD file whose header declares more than the file can hold or the reader may
+    build (10⁷ properties, 10¹² points), before any reader allocates for it.
+
+    Every declared item takes at least one byte per property in the file; a point takes 24 bytes
+    of memory once read.
+
+    Raises
+    ------
+    InputError
+    """
+    from ..linalg.estimate import available_memory
+
+    ext = path.suffix.lower()
+    if ext == ".ply":
+        with open(path, "rb") as handle:
+            if handle.read(3) != b"ply":  # not a PLY at all: the reader says what is wrong
+                return
+        header = read_ply_header(path)
+        crowded = {e: n for e, n in header.property_counts.items() if n > MAX_PLY_PROPERTIES}
+        if crowded:
+            element, count = next(iter(crowded.items()))
+            raise InputError(f"{path}: the PLY element {element!r} declares {count:,} properties; at most "
+                             f"{MAX_PLY_PROPERTIES:,} are read")
+        needed = sum(n * max(1, header.property_counts.get(e, 1)) for e, n in header.counts.items())
+        points = header.counts.get("vertex", 0)
+    elif ext == ".pcd":
+        needed = points = _pcd_points(path)
+    else:
+        return
+    size = path.stat().st_size
+    if needed > size:
+        raise InputError(f"{path}: the header declares {points:,} vertices ({needed:,} values), more than its "
+                         f"{size:,} bytes can hold: the file is truncated or its header is wrong")
+    memory = available_memory()
+    if memory is not None and 24 * points > memory:
+        raise InputError(f"{path}: {points:,} vertices need {24 * points / 2**30:.1f} GiB to read; "
+                         f"{memory / 2**30:.1f} GiB are available")
+
+
+def _pcd_points(path: Path) -> int:
+    """The ``POINTS`` a PCD header declares (0 if it declares none)."""
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(_MAX_PCD_HEADER)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror or one_line(exc)})") from None
+    for line in head.split(b"\n"):
+        words = line.decode("ascii", "replace").split()
+        if words[:1] == ["POINTS"] and len(words) == 2 and words[1].isdigit():
+            return int(words[1])
+        if words[:1] == ["DATA"]:
+            break
+    return 0
 
 
 def read_npz(path) -> dict[str, np.ndarray]:

@@ -23,6 +23,8 @@ The back-ends are extras: ``pip install 'hht3d[s3]'`` (s3fs), ``[gcs]``
 from __future__ import annotations
 
 import contextlib
+import os
+import shutil
 import tempfile
 import uuid
 from pathlib import Path, PurePosixPath
@@ -34,8 +36,9 @@ from .atomic import atomic_path, check_output_paths
 from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS
 from .paths import resolve_inputs
 
-__all__ = ["EXTRAS", "is_url", "filesystem", "file_name", "stem", "parent_name", "join", "resolve_locations",
-           "exists", "local_copy", "load_url", "atomic_location", "write_via", "check_outputs"]
+__all__ = ["EXTRAS", "is_url", "options_for", "filesystem", "file_name", "stem", "parent_name", "join", "resolve_locations",
+           "exists", "local_copy", "load_url", "atomic_location", "write_via", "check_outputs", "TEMPORARY_PREFIX",
+           "temporary_folder", "remove_temporary_folders"]
 
 #: The hht3d extra that installs each protocol's back-end.
 EXTRAS = {"s3": "s3", "s3a": "s3", "gs": "gcs", "gcs": "gcs", "az": "azure", "abfs": "azure", "abfss": "azure",
@@ -54,8 +57,26 @@ def _protocol(url: str) -> str:
     return url.split("::")[-1].split("://", 1)[0].lower()
 
 
+def options_for(url: str, storage_options: dict | None) -> dict:
+    """The ``storage_options`` of ``url``'s back-end.
+
+    ``storage_options`` is either one set of options for every URL of a run, or a mapping keyed
+    by protocol, e.g. ``{"s3": {"client_kwargs": {...}}, "https": {}}``, for runs that mix stores
+    (one set of S3 options given to an ``https://`` input fails inside its HTTP client).
+    """
+    import fsspec
+
+    options = storage_options or {}
+    protocols = set(fsspec.available_protocols())
+    if options and all(key in protocols and isinstance(value, dict) for key, value in options.items()):
+        return options.get(_protocol(url), {})
+    return options
+
+
 def filesystem(url: str, storage_options: dict | None = None):
     """``(fs, path)`` of a URL; a missing back-end names the pip command that installs it.
+
+    ``storage_options``: as for :func:`options_for`.
 
     Raises
     ------
@@ -67,7 +88,7 @@ def filesystem(url: str, storage_options: dict | None = None):
     remember_secrets(storage_options)
     protocol = _protocol(url)
     try:
-        return fsspec.core.url_to_fs(url, **(storage_options or {}))
+        return fsspec.core.url_to_fs(url, **options_for(url, storage_options))
     except ImportError:
         extra = EXTRAS.get(protocol)
         how = f"pip install 'hht3d[{extra}]'" if extra else "install the fsspec back-end for it"
@@ -110,6 +131,9 @@ def join(folder, file_name: str):
 
 
 def _access_error(exc: Exception) -> str:
+    if isinstance(exc, TypeError):  # an option of another back-end, e.g. S3's endpoint_url given to https
+        return (f"storage_options do not fit this back-end: {one_line(exc)}; for runs that mix stores, key "
+                "them by protocol, e.g. {s3: {client_kwargs: ...}, https: {}}")
     if isinstance(exc, PermissionError):
         return "access denied; check the credentials (environment, config files or instance role)"
     if isinstance(exc, FileNotFoundError):
@@ -145,10 +169,10 @@ def _remote_inputs(url: str, storage_options) -> list[str]:
         elif fs.isdir(path):
             paths = [p for p, info in fs.find(path, maxdepth=1, detail=True).items() if info["type"] == "file"]
         elif fs.isfile(path):
-            suffix = PurePosixPath(path).suffix.lower()
+            suffix = PurePosixPath(_key(url)).suffix.lower()  # a signed URL's query is no part of its name
             if suffix not in usable:
-                raise InputError(f"{redact(url)}: unknown extension {suffix or '(none)'!r}; use one of "
-                                 f"{', '.join(sorted(usable))}")
+                raise InputError(redact(f"{url}: unknown extension {suffix or '(none)'!r}; use one of "
+                                        f"{', '.join(sorted(usable))}"))
             return [url]
         else:
             raise InputError(f"{redact(url)}: no such object or folder; check the URL")
@@ -156,10 +180,17 @@ def _remote_inputs(url: str, storage_options) -> list[str]:
         raise
     except Exception as exc:  # the back-ends raise many types (network, client errors)
         raise InputError(f"{redact(url)}: cannot list ({_access_error(exc)})") from None
-    matches = sorted(fs.unstrip_protocol(p) for p in paths if PurePosixPath(p).suffix.lower() in usable)
+    matches = sorted(_as_written(url, fs, p) for p in paths if PurePosixPath(p).suffix.lower() in usable)
     if not matches:
         raise InputError(f"{redact(url)}: matches no mesh or point-cloud file ({', '.join(sorted(usable))})")
     return matches
+
+
+def _as_written(url: str, fs, path: str) -> str:
+    """A listed object's URL with the protocol the user wrote (``az://``, not the back-end's ``abfs://``)."""
+    full = fs.unstrip_protocol(path)
+    written = url.split("::")[-1].split("://", 1)[0]
+    return f"{written}://{full.split('://', 1)[1]}"
 
 
 def exists(location, storage_options: dict | None = None) -> bool:
@@ -172,6 +203,26 @@ def exists(location, storage_options: dict | None = None) -> bool:
         return fs.isfile(path)
     except Exception:  # unreadable counts as absent: the item is computed again
         return False
+
+
+#: Prefix of the temporary folders of downloads and uploads; the process id follows it.
+TEMPORARY_PREFIX = "hht3d-"
+
+
+def temporary_folder():
+    """A temporary folder named after this process, so that a stop can find it after its owner
+    (a thread or worker process ended without running its cleanup, :func:`remove_temporary_folders`)."""
+    return tempfile.TemporaryDirectory(prefix=f"{TEMPORARY_PREFIX}{os.getpid()}-")
+
+
+def remove_temporary_folders(pids) -> list[Path]:
+    """Remove the temporary folders of :func:`temporary_folder` made by the processes ``pids``."""
+    removed = []
+    for pid in pids:
+        for folder in Path(tempfile.gettempdir()).glob(f"{TEMPORARY_PREFIX}{pid}-*"):
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    return removed
 
 
 @contextlib.contextmanager
@@ -189,7 +240,7 @@ def local_copy(location, storage_options: dict | None = None, *, head: int | Non
         yield Path(location)
         return
     fs, path = filesystem(location, storage_options)
-    with tempfile.TemporaryDirectory(prefix="hht3d-") as folder:
+    with temporary_folder() as folder:
         local = Path(folder) / (file_name(location) or "object")
         try:
             if head is None:
@@ -227,7 +278,7 @@ def atomic_location(location, storage_options: dict | None = None):
             yield tmp
         return
     fs, path = filesystem(location, storage_options)
-    with tempfile.TemporaryDirectory(prefix="hht3d-") as folder:
+    with temporary_folder() as folder:
         local = Path(folder) / file_name(location)
         yield local
         _upload(fs, str(local), path, location)

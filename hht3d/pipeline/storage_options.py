@@ -14,7 +14,7 @@ their usual places (``AWS_ACCESS_KEY_ID``/``AWS_SECRET_ACCESS_KEY``,
 from __future__ import annotations
 
 from ..errors import PipelineError, shown
-from ..redaction import SECRET_NAME, remember_secrets
+from ..redaction import is_secret_name, remember_secrets
 from .document import at
 
 __all__ = ["storage_options"]
@@ -41,7 +41,7 @@ def storage_options(doc) -> dict:
 
 def _no_credentials(block: dict, dotted: str) -> None:
     for key, value in block.items():
-        if SECRET_NAME.search(str(key)) and not isinstance(value, dict):
+        if is_secret_name(key) and not isinstance(value, dict):
             raise PipelineError(f"{at(block, key)}: {dotted}.{key}: credentials do not belong in a pipeline "
                                 "file; remove it and give them through the environment (e.g. "
                                 "AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY), the back-end's config file or an "

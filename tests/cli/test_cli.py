@@ -169,3 +169,10 @@ def test_module_entry_point():
     done = subprocess.run([sys.executable, "-m", "hht3d", "ops", "load"], capture_output=True, text=True, check=False,
                           timeout=120)
     assert done.returncode == 0 and done.stdout.startswith("load(file: file) -> surface")
+
+
+def test_a_memory_output_folder_is_refused_by_the_cli(tmp_path, capfd):
+    """Results in a memory:// folder would vanish with the command: one line, nothing computed."""
+    assert main(["demo", "--out", "memory://bucket/out", "--scheduler", "synchronous"]) == 1
+    err = capfd.readouterr().err
+    assert err.count("\n") == 1 and "would vanish when the command ends" in err

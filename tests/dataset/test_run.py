@@ -92,3 +92,13 @@ def test_run_dataset_refuses_bad_options_before_building_the_graph(options, mess
     with pytest.raises(InputError, match=re.escape(message)):
         run_dataset([inputs / "good.ply"], tmp_path / "out", scheduler="synchronous", progress=False, **options)
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("pattern", ["{0}", "{name}", "{stem", "{stem.x}"])
+def test_an_output_pattern_with_another_field_is_named(pattern, tmp_path):
+    """Only {stem} is filled in; anything else is one InputError, not an IndexError or KeyError."""
+    from hht3d import InputError, data_path
+
+    with pytest.raises(InputError, match="the only field is {stem}"):
+        run_dataset([data_path("spot.ply")], tmp_path / "out", scheduler="synchronous", pattern=pattern)
+    assert not (tmp_path / "out").exists()

@@ -81,3 +81,37 @@ def test_headers_give_sizes_without_the_data(tmp_path, sphere):
         read_ply_header(tmp_path / "s.npz")
     with pytest.raises(InputError, match="not a readable .npz file"):
         read_npz_shapes(tmp_path / "s.ply")
+
+
+# -- headers that declare more than the file holds (resource bombs) ----------------------------------
+def _ply(path, header_lines, body=b""):
+    path.write_bytes(("\n".join(["ply", *header_lines, "end_header"]) + "\n").encode() + body)
+    return path
+
+
+@pytest.mark.parametrize("name, header, message", [
+    ("many properties", ["format ascii 1.0", "element vertex 1", *(f"property float p{i}" for i in range(20_000))],
+     "declares 20,000 properties; at most 10,000"),
+    ("a billion vertices", ["format binary_little_endian 1.0", "element vertex 1000000000", "property float x",
+                            "property float y", "property float z"], "more than its"),
+    ("a header over 1 MiB", ["format ascii 1.0", "element vertex 1",
+                             *(f"property float p{i}" for i in range(100_000))], "no end_header"),
+])
+def test_a_ply_header_is_bounded_before_the_data_is_read(tmp_path, name, header, message):
+    """Refused in one line from the header alone (the reader would build a dtype of every property,
+    or allocate every declared vertex); a header longer than 1 MiB is not read to its end."""
+    with pytest.raises(InputError, match=message):
+        load(_ply(tmp_path / "bomb.ply", header))
+
+
+def test_a_pcd_declaring_a_trillion_points_is_refused(tmp_path):
+    path = tmp_path / "bomb.pcd"
+    path.write_text("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                    "WIDTH 1000000000000\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1000000000000\nDATA ascii\n0 0 0\n")
+    with pytest.raises(InputError, match="declares 1,000,000,000,000 vertices"):
+        load(path)
+
+
+def test_a_path_with_a_nul_is_an_input_error():
+    with pytest.raises(InputError, match="NUL character"):
+        load("scan\0.ply")

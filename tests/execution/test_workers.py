@@ -1,0 +1,58 @@
+"""Workers of a local process pool (hht3d.execution.workers): they end with their parent."""
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+import time
+
+import os
+from pathlib import Path
+
+import psutil
+import pytest
+
+import hht3d
+
+RUN = textwrap.dedent("""
+    import time
+    from dask import delayed
+    from hht3d.execution import compute
+
+    if __name__ == "__main__":
+        compute(*[delayed(time.sleep, pure=False)(120) for _ in range(2)], scheduler="processes", workers=2,
+                progress=False)
+""")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PR_SET_PDEATHSIG is Linux's")
+def test_pool_workers_end_when_their_parent_is_killed(tmp_path):
+    """SIGKILL leaves the parent no chance to stop its workers; the kernel ends them (before, they
+    went on computing with parent PID 1)."""
+    script = tmp_path / "run.py"
+    script.write_text(RUN)
+    env = {**os.environ, "PYTHONPATH": str(Path(hht3d.__file__).parents[1])}  # the hht3d under test
+    parent = subprocess.Popen([sys.executable, str(script)], env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while len(workers := psutil.Process(parent.pid).children()) < 2 and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert len(workers) >= 2
+        time.sleep(2)  # the workers' initializer has run
+    finally:
+        parent.kill()
+        parent.wait(10)
+    deadline = time.monotonic() + 10
+    while (running := [w for w in workers if _running(w)]) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    for process in running:
+        process.kill()
+    assert running == []
+
+
+def _running(process: psutil.Process) -> bool:
+    try:
+        return process.status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return False
