@@ -28,7 +28,7 @@ from ..errors import InputError, one_line
 from ..logs import get_logger, quieted, showing
 from .cluster import gather_bounded
 from .progress import is_terminal, local_progress
-from .workers import limit_blas_threads, sigint_ignored_by_children
+from .workers import check_main_guard, limit_blas_threads, sigint_ignored_by_children
 
 __all__ = ["SCHEDULERS", "MAX_WORKERS", "compute", "open_client"]
 
@@ -96,6 +96,8 @@ def compute(*graphs, scheduler: str = "threads", workers: int | None = None, add
         raise InputError(f"unknown scheduler {scheduler!r}; choose one of {SCHEDULERS}")
     if workers is not None and not 1 <= workers <= MAX_WORKERS:
         raise InputError(f"workers must be in [1, {MAX_WORKERS}], got {workers}")
+    if scheduler == "processes" or (scheduler == "distributed" and not address and client is None):
+        check_main_guard(f"{scheduler} scheduler")
     with showing() if progress else contextlib.nullcontext():
         if scheduler == "distributed":
             # the client's reconnect attempts: a lost cluster is reported as ClusterLost instead

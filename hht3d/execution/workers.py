@@ -7,13 +7,16 @@ main process stops them (:mod:`hht3d.stopping`).
 """
 from __future__ import annotations
 
+import ast
 import contextlib
 import os
 import signal
+import sys
 
 import dask
 
-__all__ = ["SINGLE_THREAD_ENV", "worker_count", "limit_blas_threads", "end_with_parent", "sigint_ignored_by_children"]
+__all__ = ["SINGLE_THREAD_ENV", "worker_count", "limit_blas_threads", "end_with_parent", "sigint_ignored_by_children",
+           "check_main_guard"]
 
 #: Environment that keeps each worker process's BLAS/OpenMP/MKL to one thread.
 SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
@@ -57,7 +60,6 @@ def end_with_parent(parent: int | None) -> None:
     recording results; a parent already gone ends the worker at once.  Elsewhere nothing is set:
     there a killed parent's pool workers end when they next find their call queue closed."""
     import ctypes
-    import sys
 
     if not sys.platform.startswith("linux") or parent is None:
         return
@@ -91,3 +93,53 @@ def sigint_ignored_by_children():
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+def check_main_guard(what: str) -> None:
+    """Refuse to start worker processes from the top level of a script outside ``if __name__ ==
+    "__main__":``.
+
+    Worker processes are spawned: each imports the main script again, so an unguarded call would
+    run again in every worker (Dask's ``LocalCluster`` and ``multiprocessing`` then stall, and the
+    run hangs without a word).  ``what`` names the scheduler in the message.
+
+    Raises
+    ------
+    InputError
+        Naming the script, the line and the fix.
+    """
+    from ..errors import InputError
+
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    spec = getattr(getattr(main, "__spec__", None), "name", "") or ""
+    if spec == "__main__" or spec.endswith(".__main__"):  # python -m PACKAGE: spawned workers skip it
+        return
+    frame = sys._getframe(1)
+    while frame is not None and not (frame.f_globals is getattr(main, "__dict__", None)
+                                     and frame.f_code.co_name == "<module>"):
+        frame = frame.f_back
+    if frame is None or path is None:  # not called from a script's top level (a function, a notebook, -c)
+        return
+    try:
+        tree = ast.parse(open(path, encoding="utf-8").read())
+    except (OSError, SyntaxError, ValueError):
+        return
+    line = frame.f_lineno
+    guarded = any(isinstance(node, ast.If) and _is_main_test(node.test)
+                  and node.body[0].lineno <= line <= (node.body[-1].end_lineno or line)
+                  for node in ast.walk(tree))
+    if not guarded:
+        raise InputError(f"{path}:{line}: the {what} starts worker processes, and each imports this script "
+                         "again: put the call under `if __name__ == \"__main__\":`")
+
+
+def _is_main_test(test) -> bool:
+    """Whether ``test`` is ``__name__ == "__main__"`` (either way round)."""
+    if not (isinstance(test, ast.Compare) and len(test.ops) == 1
+            and isinstance(test.ops[0], ast.Eq)):
+        return False
+    sides = [test.left, *test.comparators]
+    names = {s.id for s in sides if isinstance(s, ast.Name)}
+    values = {s.value for s in sides if isinstance(s, ast.Constant)}
+    return names == {"__name__"} and values == {"__main__"}

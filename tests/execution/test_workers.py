@@ -56,3 +56,26 @@ def _running(process: psutil.Process) -> bool:
         return process.status() != psutil.STATUS_ZOMBIE
     except psutil.NoSuchProcess:
         return False
+
+
+UNGUARDED = textwrap.dedent("""
+    from hht3d import data_path
+    from hht3d.dataset import run_dataset
+
+    run_dataset([data_path("spot.ply")], "out", scheduler="{scheduler}", workers=2, emd={{"max_imfs": 1}})
+""")
+
+
+@pytest.mark.parametrize("scheduler", ["distributed", "processes"])
+def test_a_run_at_a_scripts_top_level_fails_naming_the_fix(scheduler, tmp_path):
+    """Each spawned worker imports the script again: outside `if __name__ == "__main__":` the run
+    hung for 17 minutes without a word (Dask's own bootstrap error hidden); now one line at once."""
+    script = tmp_path / "run.py"
+    script.write_text(UNGUARDED.format(scheduler=scheduler))
+    env = {**os.environ, "PYTHONPATH": str(Path(hht3d.__file__).parents[1])}
+    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=60,
+                          env=env)
+    assert done.returncode == 1
+    assert f'run.py:5: the {scheduler} scheduler starts worker processes' in done.stderr
+    assert 'put the call under `if __name__ == "__main__":`' in done.stderr
+    assert not (tmp_path / "out").exists()
