@@ -6,6 +6,13 @@ maps (``map_Kd`` ...) name images.  Open3D reads whatever they name, so a
 scan could turn ``/etc/passwd`` into vertex coordinates, or hang on a FIFO.
 A reference is allowed only to a file inside the scan's own folder (``data:``
 URIs are fine); anything else is refused before Open3D reads the scan.
+
+Each reference is checked as the reading library may take it, not as a URL
+parser would: a glTF URI's query or fragment (``inside.bin?/../../x.bin``) and
+a backslash (``..\\outside\\evil.mtl``) are refused outright, since Open3D's
+readers treat them as part of the path; an OBJ or MTL file name may hold
+spaces, so every tail of a directive's words (``../outside/a b.png``, then
+``b.png``) must stay inside.
 """
 from __future__ import annotations
 
@@ -39,29 +46,47 @@ def check_references(path: Path) -> None:
             if uri.startswith("data:"):
                 continue
             parts = urlsplit(uri)
-            target = unquote(parts.path) if not parts.scheme else None
-            _inside(path, uri, target)
+            if parts.scheme:
+                _inside(path, uri, None)
+            elif "?" in uri or "#" in uri:
+                _inside(path, uri, None, problem=_AMBIGUOUS)
+            _inside(path, uri, unquote(uri))
     elif ext == ".obj":
         for names in _directives(path, ("mtllib",)):
-            for name in names.split():
+            for name in {names, *names.split()}:  # one name with spaces, or several names
                 target = _inside(path, name, name, required=False)
                 if os.path.isfile(target):
                     for image in _directives(target, ("map_", "bump", "disp", "decal", "refl", "norm")):
-                        _inside(path, image, image.split()[-1], required=False)
+                        for tail in _tails(image):
+                            _inside(path, image, tail, required=False)
 
 
-def _inside(scan: Path, reference: str, target: str | None, required: bool = True) -> Path:
+def _tails(argument: str) -> list[str]:
+    """Every file name a directive's argument may mean: the words from each one to the end
+    (options such as ``-s 1 1 1`` come first, and a name may hold spaces)."""
+    words = argument.split()
+    return [" ".join(words[i:]) for i in range(len(words))]
+
+
+#: Why a reference with a query, a fragment or a backslash is refused.
+_AMBIGUOUS = "a name with '?', '#' or '\\', which the readers take as part of a path that may leave the folder"
+
+
+def _inside(scan: Path, reference: str, target: str | None, required: bool = True,
+            problem: str = "outside the file's folder") -> Path:
     """The referenced file, if it lies inside the scan's folder and is a regular file (or, unless
-    ``required``, is missing: Open3D then skips it); else an :class:`InputError`."""
+    ``required``, is missing: Open3D then skips it); else an :class:`InputError` saying ``problem``
+    for a reference that cannot be checked (``target`` None) or leaves the folder."""
+    if target is not None and "\\" in target:  # a separator on Windows, a name character elsewhere
+        target, problem = None, _AMBIGUOUS
     resolved = None if target is None or os.path.isabs(target) else scan.parent / target
-    if resolved is None or confined(resolved, scan.parent) is None:
-        problem = "outside the file's folder"
-    elif os.path.exists(resolved) and not os.path.isfile(resolved):
-        problem = "not a regular file"
-    elif required and not os.path.exists(resolved):
-        problem = "a missing file"
-    else:
-        return resolved
+    if resolved is not None and confined(resolved, scan.parent) is not None:
+        if os.path.exists(resolved) and not os.path.isfile(resolved):
+            problem = "not a regular file"
+        elif required and not os.path.exists(resolved):
+            problem = "a missing file"
+        else:
+            return resolved
     raise InputError(f"{short(scan)}: refers to {shown(reference)}, {problem}; a scan may only refer to "
                      "files beside it (or embed them)")
 
