@@ -1,7 +1,9 @@
 """Real servers for the object-storage tests and benchmark: an S3 server and a Dask cluster.
 
 * :func:`s3_server`: moto's ``ThreadedMotoServer`` (an S3-compatible HTTP
-  server, the way s3fs's own tests run) on 127.0.0.1 at a free port.
+  server, the way s3fs's own tests run) on 127.0.0.1 at a free port; or,
+  with ``kind="s3rver"``, the independent Node.js server s3rver (npm), where
+  Node and npm exist (:data:`S3_SERVERS` lists the kinds this machine has).
 * :func:`dask_cluster`: ``dask scheduler`` and two ``dask worker`` processes,
   each started in its own empty temporary folder (its cwd, ``TMPDIR`` and
   ``HOME``), so that the workers cannot see the client's files.
@@ -13,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 import socket
 import subprocess
 import sys
@@ -21,9 +24,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-#: Fake credentials: moto accepts any.
-FAKE_CREDENTIALS = {"AWS_ACCESS_KEY_ID": "testing-key-id", "AWS_SECRET_ACCESS_KEY": "testing-secret-value",
-                    "AWS_DEFAULT_REGION": "us-east-1"}
+#: Fake credentials: moto accepts any, s3rver its own default account.
+FAKE_CREDENTIALS = {"AWS_ACCESS_KEY_ID": "S3RVER", "AWS_SECRET_ACCESS_KEY": "S3RVER", "AWS_DEFAULT_REGION": "us-east-1"}
 START_TIMEOUT = 60.0
 
 
@@ -33,9 +35,31 @@ def free_port() -> int:
         return sock.getsockname()[1]
 
 
+#: s3rver's version, installed once per machine into :data:`S3RVER_HOME` when Node and npm exist.
+S3RVER = "s3rver@3.7.1"
+S3RVER_HOME = Path.home() / ".cache" / "hht3d-tests" / S3RVER.replace("@", "-")
+#: The S3 servers the object-storage tests run against here: moto always, s3rver where Node is.
+S3_SERVERS = ("moto", "s3rver") if shutil.which("node") and shutil.which("npm") else ("moto",)
+
+
 @contextlib.contextmanager
-def s3_server():
-    """Yield the endpoint URL of a running moto S3 server (with fake credentials in the environment)."""
+def s3_server(kind: str = "moto"):
+    """Yield the endpoint URL of a running S3 server (with fake credentials in the environment)."""
+    saved = {k: os.environ.get(k) for k in FAKE_CREDENTIALS}
+    os.environ.update(FAKE_CREDENTIALS)
+    try:
+        with (_moto() if kind == "moto" else _s3rver()) as endpoint:
+            yield endpoint
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
+@contextlib.contextmanager
+def _moto():
     import logging
 
     from moto.server import ThreadedMotoServer
@@ -43,18 +67,37 @@ def s3_server():
     logging.getLogger("werkzeug").setLevel(logging.ERROR)  # no line per request
     port = free_port()
     server = ThreadedMotoServer(ip_address="127.0.0.1", port=port, verbose=False)
-    saved = {k: os.environ.get(k) for k in FAKE_CREDENTIALS}
-    os.environ.update(FAKE_CREDENTIALS)
     server.start()
     try:
         yield f"http://127.0.0.1:{port}"
     finally:
         server.stop()
-        for key, value in saved.items():
-            if value is None:
-                os.environ.pop(key, None)
-            else:
-                os.environ[key] = value
+
+
+@contextlib.contextmanager
+def _s3rver():
+    """s3rver on 127.0.0.1, accepting any well-formed signature (the fake credentials)."""
+    script = S3RVER_HOME / "node_modules" / "s3rver" / "bin" / "s3rver.js"
+    if not script.is_file():
+        S3RVER_HOME.mkdir(parents=True, exist_ok=True)
+        subprocess.run(["npm", "install", "--no-audit", "--no-fund", "--silent", "--prefix", str(S3RVER_HOME),
+                        S3RVER], check=True, timeout=300, capture_output=True)
+    port = free_port()
+    with tempfile.TemporaryDirectory(prefix="hht3d-s3rver-") as data:
+        server = subprocess.Popen(["node", str(script), "--directory", data, "--address", "127.0.0.1", "--port",
+                                   str(port), "--silent", "--allow-mismatched-signatures", "--no-vhost-buckets"],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            _wait_for(lambda: _listening(port), [server])
+            yield f"http://127.0.0.1:{port}"
+        finally:
+            server.terminate()
+            server.wait(10)
+
+
+def _listening(port: int) -> bool:
+    with socket.socket() as sock:
+        return sock.connect_ex(("127.0.0.1", port)) == 0
 
 
 def _start(args, folder: Path, env: dict, log: str) -> subprocess.Popen:

@@ -1,6 +1,7 @@
 """Datasets and pipelines in object storage, on a Dask cluster whose workers share no files.
 
-A real S3-compatible server (moto's ThreadedMotoServer on 127.0.0.1) and a
+A real S3-compatible server (moto's ThreadedMotoServer on 127.0.0.1, and the
+independent s3rver where Node.js is installed: every test runs on each) and a
 real ``dask.distributed`` scheduler with two workers, each a separate process
 started in its own empty temporary folder (:mod:`servers`).  The workers get
 URLs and storage_options, never the client's files, and must leave no
@@ -29,7 +30,8 @@ from helpers.secrets import forms_found  # noqa: E402
 from hht3d.cli import main  # noqa: E402
 from hht3d.errors import InputError, OutputError  # noqa: E402
 from hht3d.dataset import run_dataset  # noqa: E402
-from helpers.servers import ROOT, dask_cluster, s3_server, worker_leftovers  # noqa: E402
+from helpers.servers import (FAKE_CREDENTIALS, ROOT, S3_SERVERS, dask_cluster, s3_server,  # noqa: E402
+                             worker_leftovers)
 
 BUCKET = "hht"
 MODELS = {"spot.ply": "spot.ply", "sphere.ply": "sphere_oct4098.ply"}
@@ -40,10 +42,11 @@ SECRET = "hht3dSECRETvalue0123456789abcdef"
 TIMEOUT = 120
 
 
-@pytest.fixture(scope="module")
-def store():
-    """``(endpoint, storage_options, fs)`` of a moto S3 server holding the scans."""
-    with s3_server() as endpoint:
+@pytest.fixture(scope="module", params=S3_SERVERS)
+def store(request):
+    """``(endpoint, storage_options, fs)`` of an S3 server holding the scans: moto, and s3rver (an
+    independent implementation, npm) where Node exists; the test ids name the server that ran."""
+    with s3_server(request.param) as endpoint:
         options = {"client_kwargs": {"endpoint_url": endpoint}}
         fs = fsspec.filesystem("s3", **options)
         fs.mkdir(BUCKET)
@@ -208,7 +211,7 @@ def _importable(module: str) -> bool:
 
 def test_a_secret_never_appears_in_what_runs_print_or_write(store, cluster, tmp_path, capfd):
     endpoint, options, fs = store
-    secret_options = {**options, "key": "hht3d-test-key-id", "secret": SECRET}
+    secret_options = {**options, "key": FAKE_CREDENTIALS["AWS_ACCESS_KEY_ID"], "secret": SECRET}  # a key both know
     rows = run_dataset([f"s3://{BUCKET}/scans/spot.ply", f"s3://{BUCKET}/mixed/bad.ply"], f"s3://{BUCKET}/secret-out",
                        address=cluster[0], storage_options=secret_options, progress=True, emd=EMD)
     assert [r.status for r in rows] == ["ok", "failed"]
