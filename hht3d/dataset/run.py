@@ -26,7 +26,7 @@ from ..errors import InputError
 from ..geometry.signals import SIGNALS
 from ..io.folder import OutputFolder, check_locations
 from ..io.manifest import new_run_id
-from ..io.storage import file_name, join, resolve_locations, stem
+from ..io.storage import file_name, join, local_path, resolve_locations, stem
 from ..transform import HHTResult
 from .guard import MAX_ERROR, Failure, Guarded
 from ..execution import compute
@@ -116,6 +116,7 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=RE
         file hht3d did not write (checked before any task is made).
     """
     _check_options(signal, formats)
+    out_dir = local_path(out_dir)
     sources = resolve_locations(inputs, storage_options)
     items = {source: output_paths(source, out_dir, formats, pattern) for source in sources}
     check_locations(items, out_dir)
@@ -169,7 +170,7 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     >>> sorted(path.name for path in out.iterdir() if not path.name.startswith("."))
     ['spot_hht.npz', 'spot_hht.ply', 'summary.csv', 'summary.json']
     """
-    run = options.pop("run", None) or new_run_id()
+    run, out_dir = options.pop("run", None) or new_run_id(), local_path(out_dir)
     (rows,) = compute(dataset_graph(inputs, out_dir, run=run, **options), scheduler=scheduler, workers=workers,
                       address=address, progress=progress)
     OutputFolder(out_dir, storage_options=options.get("storage_options"), run=run).finish([])

@@ -52,11 +52,15 @@ class OutputFolder:
         For a URL: options of its fsspec back-end.
     run : str, optional
         The run id recorded in a local folder's manifest (default: a new one).
+    allow_outside : bool
+        Outputs may lie outside a local folder (``outputs.allow_outside``); otherwise each write is
+        checked again, just before its rename, to resolve inside it.
     """
 
-    def __init__(self, location, *, storage_options: dict | None = None, run: str | None = None):
-        self.location, self.storage_options = location, storage_options or None
-        self.is_url = storage.is_url(location)
+    def __init__(self, location, *, storage_options: dict | None = None, run: str | None = None,
+                 allow_outside: bool = False):
+        self.location, self.storage_options = storage.local_path(location), storage_options or None
+        self.is_url, self.allow_outside = storage.is_url(self.location), allow_outside
         self.run = run or new_run_id()
         self._known: dict | None = None
 
@@ -108,7 +112,9 @@ class OutputFolder:
 
     def writer(self, write):
         """``write`` as a task function writing into this folder: recorded locally, uploaded to a URL."""
-        return Uploaded(write, self.storage_options) if self.is_url else Recorded(write, self.location, self.run)
+        if self.is_url:
+            return Uploaded(write, self.storage_options)
+        return Recorded(write, self.location, self.run, allow_outside=self.allow_outside)
 
 
 def check_locations(items: dict, folder, *, allow_outside: bool = False,
@@ -117,8 +123,8 @@ def check_locations(items: dict, folder, *, allow_outside: bool = False,
     local ``folder`` (unless ``allow_outside``), or that are one of the inputs.
 
     ``items`` maps each input to its output paths; ``where(source, path)``
-    names an output in messages.  URL outputs are joined under their folder
-    by construction and checked for names only.
+    names an output in messages.  A URL output's key is normalised
+    (:func:`hht3d.io.storage.join`) and must stay under its folder's prefix.
 
     Raises
     ------
@@ -127,13 +133,23 @@ def check_locations(items: dict, folder, *, allow_outside: bool = False,
     def real(location):
         return str(location) if storage.is_url(location) else os.path.realpath(location)
 
+    folder = storage.local_path(folder)
     inputs = {real(source): source for source in items}
     for source, paths in items.items():
         for path in paths:
             check_name(path, where(source, path))
-            if not allow_outside and not storage.is_url(path):
-                check_output_location(path, folder, where(source, path))
+            if not allow_outside:
+                _check_inside(path, folder, where(source, path))
             clash = inputs.get(real(path))
             if clash is not None:
                 raise OutputError(f"{where(source, path)}: {path} is the input {clash}; an input is never an "
                                   "output: change the output path or folder")
+
+
+def _check_inside(path, folder, where: str) -> None:
+    """Refuse an output outside ``folder``: locally after links, for a URL by its normalised key."""
+    if not storage.is_url(path):
+        check_output_location(path, folder, where)
+    elif not storage.inside(path, folder):
+        raise OutputError(f"{where}: {path} leaves the output folder {folder}; write inside it (or set "
+                          "outputs.allow_outside: true)")

@@ -23,6 +23,7 @@ The back-ends are extras: ``pip install 'hht3d[s3]'`` (s3fs), ``[gcs]``
 from __future__ import annotations
 
 import contextlib
+import posixpath
 import tempfile
 import uuid
 from pathlib import Path, PurePosixPath
@@ -34,7 +35,7 @@ from .atomic import atomic_path, check_output_paths
 from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS
 from .paths import resolve_inputs
 
-__all__ = ["EXTRAS", "is_url", "filesystem", "file_name", "stem", "parent_name", "join", "resolve_locations",
+__all__ = ["EXTRAS", "is_url", "local_path", "inside", "filesystem", "file_name", "stem", "parent_name", "join", "resolve_locations",
            "exists", "local_copy", "load_url", "atomic_location", "write_via", "check_outputs"]
 
 #: The hht3d extra that installs each protocol's back-end.
@@ -46,8 +47,34 @@ _GLOB = "*?["
 
 
 def is_url(location) -> bool:
-    """Whether ``location`` is an fsspec URL (``protocol://...``) rather than a local path."""
-    return isinstance(location, str) and "://" in location
+    """Whether ``location`` is an fsspec URL (``protocol://...``) rather than a local path; a ``file://``
+    URL is the local path it names (:func:`local_path`), with every local rule."""
+    return isinstance(location, str) and "://" in location and not _is_file_url(location)
+
+
+def _is_file_url(location) -> bool:
+    """``file://`` or ``local://``: fsspec's names for the local file system."""
+    return isinstance(location, str) and location.split("://", 1)[0].lower() in ("file", "local")
+
+
+def local_path(location):
+    """``location`` as hht3d takes it wherever a location enters: a ``file://`` (or ``local://``) URL as
+    the local :class:`~pathlib.Path` it names, anything else unchanged.
+
+    Raises
+    ------
+    InputError
+        A ``file://`` URL naming another host.
+    """
+    if not _is_file_url(location):
+        return location
+    from urllib.request import url2pathname
+
+    parts = urlsplit(location)
+    if parts.netloc not in ("", "localhost"):
+        raise InputError(f"{location}: a file:// URL names a local path, not one on host {parts.netloc!r}; "
+                         "write file:///path")
+    return Path(url2pathname(parts.path))
 
 
 def _protocol(url: str) -> str:
@@ -103,10 +130,24 @@ def parent_name(location) -> str:
 
 
 def join(folder, file_name: str):
-    """``folder / file_name``: a Path for a local folder, a URL string for a URL."""
+    """``folder / file_name``: a Path for a local folder, a URL string for a URL (its key normalised:
+    no ``.`` or ``..`` left in it, which a tool syncing the bucket would follow)."""
+    folder = local_path(folder)
     if is_url(folder):
-        return f"{folder.rstrip('/')}/{file_name}"
+        return _normalised(f"{folder.rstrip('/')}/{file_name}")
     return Path(folder) / file_name
+
+
+def _normalised(url: str) -> str:
+    """``url`` with ``.``, ``..`` and repeated slashes of its path resolved lexically."""
+    head, _, rest = url.partition("://")
+    return f"{head}://{posixpath.normpath(rest) if rest.strip('/') else rest}"
+
+
+def inside(url: str, folder: str) -> bool:
+    """Whether the URL ``url`` lies under the URL ``folder``, both normalised lexically."""
+    root = _normalised(folder).rstrip("/")
+    return _normalised(url).startswith(root + "/")
 
 
 def _access_error(exc: Exception) -> str:
@@ -130,7 +171,7 @@ def resolve_locations(spec, storage_options: dict | None = None) -> list:
     """
     specs = [spec] if isinstance(spec, (str, Path)) else list(spec)
     found = []
-    for item in specs:
+    for item in map(local_path, specs):
         found.extend(_remote_inputs(item, storage_options) if is_url(item) else resolve_inputs(item))
     return list(dict.fromkeys(found))
 
@@ -164,6 +205,7 @@ def _remote_inputs(url: str, storage_options) -> list[str]:
 
 def exists(location, storage_options: dict | None = None) -> bool:
     """Whether a file or object exists at ``location`` (a fresh listing, not a cached one)."""
+    location = local_path(location)
     if not is_url(location):
         return Path(location).is_file()
     fs, path = filesystem(location, storage_options)
@@ -185,6 +227,7 @@ def local_copy(location, storage_options: dict | None = None, *, head: int | Non
     InputError
         The object cannot be read (missing, access denied, network).
     """
+    location = local_path(location)
     if not is_url(location):
         yield Path(location)
         return
@@ -222,6 +265,7 @@ def atomic_location(location, storage_options: dict | None = None):
     OutputError
         The upload failed (names the URL and the reason).
     """
+    location = local_path(location)
     if not is_url(location):
         with atomic_path(location) as tmp:
             yield tmp
@@ -262,6 +306,7 @@ def write_via(write, *args, storage_options: dict | None = None, **options):
     (:func:`atomic_location`).
     """
     *values, location = args
+    location = local_path(location)
     if not is_url(location):
         return write(*values, location, **options)
     with atomic_location(location, storage_options) as local:
@@ -280,7 +325,7 @@ def check_outputs(locations, storage_options: dict | None = None) -> None:
     OutputError
         One line naming the location and what to change.
     """
-    locations = list(locations)
+    locations = list(map(local_path, locations))
     check_output_paths([p for p in locations if not is_url(p)])
     folders = dict.fromkeys(str(p).rsplit("/", 1)[0] for p in locations if is_url(p))
     for folder in folders:

@@ -73,7 +73,7 @@ def _item(plan: Pipeline, folder: OutputFolder, source: Path, paths: list[Path])
 
 def output_folder(plan: Pipeline, run: str | None = None) -> OutputFolder:
     """The pipeline's output folder (local or URL), writing under the run id ``run`` (default: a new one)."""
-    return OutputFolder(plan.folder, storage_options=plan.storage_options, run=run)
+    return OutputFolder(plan.folder, storage_options=plan.storage_options, run=run, allow_outside=plan.allow_outside)
 
 
 def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder | None = None):

@@ -246,10 +246,16 @@ def test_a_failed_write_leaves_no_object_and_a_non_atomic_store_gets_a_moved_who
     with pytest.raises(RuntimeError):
         write_via(half_then_fail, b"x" * 1000, "memory://atomic/out.bin")
     assert not memory.exists("/atomic/out.bin")
-    url = f"file://{tmp_path}/out/result.bin"  # no atomic upload there: a temporary name, then a move
+
+    class NonAtomic(fsspec.implementations.memory.MemoryFileSystem):
+        protocol = "nonatomic"  # no atomic upload there: a temporary name, then a move
+
+    fsspec.register_implementation("nonatomic", NonAtomic, clobber=True)
+    url = "nonatomic://nonatomic/out/result.bin"
     assert write_via(lambda data, path: path.write_bytes(data), b"y" * 1000, url) == url
-    assert [p.name for p in (tmp_path / "out").iterdir()] == ["result.bin"]
-    assert (tmp_path / "out" / "result.bin").read_bytes() == b"y" * 1000
+    store = NonAtomic()
+    assert [Path(p).name for p in store.ls("nonatomic://nonatomic/out", detail=False)] == ["result.bin"]
+    assert store.cat_file("nonatomic://nonatomic/out/result.bin") == b"y" * 1000
 
 
 def test_the_cli_reads_and_writes_urls(tmp_path, capsys):
