@@ -31,7 +31,7 @@ from ..transform import HHTResult
 from .guard import MAX_ERROR, Failure, Guarded
 from ..execution import compute
 from .summary import (SUMMARY_FILES, ItemSummary, item_summary, quality_fields, skipped_summary, summary_paths,
-                      write_summary)
+                      write_summary, written_outputs)
 
 __all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary",
            "summary_paths", "item_summary", "skipped_summary", "quality_fields", "SUMMARY_FILES", "MAX_ERROR",
@@ -173,6 +173,6 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     run, out_dir = options.pop("run", None) or new_run_id(), local_path(out_dir)
     (rows,) = compute(dataset_graph(inputs, out_dir, run=run, **options), scheduler=scheduler, workers=workers,
                       address=address, progress=progress)
-    OutputFolder(out_dir, storage_options=options.get("storage_options"), run=run).finish([])
+    OutputFolder(out_dir, storage_options=options.get("storage_options"), run=run).finish([], written_outputs(rows))
     write_summary(rows, out_dir, run, options.get("storage_options"))
     return rows

@@ -51,7 +51,8 @@ from ..logs import get_logger
 from .atomic import atomic_path, before_rename, check_inside, confined
 
 __all__ = ["MANIFEST", "LOCK", "LOCK_TIMEOUT", "new_run_id", "folder_lock", "lock_timeout", "valid_entries",
-           "entries", "digest", "is_recorded", "record", "Recorded", "recording", "recorded_names", "check_overwrites"]
+           "entries", "digest", "is_recorded", "record", "updated", "Recorded", "recording", "recorded_names",
+           "check_overwrites"]
 
 MANIFEST = ".hht3d-manifest.json"
 LOCK = ".hht3d.lock"
@@ -301,12 +302,16 @@ def record(paths, folder, run: str, *, named=None) -> None:
     found = {_key(n, folder): _digest(p) for p, n in zip(paths, named or paths)}
     found.pop(None, None)
     with before_rename(None), folder_lock(folder, run):  # the manifest itself is not recorded
-        files = entries(folder)
-        stamp = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
-        files.update({key: {"size": size, "sha256": sha, "run": run, "written": stamp}
-                      for key, (size, sha) in found.items()})
         with atomic_path(Path(folder) / MANIFEST) as tmp:
-            tmp.write_text(json.dumps({"version": 1, "files": files}, indent=1), encoding="utf-8")
+            tmp.write_text(updated(entries(folder), found, run), encoding="utf-8")
+
+
+def updated(files: dict, found: dict, run: str) -> str:
+    """The text of a manifest of ``files`` and, written now by the run ``run``, ``found`` (key: (size, SHA-256))."""
+    stamp = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+    files = {**files, **{key: {"size": size, "sha256": sha, "run": run, "written": stamp}
+                         for key, (size, sha) in found.items()}}
+    return json.dumps({"version": 1, "files": files}, indent=1)
 
 
 def recording(folder, run: str, *, confine: bool = True):

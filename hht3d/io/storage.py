@@ -35,14 +35,19 @@ from .atomic import atomic_path, check_output_paths
 from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS
 from .paths import resolve_inputs
 
-__all__ = ["EXTRAS", "is_url", "local_path", "inside", "filesystem", "file_name", "stem", "parent_name", "join", "resolve_locations",
-           "exists", "local_copy", "load_url", "atomic_location", "write_via", "check_outputs"]
+__all__ = ["EXTRAS", "is_url", "local_path", "under", "filesystem", "file_name", "stem", "parent_name", "join",
+           "resolve_locations",
+           "local_copy", "load_url", "atomic_location", "write_via", "update_object", "check_outputs"]
 
 #: The hht3d extra that installs each protocol's back-end.
 EXTRAS = {"s3": "s3", "s3a": "s3", "gs": "gcs", "gcs": "gcs", "az": "azure", "abfs": "azure", "abfss": "azure",
           "adl": "azure"}
 #: Protocols on which one upload is atomic (an object is visible only once complete).
 _ATOMIC_UPLOAD = {"s3", "s3a", "gs", "gcs", "az", "abfs", "abfss", "memory"}
+#: Protocols whose back-end writes conditionally (s3fs: ``If-None-Match: *``, ``If-Match`` an ETag).
+_CONDITIONAL = {"s3", "s3a"}
+#: Tries of :func:`update_object` when other writers keep coming first.
+_UPDATE_TRIES = 20
 _GLOB = "*?["
 
 
@@ -144,10 +149,11 @@ def _normalised(url: str) -> str:
     return f"{head}://{posixpath.normpath(rest) if rest.strip('/') else rest}"
 
 
-def inside(url: str, folder: str) -> bool:
-    """Whether the URL ``url`` lies under the URL ``folder``, both normalised lexically."""
-    root = _normalised(folder).rstrip("/")
-    return _normalised(url).startswith(root + "/")
+def under(url: str, folder: str) -> str | None:
+    """The key of the URL ``url`` relative to the URL ``folder``, both normalised lexically; ``None`` if
+    ``url`` does not lie under ``folder``."""
+    root, found = _normalised(folder).rstrip("/") + "/", _normalised(url)
+    return found[len(root):] if found.startswith(root) and len(found) > len(root) else None
 
 
 def _access_error(exc: Exception) -> str:
@@ -201,19 +207,6 @@ def _remote_inputs(url: str, storage_options) -> list[str]:
     if not matches:
         raise InputError(f"{redact(url)}: matches no mesh or point-cloud file ({', '.join(sorted(usable))})")
     return matches
-
-
-def exists(location, storage_options: dict | None = None) -> bool:
-    """Whether a file or object exists at ``location`` (a fresh listing, not a cached one)."""
-    location = local_path(location)
-    if not is_url(location):
-        return Path(location).is_file()
-    fs, path = filesystem(location, storage_options)
-    fs.invalidate_cache(str(PurePosixPath(path).parent))
-    try:
-        return fs.isfile(path)
-    except Exception:  # unreadable counts as absent: the item is computed again
-        return False
 
 
 @contextlib.contextmanager
@@ -312,6 +305,46 @@ def write_via(write, *args, storage_options: dict | None = None, **options):
     with atomic_location(location, storage_options) as local:
         write(*values, local, **options)
     return location
+
+
+def update_object(url: str, update, storage_options: dict | None = None) -> None:
+    """Replace the object at ``url`` by ``update(its bytes, or None if missing)``, other writers' changes kept.
+
+    On S3 the write is conditional (``If-Match`` the ETag read, ``If-None-Match``
+    when there was none): when another writer came first, its bytes are read
+    and ``update`` applied again.  Other stores have no conditional write
+    here: the last writer wins.
+
+    Raises
+    ------
+    OutputError
+    """
+    fs, path = filesystem(url, storage_options)
+    conditional = _protocol(url) in _CONDITIONAL
+    for _ in range(_UPDATE_TRIES):
+        fs.invalidate_cache(str(PurePosixPath(path).parent))
+        try:
+            try:
+                etag, old = fs.info(path).get("ETag"), fs.cat_file(path)
+            except FileNotFoundError:
+                etag, old = None, None
+            data = update(old)
+            if not conditional:
+                with atomic_location(url, storage_options) as tmp:
+                    tmp.write_bytes(data)
+                return
+            fs.pipe_file(path, data, **({"IfMatch": etag} if etag else {"mode": "create"}))
+            return
+        except Exception as exc:  # the back-ends raise many types (network, client errors)
+            if not (conditional and _came_first(exc)):
+                raise OutputError(f"{redact(url)}: cannot write ({_access_error(exc)}); check the bucket and the "
+                                  "credentials, or choose another output folder") from None
+    raise OutputError(f"{redact(url)}: cannot write: other runs kept changing it ({_UPDATE_TRIES} tries); run again")
+
+
+def _came_first(exc: Exception) -> bool:
+    """Whether a conditional write failed because another writer changed the object (HTTP 412)."""
+    return isinstance(exc, FileExistsError) or "pre-condition" in str(exc).lower() or "412" in str(exc)
 
 
 def check_outputs(locations, storage_options: dict | None = None) -> None:

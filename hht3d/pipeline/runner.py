@@ -25,7 +25,7 @@ from dask.base import tokenize
 
 from ..dataset.guard import Guarded
 from ..dataset.run import items_graph
-from ..dataset.summary import ItemSummary, item_summary, quality_fields, write_summary
+from ..dataset.summary import ItemSummary, item_summary, quality_fields, write_summary, written_outputs
 from ..execution import compute
 from ..graph.stages import Builder
 from ..io.folder import OutputFolder
@@ -140,7 +140,7 @@ def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int |
     folder.prepare(plan.written_paths(), overwrite=overwrite)
     (rows,) = compute(pipeline_graph(plan, resume=resume, folder=folder), scheduler=execution.scheduler,
                       workers=execution.workers, address=execution.address, progress=execution.progress)
-    folder.finish(plan.written_paths())
+    folder.finish(plan.written_paths(), written_outputs(rows))
     if summary and plan.summary:
         write_summary(rows, plan.folder, folder.run, plan.storage_options)
     return rows

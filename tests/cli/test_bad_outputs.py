@@ -179,7 +179,8 @@ def _folder_and_user_file(tmp: Path, inputs: Path) -> None:
 
 FILE_URL = "outputs.folder=file://<tmp>/out"
 MALFORMED = {"a list": "[]", "not JSON": "{files",
-             "an entry a list": '{"files": {"good_hht.npz": [1]}}', "an entry a string": '{"files": {"good_hht.npz": "x"}}',
+             "an entry a list": '{"files": {"good_hht.npz": [1]}}',
+             "an entry a string": '{"files": {"good_hht.npz": "x"}}',
              "a size that is a string": '{"files": {"good_hht.npz": {"size": "4", "sha256": "00"}}}',
              "a size that is null": '{"files": {"good_hht.npz": {"size": null, "sha256": null}}}'}
 LONG = "n" * 240  # + "_hht.npz" (8): 248 bytes, legal; its temporary name would not be without cutting
@@ -259,8 +260,8 @@ CASES = {
     # file:// output folders and inputs are local paths, with every local rule
     "file:// folder, path leaving it": Case(validate(FILE_URL, "outputs.files=[{path: '../sentinel/{stem}_hht.npz'}]"),
                                             "outside the output folder", absent=("out", "sentinel")),
-    "file:// folder, {name} leaving it": Case(validate(FILE_URL, "name=../../n", "outputs.files=[{path: '{name}.npz'}]"),
-                                              "outside the output folder"),
+    "file:// folder, {name} leaving it": Case(
+        validate(FILE_URL, "name=../../n", "outputs.files=[{path: '{name}.npz'}]"), "outside the output folder"),
     "file:// folder, user's file kept": Case(run(FILE_URL), "exists and hht3d did not write it", absent=(),
                                              setup=_user_file("out/good_hht.npz"), check=_kept("out/good_hht.npz")),
     "file:// folder and input, manifest and stale parts": Case(
