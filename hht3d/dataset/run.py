@@ -55,7 +55,7 @@ def items_graph(items: dict, folder: OutputFolder, make_item, *, resume: bool = 
     builds an input's lazy row.  With ``resume``, an input that ``folder``
     finds done (:meth:`~hht3d.io.folder.OutputFolder.done`: locally, outputs the
     manifest records as complete with the same size and checksum; for a URL,
-    outputs that exist) is a ``"skipped"`` row instead.
+    likewise in its manifest object) is a ``"skipped"`` row instead.
     """
     rows = []
     for source, paths in items.items():
@@ -88,13 +88,14 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=RE
         :func:`hht3d.io.storage.resolve_locations` (local files hht3d wrote are never inputs).
     out_dir : path or URL
         Where the per-item outputs go (see :func:`output_paths`); a local
-        folder keeps a manifest, a URL does not (:mod:`hht3d.io.folder`).
+        folder or a ``file://`` URL with every local rule, another URL with
+        those its store allows (:mod:`hht3d.io.folder`).
     signal : str
         One of :data:`hht3d.geometry.signals.SIGNALS`.
     formats : sequence of {".ply", ".npz"}
     resume : bool
-        Skip items whose outputs are done: recorded complete in a local folder's
-        manifest, or existing in a URL folder.
+        Skip items whose outputs are done: recorded complete, with the same size
+        and checksum, in the folder's manifest (a URL folder's manifest object).
     overwrite : bool
         Replace existing files hht3d did not write (refused otherwise; local folders).
     load_options : dict, optional

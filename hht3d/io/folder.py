@@ -131,7 +131,7 @@ class OutputFolder:
 
     def check_overwrites(self, paths, *, overwrite: bool = False) -> None:
         """Locally, refuse to replace a file hht3d did not write (:func:`hht3d.io.manifest.check_overwrites`);
-        a URL folder keeps no manifest and checks nothing here.
+        a URL folder checks nothing here (no rule protects an object hht3d did not write).
 
         Raises
         ------

@@ -84,8 +84,8 @@ def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder
     plan : Pipeline
     resume : bool
         Skip inputs whose outputs are done (status ``"skipped"``, sizes read
-        from those outputs): recorded complete in a local folder's manifest,
-        existing in a URL folder.
+        from those outputs): recorded complete, with the same size and
+        checksum, in the folder's manifest (a URL folder's manifest object).
     folder : OutputFolder, optional
         Where the outputs go (default: :func:`output_folder` with a new run id).
     """
