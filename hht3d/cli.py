@@ -245,8 +245,8 @@ def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -
     parser.add_argument("--workers", type=int, default=None, help="threads, processes or cluster workers")
     parser.add_argument("--address", default=None, help="address of a running dask.distributed scheduler")
     parser.add_argument("--resume", action="store_true",
-                        help="skip inputs whose outputs are done: recorded complete in a local folder's "
-                        "manifest, or existing in a URL folder")
+                        help="skip inputs whose outputs are done: recorded complete (same size and "
+                        "checksum) in the output folder's manifest")
     parser.add_argument("--overwrite", action="store_true",
                         help="replace existing local output files that hht3d did not write (kept otherwise)")
 

@@ -105,7 +105,7 @@ class HHTResult:
         """
         if io.storage.is_url(path):  # object storage: written locally, then uploaded
             return io.storage.write_via(self.save, path, storage_options=storage_options)
-        path = Path(path)
+        path = Path(io.storage.local_path(path))
         suffix = path.suffix.lower()
         if suffix == ".ply":
             return io.write_ply(path, self.surface, self.vertex_attributes())

@@ -35,14 +35,15 @@ PRELUDE = textwrap.dedent("""
     def locking(fd, mode, nbytes):   # msvcrt.locking of one byte, within this process
         key = os.fstat(fd).st_ino
         calls.append(mode)
-        if mode == LK_LOCK:
-            held.setdefault(key, threading.Lock()).acquire()
+        if mode == LK_NBLCK:
+            if not held.setdefault(key, threading.Lock()).acquire(blocking=False):
+                raise OSError(errno.EACCES, "locked by another")
         elif mode == LK_UNLCK:
             held[key].release()
         else:
             raise OSError(errno.EINVAL, "unexpected mode")
 
-    LK_UNLCK, LK_LOCK = 0, 1
+    LK_UNLCK, LK_NBLCK = 0, 2
 """)
 
 RUN = textwrap.dedent("""
@@ -55,11 +56,11 @@ RUN = textwrap.dedent("""
     from hht3d.dataset import run_dataset
     from hht3d.io import manifest
 
-    manifest.msvcrt = types.SimpleNamespace(locking=locking, LK_LOCK=LK_LOCK, LK_UNLCK=LK_UNLCK)
+    manifest.msvcrt = types.SimpleNamespace(locking=locking, LK_NBLCK=LK_NBLCK, LK_UNLCK=LK_UNLCK)
     rows = run_dataset(sys.argv[1:3], sys.argv[3], scheduler="synchronous", progress=False,
                        emd={"max_imfs": 2})
     print(json.dumps({"status": [r.status for r in rows], "fcntl": manifest.fcntl is None,
-                      "locks": calls.count(LK_LOCK), "unlocks": calls.count(LK_UNLCK),
+                      "locks": calls.count(LK_NBLCK), "unlocks": calls.count(LK_UNLCK),
                       "posix": [m for m in ("fcntl", "resource") if sys.modules.get(m) is not None]}))
 """)
 

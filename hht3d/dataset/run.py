@@ -26,12 +26,12 @@ from ..errors import InputError, shown
 from ..geometry.signals import SIGNALS
 from ..io.folder import OutputFolder, check_locations
 from ..io.manifest import new_run_id
-from ..io.storage import file_name, join, resolve_locations, stem
+from ..io.storage import file_name, join, local_path, resolve_locations, stem
 from ..transform import HHTResult
 from .guard import MAX_ERROR, Failure, Guarded
 from ..execution import compute
 from .summary import (SUMMARY_FILES, ItemSummary, item_summary, quality_fields, skipped_summary, summary_paths,
-                      write_summary)
+                      write_summary, written_outputs)
 
 __all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary",
            "summary_paths", "item_summary", "skipped_summary", "quality_fields", "SUMMARY_FILES", "MAX_ERROR",
@@ -59,7 +59,7 @@ def items_graph(items: dict, folder: OutputFolder, make_item, *, resume: bool = 
     builds an input's lazy row.  With ``resume``, an input that ``folder``
     finds done (:meth:`~hht3d.io.folder.OutputFolder.done`: locally, outputs the
     manifest records as complete with the same size and checksum; for a URL,
-    outputs that exist) is a ``"skipped"`` row instead.
+    likewise in its manifest object) is a ``"skipped"`` row instead.
     """
     rows = []
     for source, paths in items.items():
@@ -92,13 +92,14 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=RE
         :func:`hht3d.io.storage.resolve_locations` (local files hht3d wrote are never inputs).
     out_dir : path or URL
         Where the per-item outputs go (see :func:`output_paths`); a local
-        folder keeps a manifest, a URL does not (:mod:`hht3d.io.folder`).
+        folder or a ``file://`` URL with every local rule, another URL with
+        those its store allows (:mod:`hht3d.io.folder`).
     signal : str
         One of :data:`hht3d.geometry.signals.SIGNALS`.
     formats : sequence of {".ply", ".npz"}
     resume : bool
-        Skip items whose outputs are done: recorded complete in a local folder's
-        manifest, or existing in a URL folder.
+        Skip items whose outputs are done: recorded complete, with the same size
+        and checksum, in the folder's manifest (a URL folder's manifest object).
     overwrite : bool
         Replace existing files hht3d did not write (refused otherwise; local folders).
     load_options : dict, optional
@@ -120,6 +121,7 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=RE
         file hht3d did not write (checked before any task is made).
     """
     _check_options(signal, formats)
+    out_dir = local_path(out_dir)
     sources = resolve_locations(inputs, storage_options)
     items = {source: output_paths(source, out_dir, formats, pattern) for source in sources}
     check_locations(items, out_dir)
@@ -173,9 +175,9 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     >>> sorted(path.name for path in out.iterdir() if not path.name.startswith("."))
     ['spot_hht.npz', 'spot_hht.ply', 'summary.csv', 'summary.json']
     """
-    run = options.pop("run", None) or new_run_id()
+    run, out_dir = options.pop("run", None) or new_run_id(), local_path(out_dir)
     (rows,) = compute(dataset_graph(inputs, out_dir, run=run, **options), scheduler=scheduler, workers=workers,
                       address=address, progress=progress)
-    OutputFolder(out_dir, storage_options=options.get("storage_options"), run=run).finish([])
+    OutputFolder(out_dir, storage_options=options.get("storage_options"), run=run).finish([], written_outputs(rows))
     write_summary(rows, out_dir, run, options.get("storage_options"))
     return rows

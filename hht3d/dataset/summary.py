@@ -3,10 +3,13 @@
 ``summary.json`` and ``summary.csv`` in the output folder: each input's
 status, size, run time and decomposition quality
 (:mod:`hht3d.decomposition.quality`: energy ratio, index of orthogonality,
-warnings).  Concurrent runs into one local folder merge their rows under
-the folder's lock (:func:`write_summary`); a URL folder has no lock, and
-its summary holds the rows of the last run.  Secrets are redacted
-(:func:`hht3d.redaction.redact`).
+warnings).  Runs into one folder, even at once, merge their rows
+(:func:`write_summary`): a local folder under its lock, a URL folder by a
+conditional write of ``summary.json`` on S3 (``If-Match`` its ETag, redone
+from the new rows when another run came first;
+:func:`hht3d.io.storage.update_object`).  Other stores have no conditional
+write here: there the last of two runs finishing at once wins.  Secrets are
+redacted (:func:`hht3d.redaction.redact`).
 """
 from __future__ import annotations
 
@@ -19,16 +22,17 @@ from pathlib import Path
 from ..decomposition.quality import decomposition_quality
 from ..errors import InputError
 from ..io import is_recorded, new_run_id, read_npz_shapes, read_ply_header
+from ..io.folder import OutputFolder
 from ..io.manifest import folder_lock, recording
 from ..io.read import _MAX_HEADER
-from ..io.storage import atomic_location, file_name, is_url, join, local_copy
+from ..io.storage import atomic_location, file_name, is_url, join, local_copy, local_path, update_object
 from ..linalg.estimate import slow_fallback
 from ..redaction import redact
 from ..transform import HHTResult
 from .guard import Failure, Timed
 
 __all__ = ["SUMMARY_FILES", "ItemSummary", "summary_paths", "quality_fields", "item_summary", "skipped_summary",
-           "write_summary"]
+           "written_outputs", "write_summary"]
 
 #: The summary table, in the output folder.
 SUMMARY_FILES = ("summary.json", "summary.csv")
@@ -141,16 +145,24 @@ def _stored_size(path: Path) -> tuple[int | None, int | None]:
     return None, None
 
 
+def written_outputs(rows: list[ItemSummary]) -> list[str]:
+    """The outputs that the rows' inputs wrote in this run (not those of skipped inputs)."""
+    return [path for row in rows if row.status != "skipped" for path in row.outputs]
+
+
 def write_summary(rows: list[ItemSummary], out_dir, run: str | None = None,
                   storage_options: dict | None = None) -> list:
     """Write the summary table as ``summary.json`` and ``summary.csv`` (atomically, secrets redacted).
 
-    In a local folder, the rows already there are merged in, under the
-    folder's lock: runs into one folder, even at once, keep each other's
-    rows (a row of an input that ``rows`` do not cover is kept, one that
-    they do is replaced), and both files are recorded in the folder's
-    manifest (:mod:`hht3d.io.manifest`) under the run id ``run``.  A URL
-    folder (``storage_options`` for its back-end) is written with ``rows`` only.
+    The rows already there are merged in: runs into one folder, even at
+    once, keep each other's rows (a row of an input that ``rows`` do not
+    cover is kept, one that they do is replaced).  In a local folder this
+    happens under the folder's lock, with the earlier rows of a summary the
+    manifest records, and both files are recorded in the folder's manifest
+    (:mod:`hht3d.io.manifest`) under the run id ``run``.  In a URL folder
+    (``storage_options`` for its back-end) ``summary.json`` is updated
+    conditionally where the store can (see the module), ``summary.csv``
+    written from it, and both recorded in the folder's manifest object.
     In the CSV, ``outputs`` are joined with ``;`` and ``warnings`` with `` | ``.
 
     Raises
@@ -158,20 +170,44 @@ def write_summary(rows: list[ItemSummary], out_dir, run: str | None = None,
     OutputError
         A summary file cannot be written (names it and the reason).
     """
+    out_dir = local_path(out_dir)
     records = [asdict(r) | {"outputs": list(r.outputs), "warnings": list(r.warnings)} for r in rows]
+    ours = {r["source"] for r in records}
     if is_url(out_dir):
-        return _write_tables(records, out_dir, storage_options)
-    with folder_lock(out_dir), recording(out_dir, run or new_run_id()):
-        ours = {r["source"] for r in records}
-        earlier = [r for r in _earlier_rows(summary_paths(out_dir)[0], out_dir) if r.get("source") not in ours]
-        return _write_tables(earlier + records, out_dir)
+        return _write_remote(records, ours, OutputFolder(out_dir, storage_options=storage_options, run=run))
+    with folder_lock(out_dir, run), recording(out_dir, run or new_run_id()):
+        earlier = _earlier_rows(summary_paths(out_dir)[0], out_dir)
+        return _write_tables([r for r in earlier if r.get("source") not in ours] + records, out_dir)
 
 
-def _write_tables(records: list[dict], out_dir, storage_options: dict | None = None) -> list:
-    """``summary.json`` and ``summary.csv`` of ``records``, each written atomically."""
+def _write_remote(records: list[dict], ours: set, folder: OutputFolder) -> list:
+    """The summary of a URL folder: ``summary.json`` merged with the rows there, ``summary.csv`` from it,
+    then both recorded in the manifest object."""
+    json_url, csv_url = summary_paths(folder.location)
+    merged: list[dict] = []
+
+    def update(old: bytes | None) -> bytes:
+        merged[:] = [r for r in _rows(old) if r.get("source") not in ours] + records
+        return redact(json.dumps(merged, indent=2)).encode()
+
+    update_object(json_url, update, folder.storage_options)
+    with atomic_location(csv_url, folder.storage_options) as tmp:
+        tmp.write_text(_csv_text(merged), encoding="utf-8")
+    folder.record([json_url, csv_url])
+    return [json_url, csv_url]
+
+
+def _write_tables(records: list[dict], out_dir) -> list:
+    """``summary.json`` and ``summary.csv`` of ``records`` in a local folder, each written atomically."""
     json_path, csv_path = summary_paths(out_dir)
-    with atomic_location(json_path, storage_options) as tmp:
+    with atomic_location(json_path) as tmp:
         tmp.write_text(redact(json.dumps(records, indent=2)), encoding="utf-8")
+    with atomic_location(csv_path) as tmp:
+        tmp.write_text(_csv_text(records), encoding="utf-8")
+    return [json_path, csv_path]
+
+
+def _csv_text(records: list[dict]) -> str:
     buffer = _stdio.StringIO()
     names = [f.name for f in fields(ItemSummary)]
     writer = csv.DictWriter(buffer, fieldnames=names, extrasaction="ignore")
@@ -179,9 +215,7 @@ def _write_tables(records: list[dict], out_dir, storage_options: dict | None = N
     for r in records:
         writer.writerow({k: r.get(k) for k in names} | {"outputs": ";".join(r.get("outputs") or []),
                                                         "warnings": " | ".join(r.get("warnings") or [])})
-    with atomic_location(csv_path, storage_options) as tmp:
-        tmp.write_text(redact(buffer.getvalue()), encoding="utf-8")
-    return [json_path, csv_path]
+    return redact(buffer.getvalue())
 
 
 def _earlier_rows(path: Path, folder) -> list[dict]:
@@ -189,7 +223,15 @@ def _earlier_rows(path: Path, folder) -> list[dict]:
     if not is_recorded(path, folder):
         return []
     try:
-        rows = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        return _rows(path.read_bytes())
+    except OSError:
+        return []
+
+
+def _rows(data: bytes | None) -> list[dict]:
+    """The rows of a summary's bytes (none if missing or not a JSON list of rows)."""
+    try:
+        rows = json.loads(data) if data else []
+    except ValueError:
         return []
     return [r for r in rows if isinstance(r, dict)] if isinstance(rows, list) else []

@@ -5,6 +5,14 @@ over it only once complete (``NAME`` is cut so that the temporary name fits
 in 255 bytes; ``PID`` is the writing process).  A run that is killed leaves
 such files; :func:`remove_stale_parts` removes those of processes that no
 longer run, and those of the current process and its workers at a stop.
+
+The temporary file is made with ``O_EXCL``/``O_NOFOLLOW`` in the folder
+opened once (``dir_fd`` where the platform has it, so that the rename goes
+into that folder); just before the rename, the temporary file must still
+resolve into that folder, and a writer confined to an output folder
+(:func:`hht3d.io.manifest.recording`) checks it is still inside it
+(:func:`check_inside`): a subfolder swapped for a symlink after the checks
+is refused, not followed.
 """
 from __future__ import annotations
 
@@ -13,6 +21,7 @@ import os
 import re
 import tempfile
 import threading
+import uuid
 from pathlib import Path
 
 import psutil
@@ -20,13 +29,17 @@ import psutil
 from ..errors import OutputError, one_line
 from .formats import NAME_MAX, short
 
-__all__ = ["atomic_path", "before_rename", "check_output_paths", "remove_stale_parts", "stop_writes", "PART"]
+__all__ = ["atomic_path", "before_rename", "check_inside", "check_output_paths", "confined", "remove_stale_parts",
+           "stop_writes", "PART"]
 
 #: A temporary file of :func:`atomic_path`: ``.NAME.PID-XXXXXXXX.part``.
 PART = re.compile(r"^\..*\.(\d+)-[a-z0-9_]{8}\.part$")
 _SUFFIX_BYTES = len(".part") + 1 + 8
 #: Set when the process is stopping: no new temporary file is made.
 _STOPPING = threading.Event()
+_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
+#: Whether files can be made and renamed relative to an open folder (POSIX; not Windows).
+_DIR_FD = {os.open, os.rename, os.unlink} <= os.supports_dir_fd  # os.replace takes dir_fd where os.rename does
 
 
 def stop_writes() -> None:
@@ -52,28 +65,85 @@ def atomic_path(path):
     ------
     OutputError
         The folder cannot be made, or writing failed (no permission, full
-        disk, a folder in the way); names ``path`` and the reason.
+        disk, a folder in the way), or the folder was swapped since the
+        temporary file was made there; names ``path`` and the reason.
     """
     path = Path(path)
     if _STOPPING.is_set():
         raise OutputError(f"{short(path)}: not written: the run is stopping")
+    folder = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=_prefix(path.name), suffix=".part", dir=path.parent)
+        folder = os.open(path.parent, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0)) if _DIR_FD else None
+        made_in = os.fstat(folder) if folder is not None else os.stat(path.parent)
+        name = _create(path, folder)
     except OSError as exc:
+        if folder is not None:
+            os.close(folder)
         raise _cannot_write(path, exc) from None
-    os.close(fd)
+    tmp = path.parent / name
     try:
-        yield Path(tmp)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; match an ordinary write
+        yield tmp
+        if not os.path.samestat(os.stat(tmp.parent), made_in):
+            raise OutputError(f"{short(path)}: not written: its folder {short(path.parent)} was replaced while the "
+                              "file was written (by a link?); nothing was renamed: check the output folder")
         _record(tmp, path)
-        os.replace(tmp, path)
+        _at(os.replace, folder, name, path.name, tmp, path)
     except BaseException as exc:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
+        for remove in ((lambda: _at(os.unlink, folder, name, None, tmp, None)), (lambda: os.unlink(tmp))):
+            with contextlib.suppress(OSError):  # the second: the writer followed a swapped folder
+                remove()
         if isinstance(exc, OSError):
             raise _cannot_write(path, exc) from None
         raise
+    finally:
+        if folder is not None:
+            os.close(folder)
+
+
+def _create(path: Path, folder: int | None) -> str:
+    """Make a new empty temporary file for ``path`` (``O_EXCL``, no link followed) and return its name."""
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW | getattr(os, "O_CLOEXEC", 0)
+    for _ in range(100):
+        name = f"{_prefix(path.name)}{uuid.uuid4().hex[:8]}.part"
+        try:
+            fd = os.open(name, flags, 0o666, dir_fd=folder) if folder is not None else \
+                os.open(path.parent / name, flags, 0o666)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        return name
+    raise FileExistsError(f"no free temporary name beside {path.name}")
+
+
+def _at(operation, folder: int | None, name: str, target: str | None, tmp: Path, path: Path | None) -> None:
+    """``operation`` (os.replace or os.unlink) on the temporary file, relative to the open ``folder`` if any."""
+    if folder is None:
+        operation(tmp, *([path] if path is not None else []))
+    elif target is None:
+        operation(name, dir_fd=folder)
+    else:
+        operation(name, target, src_dir_fd=folder, dst_dir_fd=folder)
+
+
+def confined(path, folder) -> Path | None:
+    """``path`` resolved (symlinks followed) if it lies inside ``folder`` resolved, else ``None``."""
+    resolved, root = Path(os.path.realpath(path)), Path(os.path.realpath(folder))
+    return resolved if resolved == root or root in resolved.parents else None
+
+
+def check_inside(tmp, path, folder) -> None:
+    """Refuse, just before its rename, a temporary file of ``path`` that no longer lies inside ``folder``
+    (a subfolder swapped for a link after the output locations were checked).
+
+    Raises
+    ------
+    OutputError
+    """
+    if confined(tmp, folder) is None:
+        raise OutputError(f"{short(path)}: not written: its folder now resolves to "
+                          f"{short(os.path.realpath(Path(tmp).parent))}, outside the output folder {short(folder)} "
+                          "(swapped for a link after the check?); nothing outside was replaced")
 
 
 #: What this thread calls with ``(tmp, path)`` just before each rename of :func:`atomic_path`.
@@ -168,8 +238,3 @@ def _check_output_path(path: Path, probed: set) -> None:
                           f"({exc.strerror or one_line(exc)}); choose another output folder") from None
     probed.add(existing)
 
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask

@@ -7,20 +7,28 @@
   ``.hht3d-manifest.json`` with its size and checksum under the run id
   (:class:`hht3d.io.manifest.Recorded`), and ``resume`` trusting only what
   the manifest records.
-* **A URL folder** (``s3://bucket/out``, :mod:`hht3d.io.storage`) has no
-  manifest and no lock: a probe object checks that it can be written, each
-  file is written locally by the worker and uploaded atomically, and
-  ``resume`` skips an input whose outputs all exist.
+* **A URL folder** (``s3://bucket/out``, :mod:`hht3d.io.storage`) gets the
+  rules the store allows: output keys normalised and confined under the
+  folder's prefix (:func:`check_locations`), a probe object checking before
+  the run that it can be written, each file written locally by the worker
+  and uploaded atomically, and a manifest object of the same shape written
+  after the outputs (:meth:`OutputFolder.finish`), so that ``resume`` trusts
+  only outputs of the recorded size and checksum.  It has no lock: on S3 the
+  manifest is updated conditionally (:func:`hht3d.io.storage.update_object`),
+  elsewhere the last writer wins; no rule keeps hht3d from replacing an
+  object it did not write.
 """
 from __future__ import annotations
 
+import json
 import os
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 
 from ..errors import OutputError
 from . import storage
 from .atomic import check_output_paths, remove_stale_parts
-from .manifest import Recorded, check_overwrites, entries, is_recorded, new_run_id
+from .manifest import (MANIFEST, Recorded, check_overwrites, digest, entries, is_recorded, new_run_id, updated,
+                       valid_entries)
 from .paths import check_name, check_output_location
 
 __all__ = ["OutputFolder", "Uploaded", "check_locations"]
@@ -52,11 +60,15 @@ class OutputFolder:
         For a URL: options of its fsspec back-end.
     run : str, optional
         The run id recorded in a local folder's manifest (default: a new one).
+    allow_outside : bool
+        Outputs may lie outside a local folder (``outputs.allow_outside``); otherwise each write is
+        checked again, just before its rename, to resolve inside it.
     """
 
-    def __init__(self, location, *, storage_options: dict | None = None, run: str | None = None):
-        self.location, self.storage_options = location, storage_options or None
-        self.is_url = storage.is_url(location)
+    def __init__(self, location, *, storage_options: dict | None = None, run: str | None = None,
+                 allow_outside: bool = False):
+        self.location, self.storage_options = storage.local_path(location), storage_options or None
+        self.is_url, self.allow_outside = storage.is_url(self.location), allow_outside
         self.run = run or new_run_id()
         self._known: dict | None = None
 
@@ -76,14 +88,50 @@ class OutputFolder:
         self.check_overwrites(paths, overwrite=overwrite)
         remove_stale_parts(self.part_folders(paths))
 
-    def finish(self, paths) -> None:
+    def finish(self, paths, written=()) -> None:
         """After a run: remove the temporary files that workers killed mid-write left (a nanny
-        restarts such a worker and its task runs again elsewhere); a URL folder has none here."""
+        restarts such a worker and its task runs again elsewhere); a URL folder has none here, and
+        records the ``written`` outputs in its manifest object (:meth:`record`)."""
         remove_stale_parts(self.part_folders(paths))
+        if self.is_url:
+            self.record(written)
+
+    def record(self, urls) -> None:
+        """Add the objects ``urls`` of a URL folder, as they are now, to its manifest object (written last,
+        merged with other runs' entries; :func:`hht3d.io.storage.update_object`)."""
+        found = {}
+        for url in urls:
+            key, sums = storage.under(url, self.location), _digest_of(url, self.storage_options)
+            if key is not None and sums is not None:
+                found[key] = sums
+        if found:
+            storage.update_object(storage.join(self.location, MANIFEST), lambda old: updated(
+                self._parsed(old), found, self.run).encode(), self.storage_options)
+
+    def recorded(self, url) -> bool:
+        """Whether a URL folder's manifest object records ``url`` as it is now (same size and SHA-256)."""
+        if self._known is None:
+            fs, path = storage.filesystem(storage.join(self.location, MANIFEST), self.storage_options)
+            try:
+                fs.invalidate_cache()
+                self._known = self._parsed(fs.cat_file(path))
+            except Exception:  # the back-ends raise many types: no manifest counts as empty
+                self._known = {}
+        entry = self._known.get(storage.under(url, self.location))
+        return bool(entry) and _digest_of(url, self.storage_options, entry["size"]) == (
+            entry["size"], entry["sha256"])
+
+    @staticmethod
+    def _parsed(data: bytes | None) -> dict:
+        """The valid entries of a manifest's bytes (:func:`hht3d.io.manifest.valid_entries`)."""
+        try:
+            return valid_entries(json.loads(data)) if data else {}
+        except ValueError:
+            return {}
 
     def check_overwrites(self, paths, *, overwrite: bool = False) -> None:
         """Locally, refuse to replace a file hht3d did not write (:func:`hht3d.io.manifest.check_overwrites`);
-        a URL folder keeps no manifest and checks nothing here.
+        a URL folder checks nothing here (no rule protects an object hht3d did not write).
 
         Raises
         ------
@@ -99,16 +147,33 @@ class OutputFolder:
 
     def done(self, paths) -> bool:
         """Whether an input with these outputs is finished (``resume``): locally, every output is
-        recorded complete in the manifest (same size and checksum); for a URL, every output exists."""
+        recorded complete in the manifest (same size and checksum); for a URL, likewise in its manifest
+        object (:meth:`recorded`)."""
         if self.is_url:
-            return all(storage.exists(p, self.storage_options) for p in paths)
+            return all(self.recorded(p) for p in paths)
         if self._known is None:
             self._known = entries(self.location)
         return all(is_recorded(p, self.location, self._known) for p in paths)
 
     def writer(self, write):
         """``write`` as a task function writing into this folder: recorded locally, uploaded to a URL."""
-        return Uploaded(write, self.storage_options) if self.is_url else Recorded(write, self.location, self.run)
+        if self.is_url:
+            return Uploaded(write, self.storage_options)
+        return Recorded(write, self.location, self.run, allow_outside=self.allow_outside)
+
+
+def _digest_of(url: str, storage_options: dict | None, size: int | None = None) -> tuple[int, str] | None:
+    """Size and SHA-256 of the object at ``url`` (read afresh; ``None`` if it is missing, unreadable or,
+    when ``size`` is given, of another size, which is checked before anything is read)."""
+    fs, path = storage.filesystem(url, storage_options)
+    fs.invalidate_cache(str(PurePosixPath(path).parent))
+    try:
+        if size is not None and fs.info(path)["size"] != size:
+            return None
+        with fs.open(path, "rb") as handle:
+            return digest(handle)
+    except Exception:  # the back-ends raise many types: unreadable counts as absent, the item is redone
+        return None
 
 
 def check_locations(items: dict, folder, *, allow_outside: bool = False,
@@ -117,8 +182,8 @@ def check_locations(items: dict, folder, *, allow_outside: bool = False,
     local ``folder`` (unless ``allow_outside``), or that are one of the inputs.
 
     ``items`` maps each input to its output paths; ``where(source, path)``
-    names an output in messages.  URL outputs are joined under their folder
-    by construction and checked for names only.
+    names an output in messages.  A URL output's key is normalised
+    (:func:`hht3d.io.storage.join`) and must stay under its folder's prefix.
 
     Raises
     ------
@@ -127,13 +192,23 @@ def check_locations(items: dict, folder, *, allow_outside: bool = False,
     def real(location):
         return str(location) if storage.is_url(location) else os.path.realpath(location)
 
+    folder = storage.local_path(folder)
     inputs = {real(source): source for source in items}
     for source, paths in items.items():
         for path in paths:
             check_name(path, where(source, path))
-            if not allow_outside and not storage.is_url(path):
-                check_output_location(path, folder, where(source, path))
+            if not allow_outside:
+                _check_inside(path, folder, where(source, path))
             clash = inputs.get(real(path))
             if clash is not None:
                 raise OutputError(f"{where(source, path)}: {path} is the input {clash}; an input is never an "
                                   "output: change the output path or folder")
+
+
+def _check_inside(path, folder, where: str) -> None:
+    """Refuse an output outside ``folder``: locally after links, for a URL by its normalised key."""
+    if not storage.is_url(path):
+        check_output_location(path, folder, where)
+    elif storage.under(path, folder) is None:
+        raise OutputError(f"{where}: {path} leaves the output folder {folder}; write inside it (or set "
+                          "outputs.allow_outside: true)")

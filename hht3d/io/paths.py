@@ -1,7 +1,8 @@
 """Where files may be read and written: output confinement, file-name checks, input expansion.
 
-* :func:`confined` is the one test of "inside this folder", after symlinks;
-  a URL-aware layer can call it with its own resolution.
+* :func:`confined` (from :mod:`hht3d.io.atomic`, which checks it again
+  just before each rename) is the one test of "inside this folder", after
+  symlinks; a URL-aware layer can call it with its own resolution.
 * :func:`check_name` refuses, before anything is computed, a name the file
   system would refuse at the write: a control character (NUL included), a
   component over :data:`NAME_MAX` bytes, a path over :data:`PATH_MAX` bytes.
@@ -17,17 +18,12 @@ import os
 from pathlib import Path
 
 from ..errors import InputError, OutputError, one_line, shown
+from .atomic import confined
 from .manifest import recorded_names
 from .formats import (MESH_EXTENSIONS, NAME_MAX, PATH_MAX, POINT_CLOUD_EXTENSIONS, check_extension,
                       check_regular_file, short)
 
 __all__ = ["NAME_MAX", "PATH_MAX", "confined", "check_output_location", "check_name", "resolve_inputs", "short"]
-
-def confined(path, folder) -> Path | None:
-    """``path`` resolved (symlinks followed) if it lies inside ``folder`` resolved, else ``None``."""
-    resolved, root = Path(os.path.realpath(path)), Path(os.path.realpath(folder))
-    return resolved if resolved == root or root in resolved.parents else None
-
 
 def check_output_location(path, folder, where: str) -> None:
     """Refuse an output that resolves outside ``folder`` (``where`` names the step or output).

@@ -76,7 +76,8 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
     >>> surface.n_vertices, len(surface.faces), surface.is_mesh
     (2930, 5856, True)
     """
-    from .storage import is_url, load_url
+    from .storage import is_url, load_url, local_path
+    path = local_path(path)
     if is_url(path):  # object storage: through a temporary local copy
         return load_url(load, path, storage_options, clean=clean, laplacian=laplacian, n_neighbors=n_neighbors,
                         name=name)

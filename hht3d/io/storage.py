@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import posixpath
 import shutil
 import tempfile
 import uuid
@@ -36,21 +37,51 @@ from .atomic import atomic_path, check_output_paths
 from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS
 from .paths import resolve_inputs
 
-__all__ = ["EXTRAS", "is_url", "options_for", "filesystem", "file_name", "stem", "parent_name", "join", "resolve_locations",
-           "exists", "local_copy", "load_url", "atomic_location", "write_via", "check_outputs", "TEMPORARY_PREFIX",
-           "temporary_folder", "remove_temporary_folders"]
+__all__ = ["EXTRAS", "is_url", "local_path", "under", "options_for", "filesystem", "file_name", "stem", "parent_name",
+           "join", "resolve_locations", "local_copy", "load_url", "atomic_location", "write_via", "update_object",
+           "check_outputs", "TEMPORARY_PREFIX", "temporary_folder", "remove_temporary_folders"]
 
 #: The hht3d extra that installs each protocol's back-end.
 EXTRAS = {"s3": "s3", "s3a": "s3", "gs": "gcs", "gcs": "gcs", "az": "azure", "abfs": "azure", "abfss": "azure",
           "adl": "azure"}
 #: Protocols on which one upload is atomic (an object is visible only once complete).
 _ATOMIC_UPLOAD = {"s3", "s3a", "gs", "gcs", "az", "abfs", "abfss", "memory"}
+#: Protocols whose back-end writes conditionally (s3fs: ``If-None-Match: *``, ``If-Match`` an ETag).
+_CONDITIONAL = {"s3", "s3a"}
+#: Tries of :func:`update_object` when other writers keep coming first.
+_UPDATE_TRIES = 20
 _GLOB = "*?["
 
 
 def is_url(location) -> bool:
-    """Whether ``location`` is an fsspec URL (``protocol://...``) rather than a local path."""
-    return isinstance(location, str) and "://" in location
+    """Whether ``location`` is an fsspec URL (``protocol://...``) rather than a local path; a ``file://``
+    URL is the local path it names (:func:`local_path`), with every local rule."""
+    return isinstance(location, str) and "://" in location and not _is_file_url(location)
+
+
+def _is_file_url(location) -> bool:
+    """``file://`` or ``local://``: fsspec's names for the local file system."""
+    return isinstance(location, str) and location.split("://", 1)[0].lower() in ("file", "local")
+
+
+def local_path(location):
+    """``location`` as hht3d takes it wherever a location enters: a ``file://`` (or ``local://``) URL as
+    the local :class:`~pathlib.Path` it names, anything else unchanged.
+
+    Raises
+    ------
+    InputError
+        A ``file://`` URL naming another host.
+    """
+    if not _is_file_url(location):
+        return location
+    from urllib.request import url2pathname
+
+    parts = urlsplit(location)
+    if parts.netloc not in ("", "localhost"):
+        raise InputError(f"{location}: a file:// URL names a local path, not one on host {parts.netloc!r}; "
+                         "write file:///path")
+    return Path(url2pathname(parts.path))
 
 
 def _protocol(url: str) -> str:
@@ -124,10 +155,25 @@ def parent_name(location) -> str:
 
 
 def join(folder, file_name: str):
-    """``folder / file_name``: a Path for a local folder, a URL string for a URL."""
+    """``folder / file_name``: a Path for a local folder, a URL string for a URL (its key normalised:
+    no ``.`` or ``..`` left in it, which a tool syncing the bucket would follow)."""
+    folder = local_path(folder)
     if is_url(folder):
-        return f"{folder.rstrip('/')}/{file_name}"
+        return _normalised(f"{folder.rstrip('/')}/{file_name}")
     return Path(folder) / file_name
+
+
+def _normalised(url: str) -> str:
+    """``url`` with ``.``, ``..`` and repeated slashes of its path resolved lexically."""
+    head, _, rest = url.partition("://")
+    return f"{head}://{posixpath.normpath(rest) if rest.strip('/') else rest}"
+
+
+def under(url: str, folder: str) -> str | None:
+    """The key of the URL ``url`` relative to the URL ``folder``, both normalised lexically; ``None`` if
+    ``url`` does not lie under ``folder``."""
+    root, found = _normalised(folder).rstrip("/") + "/", _normalised(url)
+    return found[len(root):] if found.startswith(root) and len(found) > len(root) else None
 
 
 def _access_error(exc: Exception) -> str:
@@ -154,7 +200,7 @@ def resolve_locations(spec, storage_options: dict | None = None) -> list:
     """
     specs = [spec] if isinstance(spec, (str, Path)) else list(spec)
     found = []
-    for item in specs:
+    for item in map(local_path, specs):
         found.extend(_remote_inputs(item, storage_options) if is_url(item) else resolve_inputs(item))
     return list(dict.fromkeys(found))
 
@@ -193,18 +239,6 @@ def _as_written(url: str, fs, path: str) -> str:
     return f"{written}://{full.split('://', 1)[1]}"
 
 
-def exists(location, storage_options: dict | None = None) -> bool:
-    """Whether a file or object exists at ``location`` (a fresh listing, not a cached one)."""
-    if not is_url(location):
-        return Path(location).is_file()
-    fs, path = filesystem(location, storage_options)
-    fs.invalidate_cache(str(PurePosixPath(path).parent))
-    try:
-        return fs.isfile(path)
-    except Exception:  # unreadable counts as absent: the item is computed again
-        return False
-
-
 #: Prefix of the temporary folders of downloads and uploads; the process id follows it.
 TEMPORARY_PREFIX = "hht3d-"
 
@@ -236,6 +270,7 @@ def local_copy(location, storage_options: dict | None = None, *, head: int | Non
     InputError
         The object cannot be read (missing, access denied, network).
     """
+    location = local_path(location)
     if not is_url(location):
         yield Path(location)
         return
@@ -273,6 +308,7 @@ def atomic_location(location, storage_options: dict | None = None):
     OutputError
         The upload failed (names the URL and the reason).
     """
+    location = local_path(location)
     if not is_url(location):
         with atomic_path(location) as tmp:
             yield tmp
@@ -313,11 +349,52 @@ def write_via(write, *args, storage_options: dict | None = None, **options):
     (:func:`atomic_location`).
     """
     *values, location = args
+    location = local_path(location)
     if not is_url(location):
         return write(*values, location, **options)
     with atomic_location(location, storage_options) as local:
         write(*values, local, **options)
     return location
+
+
+def update_object(url: str, update, storage_options: dict | None = None) -> None:
+    """Replace the object at ``url`` by ``update(its bytes, or None if missing)``, other writers' changes kept.
+
+    On S3 the write is conditional (``If-Match`` the ETag read, ``If-None-Match``
+    when there was none): when another writer came first, its bytes are read
+    and ``update`` applied again.  Other stores have no conditional write
+    here: the last writer wins.
+
+    Raises
+    ------
+    OutputError
+    """
+    fs, path = filesystem(url, storage_options)
+    conditional = _protocol(url) in _CONDITIONAL
+    for _ in range(_UPDATE_TRIES):
+        fs.invalidate_cache(str(PurePosixPath(path).parent))
+        try:
+            try:
+                etag, old = fs.info(path).get("ETag"), fs.cat_file(path)
+            except FileNotFoundError:
+                etag, old = None, None
+            data = update(old)
+            if not conditional:
+                with atomic_location(url, storage_options) as tmp:
+                    tmp.write_bytes(data)
+                return
+            fs.pipe_file(path, data, **({"IfMatch": etag} if etag else {"mode": "create"}))
+            return
+        except Exception as exc:  # the back-ends raise many types (network, client errors)
+            if not (conditional and _came_first(exc)):
+                raise OutputError(f"{redact(url)}: cannot write ({_access_error(exc)}); check the bucket and the "
+                                  "credentials, or choose another output folder") from None
+    raise OutputError(f"{redact(url)}: cannot write: other runs kept changing it ({_UPDATE_TRIES} tries); run again")
+
+
+def _came_first(exc: Exception) -> bool:
+    """Whether a conditional write failed because another writer changed the object (HTTP 412)."""
+    return isinstance(exc, FileExistsError) or "pre-condition" in str(exc).lower() or "412" in str(exc)
 
 
 def check_outputs(locations, storage_options: dict | None = None) -> None:
@@ -331,7 +408,7 @@ def check_outputs(locations, storage_options: dict | None = None) -> None:
     OutputError
         One line naming the location and what to change.
     """
-    locations = list(locations)
+    locations = list(map(local_path, locations))
     check_output_paths([p for p in locations if not is_url(p)])
     folders = dict.fromkeys(str(p).rsplit("/", 1)[0] for p in locations if is_url(p))
     for folder in folders:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ..errors import InputError, OutputError, PipelineError, shown
 from ..io.folder import check_locations
-from ..io.storage import check_outputs, is_url
+from ..io.storage import check_outputs, is_url, local_path
 from .document import as_mapping, at, known_keys
 from .outputs import FORMATS, SUFFIXES, check_options, field_imf
 from .params import Param, did_you_mean
@@ -66,6 +66,7 @@ def read_outputs(doc, steps: tuple[Step, ...], source: str):
     folder = block.get("folder", "out")
     if not isinstance(folder, str) or not folder:
         raise PipelineError(f"{at(block, 'folder')}: outputs.folder must be a path, got {shown(folder)}")
+    folder = local_path(folder)
     summary = Param("summary", "bool", "").check(block.get("summary", True), f"{at(block, 'summary')}: outputs")
     outside = Param("allow_outside", "bool", "").check(block.get("allow_outside", False),
                                                        f"{at(block, 'allow_outside')}: outputs")

@@ -25,7 +25,7 @@ from dask.base import tokenize
 
 from ..dataset.guard import Guarded
 from ..dataset.run import items_graph
-from ..dataset.summary import ItemSummary, item_summary, quality_fields, write_summary
+from ..dataset.summary import ItemSummary, item_summary, quality_fields, write_summary, written_outputs
 from ..execution import compute
 from ..graph.stages import Builder
 from ..io.folder import OutputFolder
@@ -73,7 +73,7 @@ def _item(plan: Pipeline, folder: OutputFolder, source: Path, paths: list[Path])
 
 def output_folder(plan: Pipeline, run: str | None = None) -> OutputFolder:
     """The pipeline's output folder (local or URL), writing under the run id ``run`` (default: a new one)."""
-    return OutputFolder(plan.folder, storage_options=plan.storage_options, run=run)
+    return OutputFolder(plan.folder, storage_options=plan.storage_options, run=run, allow_outside=plan.allow_outside)
 
 
 def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder | None = None):
@@ -84,8 +84,8 @@ def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder
     plan : Pipeline
     resume : bool
         Skip inputs whose outputs are done (status ``"skipped"``, sizes read
-        from those outputs): recorded complete in a local folder's manifest,
-        existing in a URL folder.
+        from those outputs): recorded complete, with the same size and
+        checksum, in the folder's manifest (a URL folder's manifest object).
     folder : OutputFolder, optional
         Where the outputs go (default: :func:`output_folder` with a new run id).
     """
@@ -140,7 +140,7 @@ def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int |
     folder.prepare(plan.written_paths(), overwrite=overwrite)
     (rows,) = compute(pipeline_graph(plan, resume=resume, folder=folder), scheduler=execution.scheduler,
                       workers=execution.workers, address=execution.address, progress=execution.progress)
-    folder.finish(plan.written_paths())
+    folder.finish(plan.written_paths(), written_outputs(rows))
     if summary and plan.summary:
         write_summary(rows, plan.folder, folder.run, plan.storage_options)
     return rows

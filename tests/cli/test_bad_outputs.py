@@ -117,6 +117,72 @@ def _summary_rows(*names: str):
     return check
 
 
+def _manifest(files, *, user: str | None = None):
+    """A setup: ``out/.hht3d-manifest.json`` holding ``files`` (JSON text, or its value), and the user's own file
+    at ``<tmp>/user`` if given; ``"<mine>"`` in ``files`` is the size and SHA-256 of that file."""
+    import hashlib
+
+    def setup(tmp: Path, inputs: Path) -> None:
+        if user is not None:
+            _user_file(user)(tmp, inputs)
+        text = files if isinstance(files, str) else json.dumps(files)
+        mine = {"size": 4, "sha256": hashlib.sha256(b"mine").hexdigest(), "run": "planted"}
+        (tmp / "out").mkdir(exist_ok=True)
+        (tmp / "out" / ".hht3d-manifest.json").write_text(text.replace('"<mine>"', json.dumps(mine)))
+    return setup
+
+
+def _recorded(*names: str):
+    """A check: the manifest of ``out`` is valid and records ``names``."""
+    def check(ran: Ran) -> None:
+        from hht3d.io.manifest import entries
+
+        files = json.loads((ran.out / ".hht3d-manifest.json").read_text())["files"]
+        assert set(entries(ran.out)) >= set(names) and all(isinstance(entry, dict) for entry in files.values())
+    return check
+
+
+def _lock_file(make):
+    """A setup: ``out/.hht3d.lock`` made by ``make(lock, tmp)``."""
+    def setup(tmp: Path, inputs: Path) -> None:
+        (tmp / "out").mkdir(exist_ok=True)
+        make(tmp / "out" / ".hht3d.lock", tmp)
+    return setup
+
+
+def _dead_part(tmp: Path, inputs: Path) -> None:
+    from helpers.folders import dead_writers_part
+
+    dead_writers_part(tmp / "out", "good_hht.npz")
+
+
+def _swapped_after_checks(monkeypatch) -> None:
+    """A fault: once the run has checked its outputs, their folder ``out/sub`` is swapped for a link to
+    ``<tmp>/elsewhere`` (where the user keeps a file of the output's name)."""
+    from hht3d.io.folder import OutputFolder
+
+    prepare = OutputFolder.prepare
+
+    def swap(self, paths, **options):
+        prepare(self, paths, **options)
+        sub = Path(paths[0]).parent
+        sub.rmdir()
+        sub.symlink_to(sub.parent.parent / "elsewhere")
+
+    monkeypatch.setattr(OutputFolder, "prepare", swap)
+
+
+def _folder_and_user_file(tmp: Path, inputs: Path) -> None:
+    (tmp / "out" / "sub").mkdir(parents=True)
+    _user_file("elsewhere/good_hht.npz")(tmp, inputs)
+
+
+FILE_URL = "outputs.folder=file://<tmp>/out"
+MALFORMED = {"a list": "[]", "not JSON": "{files",
+             "an entry a list": '{"files": {"good_hht.npz": [1]}}',
+             "an entry a string": '{"files": {"good_hht.npz": "x"}}',
+             "a size that is a string": '{"files": {"good_hht.npz": {"size": "4", "sha256": "00"}}}',
+             "a size that is null": '{"files": {"good_hht.npz": {"size": null, "sha256": null}}}'}
 LONG = "n" * 240  # + "_hht.npz" (8): 248 bytes, legal; its temporary name would not be without cutting
 PLY_OUTPUT = "outputs.files=[{path: '{stem}_hht.ply'}]"
 
@@ -191,6 +257,43 @@ CASES = {
     "300-byte output name": Case(run(f"outputs.files=[{{path: '{'n' * 296}.npz'}}]"),
                                  "is 300 bytes long; the limit is 255"),
     "NUL in an output name": Case(run('outputs.files=[{path: "a\\0{stem}.npz"}]'), "holds a control character"),
+    # file:// output folders and inputs are local paths, with every local rule
+    "file:// folder, path leaving it": Case(validate(FILE_URL, "outputs.files=[{path: '../sentinel/{stem}_hht.npz'}]"),
+                                            "outside the output folder", absent=("out", "sentinel")),
+    "file:// folder, {name} leaving it": Case(
+        validate(FILE_URL, "name=../../n", "outputs.files=[{path: '{name}.npz'}]"), "outside the output folder"),
+    "file:// folder, user's file kept": Case(run(FILE_URL), "exists and hht3d did not write it", absent=(),
+                                             setup=_user_file("out/good_hht.npz"), check=_kept("out/good_hht.npz")),
+    "file:// folder and input, manifest and stale parts": Case(
+        run(FILE_URL, "inputs=file://<in>/good.ply"), "", 0, (), setup=_dead_part, check=_recorded("good_hht.npz")),
+    # the manifest is untrusted input
+    "planted manifest naming a file outside": Case(
+        run("outputs.allow_outside=true", "outputs.files=[{path: '../sentinel/{stem}_hht.npz'}]"),
+        "exists and hht3d did not write it", absent=(), check=_kept("sentinel/good_hht.npz"),
+        setup=_manifest('{"files": {"../sentinel/good_hht.npz": "<mine>"}}', user="sentinel/good_hht.npz")),
+    "allow_outside into a missing folder keeps a user's file": Case(
+        run("outputs.allow_outside=true", "outputs.files=[{path: '../side/{stem}_hht.npz'}]"),
+        "exists and hht3d did not write it", absent=("out",), setup=_user_file("side/good_hht.npz"),
+        check=_kept("side/good_hht.npz")),
+    "path through a missing subfolder keeps a user's file": Case(
+        run("outputs.files=[{path: 'sub/../{stem}_hht.npz'}]"), "exists and hht3d did not write it", absent=(),
+        setup=_user_file("out/good_hht.npz"), check=_kept("out/good_hht.npz")),
+    **{f"manifest {what}, user's file kept": Case(run(), "exists and hht3d did not write it", absent=(),
+                                                  setup=_manifest(text, user="out/good_hht.npz"),
+                                                  check=_kept("out/good_hht.npz"))
+       for what, text in MALFORMED.items()},
+    "manifest with a malformed entry, replaced": Case(run(), "", 0, (), setup=_manifest('{"files": {"x.npz": [1]}}'),
+                                                      check=_recorded("good_hht.npz")),
+    # the lock file
+    "lock file a link to a file outside": Case(
+        run(), "lock file is a link or not a regular file", absent=("victim",),
+        setup=_lock_file(lambda lock, tmp: lock.symlink_to(tmp / "victim"))),
+    "lock file a FIFO": Case(run(), "lock file is a link or not a regular file", absent=(),
+                             setup=_lock_file(lambda lock, tmp: os.mkfifo(lock))),
+    # a folder swapped for a link between the checks and the write
+    "subfolder swapped for a link after the checks": Case(
+        run("outputs.files=[{path: 'sub/{stem}_hht.npz'}]"), "outside the output folder", absent=(),
+        setup=_folder_and_user_file, fault=_swapped_after_checks, check=_kept("elsewhere/good_hht.npz")),
 }
 
 

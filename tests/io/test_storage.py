@@ -112,8 +112,8 @@ def test_dataset_from_s3_to_s3_equals_the_local_run_and_isolates_a_corrupt_objec
                                                              progress=False, emd=EMD)}
     fs.invalidate_cache()
     written = sorted(Path(p).name for p in fs.ls(f"{BUCKET}/out"))
-    assert written == ["sphere_hht.npz", "sphere_hht.ply", "spot_hht.npz", "spot_hht.ply", "summary.csv",
-                       "summary.json"]
+    assert written == [".hht3d-manifest.json", "sphere_hht.npz", "sphere_hht.ply", "spot_hht.npz", "spot_hht.ply",
+                       "summary.csv", "summary.json"]
     for key in MODELS:
         assert remote_run[key].vertices == local[key].vertices
         for suffix in (".npz", ".ply"):
@@ -232,7 +232,7 @@ def test_a_secret_never_appears_in_what_runs_print_or_write(store, cluster, tmp_
     printed = [captured.out, captured.err] + [r.stdout + r.stderr for r in runs]
     fs.invalidate_cache()
     written = [fs.cat_file(p) for prefix in ("secret-out", "secret-yaml") for p in fs.find(f"{BUCKET}/{prefix}")]
-    assert len(written) == 6  # spot's .ply and .npz; summary.json and .csv of both runs (the YAML one failed)
+    assert len(written) == 8  # spot's .ply and .npz; summary.json, .csv and manifest of both runs (the YAML one failed)
     written += [p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()]
     written += [p.read_bytes() for folder in cluster[1] for p in folder.rglob("*.log")]
     assert [forms_found(text, SECRET) for text in printed + written] == [[]] * len(printed + written)
@@ -249,10 +249,16 @@ def test_a_failed_write_leaves_no_object_and_a_non_atomic_store_gets_a_moved_who
     with pytest.raises(RuntimeError):
         write_via(half_then_fail, b"x" * 1000, "memory://atomic/out.bin")
     assert not memory.exists("/atomic/out.bin")
-    url = f"file://{tmp_path}/out/result.bin"  # no atomic upload there: a temporary name, then a move
+
+    class NonAtomic(fsspec.implementations.memory.MemoryFileSystem):
+        protocol = "nonatomic"  # no atomic upload there: a temporary name, then a move
+
+    fsspec.register_implementation("nonatomic", NonAtomic, clobber=True)
+    url = "nonatomic://nonatomic/out/result.bin"
     assert write_via(lambda data, path: path.write_bytes(data), b"y" * 1000, url) == url
-    assert [p.name for p in (tmp_path / "out").iterdir()] == ["result.bin"]
-    assert (tmp_path / "out" / "result.bin").read_bytes() == b"y" * 1000
+    store = NonAtomic()
+    assert [Path(p).name for p in store.ls("nonatomic://nonatomic/out", detail=False)] == ["result.bin"]
+    assert store.cat_file("nonatomic://nonatomic/out/result.bin") == b"y" * 1000
 
 
 def test_the_cli_reads_and_writes_urls(tmp_path, capsys):
@@ -294,16 +300,82 @@ def test_url_inputs_into_a_local_folder_keep_the_local_rules(store, tmp_path):
     assert (out / "spot_hht.ply").stat().st_size == entries(out)["spot_hht.ply"]["size"] > 0
 
 
-def test_a_url_output_folder_resumes_by_existence_and_keeps_no_manifest(store, tmp_path, capsys):
-    """A local pipeline writing to s3://: the CLI's --resume skips what exists in the bucket, and the
-    bucket gets the outputs and the summary only (no manifest, no lock object)."""
+def test_a_url_output_folder_resumes_only_what_its_manifest_object_records(store, tmp_path, capsys):
+    """A local pipeline writing to s3://: the outputs, then the summary, then a manifest object (the local
+    manifest's shape: sizes and SHA-256) and no lock object; --resume skips what the manifest records as it is,
+    and redoes an object emptied or changed since."""
+    import hashlib
+
     endpoint, _, fs = store
     pipeline = tmp_path / "p.yaml"
     pipeline.write_text(PIPELINE.format(endpoint=endpoint, inputs=str(shipped_model_path("spot.ply")),
                                         folder=f"s3://{BUCKET}/resumed"))
-    assert main(["run", str(pipeline), "--scheduler", "synchronous", "--quiet"]) == 0
-    assert main(["run", str(pipeline), "--scheduler", "synchronous", "--quiet", "--resume"]) == 0
-    assert "spot.ply: skipped (outputs complete), 2930 vertices, 2 IMFs" in capsys.readouterr().out
+
+    def run(*flags) -> str:
+        assert main(["run", str(pipeline), "--scheduler", "synchronous", "--quiet", *flags]) == 0
+        return capsys.readouterr().out
+
+    run()
     fs.invalidate_cache()
     assert sorted(Path(p).name for p in fs.ls(f"{BUCKET}/resumed")) == [
-        "spot_frequency_1.ply", "spot_hht.npz", "summary.csv", "summary.json"]
+        ".hht3d-manifest.json", "spot_frequency_1.ply", "spot_hht.npz", "summary.csv", "summary.json"]
+    files = json.loads(fs.cat_file(f"{BUCKET}/resumed/.hht3d-manifest.json"))["files"]
+    for name in ("spot_hht.npz", "spot_frequency_1.ply", "summary.json", "summary.csv"):
+        data = fs.cat_file(f"{BUCKET}/resumed/{name}")
+        assert (files[name]["size"], files[name]["sha256"]) == (len(data), hashlib.sha256(data).hexdigest())
+    assert "spot.ply: skipped (outputs complete), 2930 vertices, 2 IMFs" in run("--resume")
+    good = fs.cat_file(f"{BUCKET}/resumed/spot_hht.npz")
+    for changed in (b"", b"x" * len(good)):  # emptied, then the same size with other bytes
+        fs.pipe_file(f"{BUCKET}/resumed/spot_hht.npz", changed)
+        assert "spot.ply: ok" in run("--resume")
+        assert fs.cat_file(f"{BUCKET}/resumed/spot_hht.npz") == good
+
+
+def test_url_output_keys_leaving_the_folder_are_refused(store, tmp_path, capsys):
+    endpoint, _, fs = store
+    pipeline = tmp_path / "p.yaml"
+    pipeline.write_text(PIPELINE.format(endpoint=endpoint, inputs=str(shipped_model_path("spot.ply")),
+                                        folder=f"s3://{BUCKET}/confined/U05"))
+    assert main(["validate", str(pipeline), "--set", "name=../../victim",
+                 "--set", "outputs.files=[{path: '{name}/{stem}.npz'}]"]) == 1
+    message = f"s3://{BUCKET}/victim/spot.npz leaves the output folder s3://{BUCKET}/confined/U05"
+    assert message in capsys.readouterr().err
+    fs.invalidate_cache()
+    assert not fs.exists(f"{BUCKET}/victim") and not fs.exists(f"{BUCKET}/confined")
+
+
+@pytest.mark.parametrize("folder", [f"s3://{BUCKET}/merged", "memory://merged"])
+def test_runs_into_one_url_folder_keep_each_others_summary_rows(store, folder):
+    from hht3d.dataset import ItemSummary, write_summary
+
+    _, options, _ = store
+    options = options if folder.startswith("s3") else None
+    write_summary([ItemSummary("a.ply", "ok"), ItemSummary("b.ply", "failed")], folder, "R1", options)
+    write_summary([ItemSummary("b.ply", "ok"), ItemSummary("c.ply", "ok")], folder, "R2", options)
+    fs, path = fsspec.core.url_to_fs(folder, **(options or {}))
+    rows = json.loads(fs.cat_file(f"{path}/summary.json"))
+    assert [(r["source"], r["status"]) for r in rows] == [("a.ply", "ok"), ("b.ply", "ok"), ("c.ply", "ok")]
+    table = fs.cat_file(f"{path}/summary.csv").decode().splitlines()[1:]
+    assert [line.split(",")[:2] for line in table] == [["a.ply", "ok"], ["b.ply", "ok"], ["c.ply", "ok"]]
+    assert {v["run"] for v in json.loads(fs.cat_file(f"{path}/.hht3d-manifest.json"))["files"].values()} == {"R2"}
+
+
+def test_a_conditional_summary_write_keeps_the_rows_of_a_run_that_came_first(store):
+    """On S3 the summary is written If-Match its ETag: another run's summary written between this run's read
+    and its write makes the write fail and be redone from the other run's rows."""
+    from hht3d.io.storage import update_object
+
+    _, options, fs = store
+    url = f"s3://{BUCKET}/raced/summary.json"
+    fs.pipe_file(url, b"[]")
+    seen = []
+
+    def update(old: bytes | None) -> bytes:
+        seen.append(old)
+        if len(seen) == 1:  # the other run writes after this one read
+            fs.pipe_file(url, json.dumps([{"source": "theirs"}]).encode())
+        return json.dumps(json.loads(old) + [{"source": "ours"}]).encode()
+
+    update_object(url, update, options)
+    assert seen[0] == b"[]" and len(seen) == 2
+    assert json.loads(fs.cat_file(url)) == [{"source": "theirs"}, {"source": "ours"}]
