@@ -156,8 +156,9 @@ def _validate(args) -> int:
 
 
 def _ops(args) -> int:
-    from .pipeline import FORMATS, OPERATIONS
-    from .pipeline.params import did_you_mean, yaml_text
+    from .output_formats import FORMATS
+    from .pipeline import OPERATIONS
+    from .pipeline.params import did_you_mean, record_params, yaml_text
 
     names = args.op or list(OPERATIONS)
     for name in names:
@@ -174,7 +175,7 @@ def _ops(args) -> int:
         print("\noutputs (outputs.files entries: {from: STEP, path: PATTERN, format: ..., options}):")
         for kind, formats in FORMATS.items():
             for fmt in formats.values():
-                options = ", ".join(f"{p.name}={yaml_text(p.default)}" for p in fmt.params)
+                options = ", ".join(f"{p.name}={yaml_text(p.default)}" for p in record_params(fmt.options))
                 print(f"    {kind:<9} {fmt.name:<12} {fmt.summary}" + (f" [{options}]" if options else ""))
     return 0
 

@@ -15,13 +15,9 @@ from .io import storage
 from .io.read import read_npz
 from .redaction import redact
 from .spectral.monogenic_signal import MonogenicSignal
-from .transform import HHTResult
+from .transform import RESULT_ARRAYS, HHTResult
 
 __all__ = ["load_result", "RESULT_ARRAYS"]
-
-#: The arrays every saved result holds (meshes add ``faces``).
-RESULT_ARRAYS = ("vertices", "normals", "laplacian", "n_neighbors", "signal", "imfs", "residue", "riesz",
-                 "amplitude", "phase", "frequency", "area")
 
 
 def load_result(path, *, storage_options: dict | None = None) -> HHTResult:
@@ -34,7 +30,8 @@ def load_result(path, *, storage_options: dict | None = None) -> HHTResult:
     Raises
     ------
     InputError
-        Not a ``.npz`` (a PLY keeps no Riesz vectors), unreadable, or without the arrays of a result.
+        Not a ``.npz`` (a PLY keeps no Riesz vectors), unreadable, or without the arrays of a result
+        (:data:`~hht3d.transform.RESULT_ARRAYS`).
 
     Examples
     --------

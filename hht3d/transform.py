@@ -13,6 +13,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
+from operator import attrgetter
 from pathlib import Path
 from typing import Callable, Protocol
 
@@ -31,7 +32,32 @@ from .spectral.options import RieszOptions
 from .spectral.riesz_transform import fractional_laplacian
 from .spectral.spectrum import HilbertSpectrum
 
-__all__ = ["HHTResult", "hht", "hht_stages", "decomposition_stage", "Stages"]
+__all__ = ["HHTResult", "hht", "hht_stages", "decomposition_stage", "Stages", "RESULT_ARRAYS", "FIELDS",
+           "IMF_FIELDS", "field_imf"]
+
+#: The arrays of a saved result (:meth:`HHTResult.arrays`), each by the attribute of the result it holds;
+#: a mesh adds ``faces``.
+RESULT_ARRAYS = {"vertices": "surface.vertices", "normals": "surface.normals", "laplacian": "surface.laplacian",
+                 "n_neighbors": "surface.n_neighbors", "signal": "signal", "imfs": "imfs", "residue": "residue",
+                 "riesz": "monogenic.riesz", "amplitude": "monogenic.amplitude", "phase": "monogenic.phase",
+                 "frequency": "monogenic.frequency", "area": "surface.mass_diagonal"}
+#: The fields of :meth:`HHTResult.vertex_attributes` that a result has once (attributes of the same name).
+FIELDS = ("signal", "residue")
+#: The fields it has per IMF: ``{kind}_{K}`` is row K - 1 (IMF K, from 1) of the attribute of its kind.
+IMF_FIELDS = {"imf": "imfs", "amplitude": "monogenic.amplitude", "phase": "monogenic.phase",
+              "frequency": "monogenic.frequency"}
+
+
+def field_imf(name) -> int | None:
+    """The IMF number K of a field ``{kind}_K`` of :data:`IMF_FIELDS` (``imf_K``, ..., ``frequency_K``); else None.
+
+    >>> field_imf("phase_2"), field_imf("signal"), field_imf("imf_0"), field_imf("frequncy_1")
+    (2, None, None, None)
+    """
+    kind, _, number = name.rpartition("_") if isinstance(name, str) else ("", "", "")
+    if kind in IMF_FIELDS and number.isascii() and number.isdigit() and not number.startswith("0"):
+        return int(number)
+    return None
 
 
 @dataclass
@@ -84,42 +110,42 @@ class HHTResult:
         return HilbertSpectrum.from_monogenic(self.surface, self.monogenic)
 
     def vertex_attributes(self) -> dict[str, np.ndarray]:
-        """Named per-vertex fields: ``signal``, ``residue`` and, for IMF ``i`` (from 1),
-        ``imf_i``, ``amplitude_i``, ``phase_i``, ``frequency_i``."""
-        fields = {"signal": self.signal, "residue": self.residue}
-        mono = self.monogenic
+        """Named per-vertex fields: :data:`FIELDS` (``signal``, ``residue``) and, for IMF ``K``
+        (from 1), one per kind of :data:`IMF_FIELDS`: ``imf_K``, ``amplitude_K``, ``phase_K``,
+        ``frequency_K``."""
+        fields = {name: getattr(self, name) for name in FIELDS}
+        per_imf = {kind: attrgetter(source)(self) for kind, source in IMF_FIELDS.items()}
         for i in range(self.n_imfs):
-            fields.update({f"imf_{i + 1}": self.imfs[i], f"amplitude_{i + 1}": mono.amplitude[i],
-                           f"phase_{i + 1}": mono.phase[i], f"frequency_{i + 1}": mono.frequency[i]})
+            fields.update({f"{kind}_{i + 1}": values[i] for kind, values in per_imf.items()})
         return fields
 
-    def save(self, path, *, storage_options: dict | None = None) -> Path:
-        """Write the result atomically.
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of the ``.npz`` file: :data:`RESULT_ARRAYS` (``vertices``, ``normals``,
+        ``laplacian``, ``n_neighbors``, ``signal``, ``imfs``, ``residue``, ``riesz``,
+        ``amplitude``, ``phase``, ``frequency``, ``area``: the vertex areas), then ``faces`` of a mesh."""
+        arrays = {name: np.asarray(attrgetter(source)(self)) for name, source in RESULT_ARRAYS.items()}
+        if self.surface.is_mesh:
+            arrays["faces"] = self.surface.faces
+        return arrays
 
-        ``.ply``: the surface with :meth:`vertex_attributes` as float64
-        vertex properties.  ``.npz``: arrays ``vertices``, ``faces`` (meshes),
-        ``normals``, ``laplacian``, ``n_neighbors``, ``signal``, ``imfs``,
-        ``residue``, ``riesz``, ``amplitude``, ``phase``, ``frequency`` and
-        ``area`` (vertex areas); :func:`hht3d.results.load_result` reads it back.
-        ``path`` may be an fsspec URL, with ``storage_options`` (:mod:`hht3d.io.storage`).
+    def save(self, path, *, storage_options: dict | None = None) -> Path:
+        """Write the result atomically in the format of its suffix, one of the formats of an HHT
+        result that take no options (:func:`hht3d.output_formats.plain_formats`).
+
+        ``.ply``: the surface with :meth:`vertex_attributes` as float64 vertex
+        properties.  ``.npz``: :meth:`arrays`; :func:`hht3d.results.load_result`
+        reads it back.  ``path`` may be an fsspec URL, with ``storage_options``
+        (:mod:`hht3d.io.storage`).
         """
+        from .output_formats import plain_formats
+
         if io.storage.is_url(path):  # object storage: written locally, then uploaded
             return io.storage.write_via(self.save, path, storage_options=storage_options)
         path = Path(io.storage.local_path(path))
-        suffix = path.suffix.lower()
-        if suffix == ".ply":
-            return io.write_ply(path, self.surface, self.vertex_attributes())
-        if suffix == ".npz":
-            mono = self.monogenic
-            arrays = {"vertices": self.surface.vertices, "normals": self.surface.normals,
-                      "laplacian": np.array(self.surface.laplacian), "n_neighbors": np.array(self.surface.n_neighbors),
-                      "signal": self.signal, "imfs": self.imfs, "residue": self.residue, "riesz": mono.riesz,
-                      "amplitude": mono.amplitude, "phase": mono.phase, "frequency": mono.frequency,
-                      "area": self.surface.mass_diagonal}
-            if self.surface.is_mesh:
-                arrays["faces"] = self.surface.faces
-            return io.write_npz(path, arrays)
-        raise InputError(f"cannot save an HHT result as {path.name!r}: use a .ply or .npz file name")
+        formats = plain_formats("hht")
+        if path.suffix.lower() not in formats:
+            raise InputError(f"cannot save an HHT result as {path.name!r}: use a {' or '.join(formats)} file name")
+        return formats[path.suffix.lower()].write(self, self.surface, path)
 
     def to_html(self, path, *, storage_options: dict | None = None, **options) -> Path:
         """Write an interactive page of every field, the marginal spectrum and the quality

@@ -24,3 +24,11 @@ def test_load_result_gives_back_the_saved_result(tmp_path):
     np.testing.assert_allclose(again.spectrum.mean_frequency(), result.spectrum.mean_frequency(), rtol=1e-12)
     with pytest.raises(InputError, match="Riesz"):
         load_result(result.save(tmp_path / "spot_hht.ply"))
+
+
+def test_load_result_names_the_arrays_a_file_lacks(tmp_path):
+    from hht3d import load_result
+
+    np.savez(tmp_path / "x.npz", vertices=np.zeros((3, 3)), signal=np.zeros(3))
+    with pytest.raises(InputError, match="no normals, laplacian, n_neighbors, imfs, .*, area; expected a file"):
+        load_result(tmp_path / "x.npz")

@@ -6,7 +6,7 @@ import pytest
 
 import hht3d
 from hht3d.errors import InputError
-from hht3d.transform import HHTResult, hht
+from hht3d.transform import FIELDS, IMF_FIELDS, RESULT_ARRAYS, HHTResult, field_imf, hht
 from hht3d.geometry.surface import Surface
 from helpers.meshes import fibonacci_sphere, icosphere
 
@@ -58,6 +58,17 @@ def test_save_npz(result, tmp_path):
         assert np.array_equal(data["riesz"], result.monogenic.riesz)
         assert np.array_equal(data["faces"], result.surface.faces)
         assert data["area"].sum() == pytest.approx(4 * np.pi, rel=0.01)
+
+
+def test_fields_and_arrays_are_declared_once(result, tmp_path):
+    """The fields are FIELDS, then one per kind of IMF_FIELDS for every IMF, which field_imf reads back;
+    the .npz holds arrays(): RESULT_ARRAYS, then the faces."""
+    imfs = range(1, result.n_imfs + 1)
+    names = list(result.vertex_attributes())
+    assert names == [*FIELDS, *(f"{kind}_{k}" for k in imfs for kind in IMF_FIELDS)]
+    assert [field_imf(name) for name in names] == [None] * len(FIELDS) + [k for k in imfs for _ in IMF_FIELDS]
+    with np.load(result.save(tmp_path / "out.npz")) as data:
+        assert data.files == list(result.arrays()) == [*RESULT_ARRAYS, "faces"]
 
 
 def test_save_rejects_unknown_format(result, tmp_path):

@@ -27,6 +27,7 @@ from ..geometry.signals import SIGNALS
 from ..io.folder import OutputFolder, check_locations
 from ..io.manifest import new_run_id
 from ..io.storage import file_name, join, local_path, resolve_locations, stem
+from ..output_formats import plain_formats
 from ..transform import HHTResult
 from .guard import MAX_ERROR, Failure, Guarded
 from ..execution import compute
@@ -37,9 +38,9 @@ __all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph",
            "summary_paths", "item_summary", "skipped_summary", "quality_fields", "SUMMARY_FILES", "MAX_ERROR",
            "RESULT_SUFFIXES", "items_graph"]
 
-#: The files a dataset item's result can be saved as (:meth:`HHTResult.save`); a pipeline's
-#: output formats per kind of result are :data:`hht3d.pipeline.FORMATS`.
-RESULT_SUFFIXES = (".ply", ".npz")
+#: The files a dataset item's result is saved as by default: the formats of an HHT result that take no
+#: options (:func:`hht3d.output_formats.plain_formats`, written by :meth:`HHTResult.save`).
+RESULT_SUFFIXES = tuple(plain_formats("hht"))
 
 
 def output_paths(source, out_dir, formats=RESULT_SUFFIXES, pattern: str = "{stem}_hht") -> list:
@@ -74,9 +75,10 @@ def _check_options(signal: str, formats) -> None:
     """An invalid option is the caller's error, found before any task is made."""
     if signal not in SIGNALS:
         raise InputError(f"unknown signal {signal!r}; run_dataset takes one of {sorted(SIGNALS)}")
+    written = plain_formats("hht")
     for suffix in formats:
-        if suffix not in RESULT_SUFFIXES:
-            raise InputError(f"unknown output format {suffix!r}; run_dataset writes {', '.join(RESULT_SUFFIXES)}")
+        if suffix not in written:
+            raise InputError(f"unknown output format {suffix!r}; run_dataset writes {', '.join(written)}")
 
 
 def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=RESULT_SUFFIXES,

@@ -6,8 +6,14 @@
 * :mod:`~hht3d.linalg.pardiso`, :mod:`~hht3d.linalg.cholmod`, :mod:`~hht3d.linalg.superlu` — the backends.
 """
 from .backends import (BACKEND_VARIABLE, SOLVER_BACKENDS, Backend, register_backend, available_backends,
-                       default_backend, BackendStatus, backend_report, check_backend, BACKENDS)
+                       default_backend, BackendStatus, backend_report, check_backend)
 from .factor import Factor
 from .symbolic import SymbolicFactorization, factorize
 from .estimate import (Estimate, estimate_hht, backend_estimates, available_memory, check_memory, estimate_lines,
                        SLOW_FALLBACK_VERTICES, SlowSolverWarning, slow_fallback, warn_slow_fallback)
+
+
+def __getattr__(name: str):
+    if name == "BACKENDS":  # deprecated in 0.2.0
+        return backends._deprecated_backends()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -50,6 +50,7 @@ import importlib
 import importlib.metadata
 import os
 import threading
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -63,7 +64,6 @@ __all__ = [
     "SOLVER_BACKENDS",
     "register_backend",
     "check_backend",
-    "BACKENDS",
     "BACKEND_VARIABLE",
     "available_backends",
     "default_backend",
@@ -229,5 +229,15 @@ register_backend(Backend(
     "SciPy SuperLU without pivoting, MMD ordering once per pattern, then reused",
     "scipy is always installed", SuperLUPattern))
 
-#: Every backend's name, fastest first (the registry's order when this module was imported).
-BACKENDS = tuple(SOLVER_BACKENDS)
+
+def _deprecated_backends() -> tuple[str, ...]:
+    """What ``BACKENDS`` gave, the backends' names fastest first, with a warning to the code that asked."""
+    warnings.warn("hht3d.linalg.BACKENDS is deprecated and goes in 0.3.0; use tuple(hht3d.linalg.SOLVER_BACKENDS), "
+                  "which also holds the backends registered later", DeprecationWarning, stacklevel=3)
+    return tuple(SOLVER_BACKENDS)
+
+
+def __getattr__(name: str):
+    if name == "BACKENDS":  # deprecated in 0.2.0
+        return _deprecated_backends()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

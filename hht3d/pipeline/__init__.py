@@ -19,7 +19,7 @@ and runs it on any scheduler of :mod:`hht3d.execution`.
 
 This layer adds configuration only: nothing in the core knows YAML exists.
 """
-from .outputs import FORMATS, Format
+from ..output_formats import FORMATS, Format
 from .params import Param
 from .plan import Execution, Output, Pipeline, Step
 from .registry import OPERATIONS, Operation, Slot

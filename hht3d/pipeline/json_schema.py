@@ -31,8 +31,8 @@ import dataclasses
 import json
 
 from ..apps.filters import GAINS
-from .outputs import FORMATS
-from .params import Param
+from ..output_formats import FORMATS
+from .params import Param, record_params
 from .registry import OPERATIONS
 from .validation import EXECUTION, MAX_ID, VERSION, builtin_models
 
@@ -117,7 +117,7 @@ def _output_schema() -> dict:
     options: dict[str, list[dict]] = {}
     for formats in FORMATS.values():
         for fmt in formats.values():
-            for p in fmt.params:
+            for p in record_params(fmt.options):
                 schema = param_schema(p)
                 if schema not in options.setdefault(p.name, []):
                     options[p.name].append(schema)

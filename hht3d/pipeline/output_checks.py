@@ -16,9 +16,10 @@ from pathlib import Path
 from ..errors import InputError, OutputError, PipelineError, shown
 from ..io.folder import check_locations
 from ..io.storage import check_outputs, is_url, local_path
+from ..output_formats import FORMATS, by_suffix
+from ..transform import field_imf
 from .document import as_mapping, at, known_keys
-from .outputs import FORMATS, SUFFIXES, check_options, field_imf
-from .params import Param, did_you_mean
+from .params import Param, did_you_mean, record_params
 from .plan import PLACEHOLDERS, Output, Pipeline, Step
 
 __all__ = ["OUTPUTS_KEYS", "FILE_KEYS", "read_outputs", "check_plan_outputs"]
@@ -98,14 +99,18 @@ def _output(entry, steps: dict, last: str) -> Output:
     fmt = formats[name]
     if not path.lower().endswith(fmt.suffix):
         raise PipelineError(f"{context}: format {name} writes {fmt.suffix} files; end the path with {fmt.suffix}")
-    known = [p.name for p in fmt.params]
+    params = record_params(fmt.options)
+    known = [p.name for p in params]
     for key in entry:
         if key not in FILE_KEYS and key not in known:
             raise PipelineError(f"{at(entry, key)}: output {shown(path)}: unknown option {shown(key)} for format "
                                 f"{name}{did_you_mean(key, [*FILE_KEYS, *known])}")
     options = {p.name: p.check(entry[p.name], f"{at(entry, p.name)}: output {shown(path)}") if p.name in entry
-               else p.default for p in fmt.params}
-    check_options(options, context)
+               else p.default for p in params}
+    try:
+        fmt.options.of(options)
+    except InputError as exc:  # what the types cannot say: an unknown field or colour map
+        raise PipelineError(f"{context}: {exc}") from None
     _imf_exists(options, steps[step_id], context)
     return Output(step_id, path, fmt, options, tuple(k for k in entry if k in known))
 
@@ -125,11 +130,11 @@ def _format_from(path: str, entry, formats: dict) -> str:
     suffix = Path(path).suffix.lower()
     if suffix == ".ply" and ("field" in entry or "cmap" in entry):
         return "colored_ply"
-    names = [n for n, s in SUFFIXES.items() if s == suffix]
-    if not names:
+    names = by_suffix()
+    if suffix not in names:
         raise PipelineError(f"{at(entry, 'path')}: cannot tell the format of {shown(path)}; end it with "
-                            f"{', '.join(sorted(set(SUFFIXES.values())))} or give format:")
-    return names[0]
+                            f"{', '.join(sorted(names))} or give format:")
+    return names[suffix]
 
 def _placeholders(path: str, where: str) -> None:
     try:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from ..dataset.summary import summary_paths
 from ..io.storage import join, parent_name, stem
-from .outputs import Format
+from ..output_formats import Format
 from .params import yaml_text
 from .registry import Operation
 

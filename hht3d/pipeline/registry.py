@@ -38,7 +38,7 @@ Its lazy twin, if wanted outside pipelines, is one line in
 """
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from .. import graph, linalg
@@ -56,8 +56,23 @@ from .params import REQUIRED, Param, did_you_mean, record_params, with_defaults
 
 __all__ = ["Slot", "Operation", "OPERATIONS", "operation"]
 
-#: Sparse solver backends of :data:`hht3d.linalg.backends.SOLVER_BACKENDS` (availability is checked when a step runs).
-SOLVERS = tuple(linalg.SOLVER_BACKENDS)
+
+class _Solvers(Sequence):
+    """The names of :data:`hht3d.linalg.backends.SOLVER_BACKENDS`, read at each use, so that a backend
+    registered after import is a ``backend:`` choice too (availability is checked when a step runs)."""
+
+    def __getitem__(self, index):
+        return tuple(linalg.backends.SOLVER_BACKENDS)[index]
+
+    def __len__(self) -> int:
+        return len(linalg.backends.SOLVER_BACKENDS)
+
+    def __repr__(self) -> str:
+        return repr(tuple(self))
+
+
+#: The ``backend:`` choices: every registered sparse solver backend, fastest first.
+SOLVERS = _Solvers()
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,12 @@ def icosphere(subdivisions: int = 5, radius: float = 1.0):
     return radius * v, f
 
 
+def bumpy_sphere(subdivisions: int = 2, waves: int = 5, scale: float = 1.0):
+    """An icosphere with a smooth bump pattern: ``(vertices, faces)``."""
+    v, f = icosphere(subdivisions)
+    return scale * v * (1 + 0.06 * np.sin(waves * v[:, [0]]) * np.cos(4 * v[:, [1]])), f
+
+
 def fibonacci_sphere(n: int, radius: float = 1.0):
     """``n`` nearly uniform points on a sphere (Fibonacci lattice)."""
     i = np.arange(n) + 0.5

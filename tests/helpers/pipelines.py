@@ -1,16 +1,24 @@
-"""The pipeline tests' shared parts (tests/pipeline/): the shipped examples, a good pipeline to break, a run
-through the CLI, and what an output file must hold."""
+"""The pipeline and output-format tests' shared parts: the shipped examples, a bumpy sphere file, a good
+pipeline to break, a run through the CLI, and what an output file must hold."""
 from pathlib import Path
 
 import numpy as np
 
+from helpers.meshes import bumpy_sphere
 from helpers.pages import field_values, page_data
+from hht3d import Surface
 from hht3d.cli import main
-from hht3d.io import load
+from hht3d.io import load, write_ply
 from hht3d.pipeline import load_pipeline
 
 EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "pipelines").glob("*.yaml"))
 FAST = ["--scheduler", "synchronous", "--quiet"]
+
+
+def bumpy_file(folder: Path) -> Path:
+    """``folder/bumpy.ply``: the bumpy sphere of :func:`helpers.meshes.bumpy_sphere` (162 vertices)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    return write_ply(folder / "bumpy.ply", Surface(*bumpy_sphere(), name="bumpy"))
 
 
 def assert_output_fits(path: Path, n_vertices: int) -> None:

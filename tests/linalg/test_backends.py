@@ -77,9 +77,9 @@ def test_indefinite_matrix_raises_numerical_error(spot, backend):
 def test_default_backend_and_override(monkeypatch):
     monkeypatch.delenv(linalg.BACKEND_VARIABLE, raising=False)
     assert linalg.default_backend() == BACKENDS[0]
-    assert BACKENDS[-1] == "superlu" and set(BACKENDS) <= set(linalg.BACKENDS)
+    assert BACKENDS[-1] == "superlu" and set(BACKENDS) <= set(linalg.SOLVER_BACKENDS)
     statuses, reason = linalg.backend_report()
-    assert [s.name for s in statuses] == list(linalg.BACKENDS)
+    assert [s.name for s in statuses] == list(linalg.SOLVER_BACKENDS)
     assert [s.name for s in statuses if s.default] == [BACKENDS[0]]
     assert linalg.BACKEND_VARIABLE in reason
 
@@ -113,7 +113,7 @@ def test_info_backends_names_the_solver_and_why(capsys, monkeypatch):
     assert main(["info", "--backends"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("sparse solver: superlu (set by the environment variable HHT3D_BACKEND=superlu)")
-    assert all(name in out for name in linalg.BACKENDS)
+    assert all(name in out for name in linalg.SOLVER_BACKENDS)
 
 
 class _DenseCholesky:
@@ -144,6 +144,21 @@ def test_a_new_backend_is_one_registry_entry(monkeypatch):
     statuses = {s.name: s for s in linalg.backend_report()[0]}
     assert statuses["dense"].available and "dense Cholesky" in statuses["dense"].detail
     assert statuses["absent"].detail == "pip install absent"
+    # the pipeline's backend: choices and the JSON Schema read the registry
+    from hht3d.pipeline import OPERATIONS
+    from hht3d.pipeline.json_schema import pipeline_schema
+
+    param = OPERATIONS["emd"].param("backend")
+    assert param.check("dense", "steps.emd") == "dense" and "dense" in param.describe()
+    emd = next(rule["then"] for rule in pipeline_schema()["$defs"]["step"]["allOf"]
+               if rule["if"]["properties"]["op"]["const"] == "emd")
+    assert emd["properties"]["params"]["properties"]["backend"]["enum"][-4:] == ["dense", "superlu", "absent", None]
+
+
+def test_the_backends_tuple_is_deprecated_for_the_registry():
+    for module in (linalg, backends):
+        with pytest.warns(DeprecationWarning, match="SOLVER_BACKENDS"):
+            assert module.BACKENDS == tuple(backends.SOLVER_BACKENDS)
 
 
 class _Occupancy:

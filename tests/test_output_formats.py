@@ -1,19 +1,36 @@
-"""Every operation and every output format of a pipeline (hht3d.pipeline.outputs), each file against the same
-steps run eagerly through the Python API."""
+"""The output formats (hht3d.output_formats): every format of every kind of result written by a pipeline,
+each file against the same steps run eagerly through the Python API; a new format is one entry and one writer."""
 import textwrap
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from helpers.pipelines import assert_output_fits
+import pytest
+from helpers.meshes import icosphere
+from helpers.pipelines import GOOD, assert_output_fits, bumpy_file
 
 from hht3d.apps import (LowPass, PiecewiseLinear, filter_signal, hks_features, imf_enhancement,
                         manifold_harmonics_filter, prominent_features, reconstruct)
+from hht3d.cli import main
+from hht3d.dataset import dataset_graph
 from hht3d.decomposition import eemd, emd
-from hht3d.transform import HHTResult
+from hht3d.errors import InputError, PipelineError
+from hht3d.geometry.surface import Surface
+from hht3d.io.atomic import atomic_path
+from hht3d.io.write import write_npz
+from hht3d.output_formats import FORMATS, Format, FormatOptions, by_suffix, plain_formats
+from hht3d.records import option
+from hht3d.transform import HHTResult, hht
 from hht3d.io import load
 from hht3d.spectral.monogenic_signal import monogenic
 from hht3d.geometry.signals import mean_curvature
 from hht3d.pipeline import OPERATIONS, parse_pipeline, run_pipeline
+from hht3d.pipeline.json_schema import pipeline_schema
+
+
+@pytest.fixture
+def mesh_file(tmp_path):
+    return bumpy_file(tmp_path / "in")
 
 
 def test_every_operation_and_output_format_runs(tmp_path, mesh_file):
@@ -96,3 +113,61 @@ def test_every_operation_and_output_format_runs(tmp_path, mesh_file):
     amplitude = result.monogenic.amplitude[0]
     np.testing.assert_allclose(load(out / "amplitude_1.ply", clean=False).attributes["amplitude_1"], amplitude,
                                rtol=0, atol=1e-12 * amplitude.max())
+
+
+@dataclass(frozen=True)
+class _Digits(FormatOptions):
+    digits: int = option(6, "significant digits", minimum=1, maximum=17)
+
+
+def _signal_txt(values, surface, path, *, digits):
+    with atomic_path(path) as tmp:
+        np.savetxt(tmp, values, fmt=f"%.{digits - 1}e")
+    return Path(path)
+
+
+def _hht_energy(result, surface, path):
+    return write_npz(path, {"energy": (result.imfs ** 2 * result.surface.mass_diagonal).sum(1)})
+
+
+def test_a_new_format_is_one_entry_and_one_writer(monkeypatch, tmp_path, mesh_file, capsys):
+    """Its suffix names it, its options are checked, the JSON Schema and ``hht3d ops`` list it; a format of
+    an HHT result without options is one HHTResult.save and run_dataset write too."""
+    monkeypatch.setitem(FORMATS["signal"], "txt", Format("txt", ".txt", "the values as text", _signal_txt, _Digits))
+    monkeypatch.setitem(FORMATS["hht"], "energy", Format("energy", ".energy", "IMF energies", _hht_energy))
+    text = GOOD.format(mesh=mesh_file, out=tmp_path / "out")
+    txt = "outputs.files=[{from: curvature, path: '{stem}.txt', digits: %d}]"
+    plan = parse_pipeline(text, overrides=["execution={scheduler: synchronous, progress: false}", txt % 3])
+    assert (plan.outputs[0].format.name, plan.outputs[0].options) == ("txt", {"digits": 3})
+    with pytest.raises(PipelineError, match=r"parameter digits must be an integer in \[1, 17\]"):
+        parse_pipeline(text, overrides=[txt % 0])
+    (row,) = run_pipeline(plan)
+    assert row.status == "ok", row.error
+    expected = mean_curvature(load(mesh_file))
+    np.testing.assert_allclose(np.loadtxt(tmp_path / "out" / "bumpy.txt"), expected, rtol=1e-2)
+
+    output = pipeline_schema()["$defs"]["output"]["properties"]
+    assert {"txt", "energy"} <= set(output["format"]["enum"]) and output["digits"]["maximum"] == 17
+    assert main(["ops"]) == 0
+    assert "signal    txt          the values as text [digits=6]" in capsys.readouterr().out
+
+    assert list(plain_formats("hht")) == [".ply", ".npz", ".energy"] and by_suffix()[".energy"] == "energy"
+    surface = Surface(*icosphere(2))
+    result = hht(surface, surface.vertices[:, 0], emd={"max_imfs": 1})
+    with np.load(result.save(tmp_path / "x.energy"), allow_pickle=False) as saved:
+        np.testing.assert_allclose(saved["energy"], (result.imfs ** 2 * surface.mass_diagonal).sum(1))
+    dataset_graph([mesh_file], tmp_path / "dataset", formats=(".energy",), emd={"max_imfs": 1})  # accepted
+
+
+def test_format_options_refuse_what_the_types_cannot_say():
+    """A field no HHT result has and a colour map Matplotlib does not know, named with the fields
+    :meth:`HHTResult.vertex_attributes` makes."""
+    options = FORMATS["hht"]["colored_ply"].options
+    assert options.of(field="frequency_12").field == "frequency_12"
+    for field in ("imf_0", "frequncy_1", "amplitude_01", "imf_", "residue_1"):
+        with pytest.raises(InputError, match=r"unknown field .*; use signal, residue, imf_K, amplitude_K, "
+                                             r"phase_K or frequency_K"):
+            options.of(field=field)
+    with pytest.raises(InputError, match="unknown colour map 'viridi'; did you mean 'viridis'"):
+        options.of(cmap="viridi")
+    assert FORMATS["signal"]["png"].options.of().cmap is None  # the automatic colour map
