@@ -211,7 +211,8 @@ def _info(args) -> int:
 
 
 def _view(args) -> int:
-    from .io.storage import is_url, local_copy, stem, write_via
+    from .io.storage import is_url, local_copy, stem
+    from .io.uploads import write_via
     from .viz.viewer import file_html
 
     out = args.out or (f"{stem(args.file)}.html" if is_url(args.file) else None)

@@ -140,7 +140,7 @@ class HHTResult:
         from .output_formats import plain_formats
 
         if io.storage.is_url(path):  # object storage: written locally, then uploaded
-            return io.storage.write_via(self.save, path, storage_options=storage_options)
+            return io.uploads.write_via(self.save, path, storage_options=storage_options)
         path = Path(io.storage.local_path(path))
         formats = plain_formats("hht")
         if path.suffix.lower() not in formats:
@@ -154,7 +154,7 @@ class HHTResult:
         ``path`` may be an fsspec URL, with ``storage_options``."""
         from .viz.viewer import result_html
 
-        return io.storage.write_via(result_html, self, path, storage_options=storage_options, **options)
+        return io.uploads.write_via(result_html, self, path, storage_options=storage_options, **options)
 
     def to_open3d(self):
         """An Open3D tensor ``TriangleMesh`` (or ``PointCloud``) carrying

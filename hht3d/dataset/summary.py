@@ -7,7 +7,7 @@ warnings).  Runs into one folder, even at once, merge their rows
 (:func:`write_summary`): a local folder under its lock, a URL folder by a
 conditional write of ``summary.json`` on S3 (``If-Match`` its ETag, redone
 from the new rows when another run came first;
-:func:`hht3d.io.storage.update_object`).  Other stores have no conditional
+:func:`hht3d.io.uploads.update_object`).  Other stores have no conditional
 write here: there the last of two runs finishing at once wins.  Secrets are
 redacted (:func:`hht3d.redaction.redact`).
 """
@@ -25,7 +25,8 @@ from ..io import is_recorded, new_run_id, read_npz_shapes, read_ply_header
 from ..io.folder import OutputFolder
 from ..io.manifest import folder_lock, recording
 from ..io.read import _MAX_HEADER
-from ..io.storage import atomic_location, file_name, is_url, join, local_copy, local_path, update_object
+from ..io.storage import file_name, is_url, join, local_copy, local_path
+from ..io.uploads import atomic_location, update_object
 from ..linalg.estimate import slow_fallback
 from ..redaction import redact
 from ..transform import HHTResult

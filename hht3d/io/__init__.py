@@ -9,7 +9,8 @@
 * :mod:`~hht3d.io.atomic` — atomic writes and their stale temporary files;
 * :mod:`~hht3d.io.manifest` — what hht3d wrote in an output folder (overwrite and resume rules);
 * :mod:`~hht3d.io.folder` — an output folder's rules, local (manifest, lock, confinement) or URL;
-* :mod:`~hht3d.io.storage` — fsspec URLs (``s3://``, ``gs://``, ...): reading, atomic uploads, listing.
+* :mod:`~hht3d.io.storage` — fsspec URLs (``s3://``, ``gs://``, ...): locations, back-ends, listing, reading;
+* :mod:`~hht3d.io.uploads` — writing to them: atomic uploads, conditional updates, the check before a run.
 """
 from .atomic import atomic_path, check_output_paths, remove_stale_parts
 from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS, check_regular_file
@@ -19,7 +20,7 @@ from .paths import check_name, check_output_location, confined, resolve_inputs
 from .read import PlyHeader, data_path, load, read_npz, read_npz_shapes, read_ply_header
 from .write import field_colors, write_colored_ply, write_npz, write_ply
 from ..geometry.normals import estimate_point_normals
-from . import storage
+from . import storage, uploads
 
 __all__ = ["MESH_EXTENSIONS", "POINT_CLOUD_EXTENSIONS", "data_path", "load", "PlyHeader", "read_ply_header",
            "read_npz", "read_npz_shapes", "surface_from_open3d", "surface_to_open3d", "estimate_point_normals",

@@ -14,7 +14,7 @@
   and uploaded atomically, and a manifest object of the same shape written
   after the outputs (:meth:`OutputFolder.finish`), so that ``resume`` trusts
   only outputs of the recorded size and checksum.  It has no lock: on S3 the
-  manifest is updated conditionally (:func:`hht3d.io.storage.update_object`),
+  manifest is updated conditionally (:func:`hht3d.io.uploads.update_object`),
   elsewhere the last writer wins; no rule keeps hht3d from replacing an
   object it did not write.
 """
@@ -25,7 +25,7 @@ import os
 from pathlib import Path, PurePosixPath
 
 from ..errors import OutputError
-from . import storage
+from . import storage, uploads
 from .atomic import check_output_paths, remove_stale_parts
 from .manifest import (MANIFEST, Recorded, check_overwrites, digest, entries, is_recorded, new_run_id, updated,
                        valid_entries)
@@ -36,7 +36,7 @@ __all__ = ["OutputFolder", "Uploaded", "check_locations"]
 
 class Uploaded:
     """A writer whose last positional argument is a URL: written locally, then uploaded
-    (:func:`hht3d.io.storage.write_via`; a picklable task function)."""
+    (:func:`hht3d.io.uploads.write_via`; a picklable task function)."""
 
     def __init__(self, write, storage_options: dict | None):
         self.write, self.storage_options = write, storage_options or None
@@ -47,7 +47,7 @@ class Uploaded:
         return (self.write.__module__, self.write.__qualname__, repr(sorted((self.storage_options or {}).items())))
 
     def __call__(self, *args, **kwargs):
-        return storage.write_via(self.write, *args, storage_options=self.storage_options, **kwargs)
+        return uploads.write_via(self.write, *args, storage_options=self.storage_options, **kwargs)
 
 
 class OutputFolder:
@@ -82,7 +82,7 @@ class OutputFolder:
         """
         paths = list(paths)
         if self.is_url:
-            storage.check_outputs(paths, self.storage_options)
+            uploads.check_outputs(paths, self.storage_options)
             return
         check_output_paths(paths)
         self.check_overwrites(paths, overwrite=overwrite)
@@ -98,14 +98,14 @@ class OutputFolder:
 
     def record(self, urls) -> None:
         """Add the objects ``urls`` of a URL folder, as they are now, to its manifest object (written last,
-        merged with other runs' entries; :func:`hht3d.io.storage.update_object`)."""
+        merged with other runs' entries; :func:`hht3d.io.uploads.update_object`)."""
         found = {}
         for url in urls:
             key, sums = storage.under(url, self.location), _digest_of(url, self.storage_options)
             if key is not None and sums is not None:
                 found[key] = sums
         if found:
-            storage.update_object(storage.join(self.location, MANIFEST), lambda old: updated(
+            uploads.update_object(storage.join(self.location, MANIFEST), lambda old: updated(
                 self._parsed(old), found, self.run).encode(), self.storage_options)
 
     def recorded(self, url) -> bool:

@@ -5,6 +5,7 @@
 * :mod:`~hht3d.linalg.estimate` — time and memory known before factorizing, and the advice that follows;
 * :mod:`~hht3d.linalg.pardiso`, :mod:`~hht3d.linalg.cholmod`, :mod:`~hht3d.linalg.superlu` — the backends.
 """
+from . import backends
 from .backends import (BACKEND_VARIABLE, SOLVER_BACKENDS, Backend, register_backend, available_backends,
                        default_backend, BackendStatus, backend_report, check_backend)
 from .factor import Factor

@@ -6,7 +6,7 @@ specs); :func:`check_plan_outputs` checks the resolved paths of every input
 before anything runs: distinct, names the file system takes, inside
 a local ``outputs.folder`` after placeholders and symlinks (unless
 ``outputs.allow_outside: true``), never an input, writable (a URL folder:
-a probe object written and removed, :func:`hht3d.io.storage.check_outputs`).
+a probe object written and removed, :func:`hht3d.io.uploads.check_outputs`).
 """
 from __future__ import annotations
 
@@ -15,7 +15,8 @@ from pathlib import Path
 
 from ..errors import InputError, OutputError, PipelineError, shown
 from ..io.folder import check_locations
-from ..io.storage import check_outputs, is_url, local_path
+from ..io.storage import is_url, local_path
+from ..io.uploads import check_outputs
 from ..output_formats import FORMATS, by_suffix
 from ..transform import field_imf
 from .document import as_mapping, at, known_keys

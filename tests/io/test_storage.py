@@ -239,7 +239,7 @@ def test_a_secret_never_appears_in_what_runs_print_or_write(store, cluster, tmp_
 
 
 def test_a_failed_write_leaves_no_object_and_a_non_atomic_store_gets_a_moved_whole_file(tmp_path):
-    from hht3d.io.storage import write_via
+    from hht3d.io.uploads import write_via
 
     def half_then_fail(data: bytes, path: Path) -> None:
         path.write_bytes(data[: len(data) // 2])
@@ -360,10 +360,14 @@ def test_runs_into_one_url_folder_keep_each_others_summary_rows(store, folder):
     assert {v["run"] for v in json.loads(fs.cat_file(f"{path}/.hht3d-manifest.json"))["files"].values()} == {"R2"}
 
 
-def test_a_conditional_summary_write_keeps_the_rows_of_a_run_that_came_first(store):
+def test_a_conditional_summary_write_keeps_the_rows_of_a_run_that_came_first(store, request):
     """On S3 the summary is written If-Match its ETag: another run's summary written between this run's read
     and its write makes the write fail and be redone from the other run's rows."""
-    from hht3d.io.storage import update_object
+    from hht3d.io.uploads import update_object
+
+    if request.node.callspec.params["store"] == "s3rver":
+        pytest.skip("s3rver 3.7 ignores If-Match and If-None-Match: there the last of two runs wins, as on "
+                    "stores without conditional writes (README, Safety)")
 
     _, options, fs = store
     url = f"s3://{BUCKET}/raced/summary.json"
