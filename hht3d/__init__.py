@@ -16,7 +16,7 @@ Examples
 >>> decomposition.n_imfs
 2
 >>> from hht3d.decomposition import envelope_operator
->>> envelope_operator(surface).shape
+>>> envelope_operator(surface, envelope="biharmonic").shape
 (2930, 2930)
 """
 from .decomposition import EMDResult, eemd, emd
@@ -25,11 +25,11 @@ from .geometry import Surface
 from .io import data_path, load
 from .results import load_result
 from .spectral import HilbertSpectrum, MonogenicSignal, fractional_laplacian, monogenic, riesz
-from .transform import HHTResult, hht
+from .transform import HHTOptions, HHTResult, hht
 from .version import __version__
 
 __all__ = [
-    "EMDResult", "HHTResult", "HilbertSpectrum", "MonogenicSignal", "Surface",
+    "EMDResult", "HHTOptions", "HHTResult", "HilbertSpectrum", "MonogenicSignal", "Surface",
     "HHT3DError", "InputError", "NumericalError", "PipelineError",
     "__version__", "data_path", "eemd", "emd", "fractional_laplacian", "hht", "load", "load_result", "monogenic",
     "riesz",

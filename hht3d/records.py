@@ -24,19 +24,20 @@ Examples
 >>> Smoothing.of(steps=0)
 Traceback (most recent call last):
 ...
-hht3d.errors.InputError: smoothing option steps must be an integer in [1, 100]; got 0
+hht3d.errors.InputError: smoothing option steps must be an integer in [1, 100]; got 0 (diffusion steps)
 """
 from __future__ import annotations
 
 import dataclasses
 import math
 import numbers
+import warnings
 from dataclasses import dataclass
 from typing import ClassVar
 
 from .errors import InputError, did_you_mean, shown
 
-__all__ = ["Spec", "Record", "option"]
+__all__ = ["Spec", "Record", "option", "route", "renamed_keywords"]
 
 #: Kinds of settings.
 KINDS = ("int", "float", "bool", "str", "choice")
@@ -72,14 +73,15 @@ class Spec:
             return f" {'<' if self.open_maximum else '<='} {hi}"
         return ""
 
-    def expected(self) -> str:
-        """What a valid value is, in words: ``an integer in [1, 100]``, ``one of sd, rfg``."""
+    def expected(self, null: str = "None") -> str:
+        """What a valid value is, in words: ``an integer in [1, 100]``, ``one of sd, rfg``;
+        ``null`` names the empty value of a nullable setting (``""``: leave it out)."""
         if self.kind == "choice":
             text = "one of " + ", ".join(map(str, self.choices))
         else:
             text = {"int": "an integer", "float": "a number", "bool": "true or false",
                     "str": "a string"}[self.kind] + self.range_text()
-        return text + (" or None" if self.nullable else "")
+        return text + (f" or {null}" if self.nullable and null else "")
 
     def accepts(self, value) -> bool:
         """Whether ``value`` is a valid setting."""
@@ -105,18 +107,63 @@ class Spec:
 
 def option(default, doc: str, *, choices: tuple = (), kind: str | None = None, minimum: float | None = None,
            maximum: float | None = None, open_minimum: bool = False, open_maximum: bool = False,
-           nullable: bool = False):
+           nullable: bool = False, like: Spec | None = None):
     """A dataclass field of a :class:`Record` with its :class:`Spec`.
 
     The kind follows from ``choices`` or the default's type unless given;
-    a default of ``None`` makes the setting nullable.
+    a default of ``None`` makes the setting nullable.  ``like``: the kind,
+    choices and range of another record's setting of the same name (e.g.
+    ``like=EMDOptions.specs()["ring"]``), so that its range is written once.
+    A default of :data:`dataclasses.MISSING` makes the setting required.
     """
-    if kind is None:
-        kind = ("choice" if choices else "bool" if isinstance(default, bool)
-                else "int" if isinstance(default, int) else "float" if isinstance(default, float) else "str")
-    spec = Spec(doc, kind, tuple(choices), minimum, maximum, open_minimum, open_maximum,
-                nullable or default is None)
+    if like is not None:
+        spec = dataclasses.replace(like, doc=doc, nullable=nullable or default is None)
+    else:
+        if kind is None:
+            kind = ("choice" if choices else "bool" if isinstance(default, bool)
+                    else "int" if isinstance(default, int) else "float" if isinstance(default, float) else "str")
+        spec = Spec(doc, kind, tuple(choices), minimum, maximum, open_minimum, open_maximum,
+                    nullable or default is None)
     return dataclasses.field(default=default, metadata={"spec": spec})
+
+
+def route(settings: dict, *records: type[Record]) -> list[dict]:
+    """``settings`` split by the record that declares each name (their names are disjoint).
+
+    Raises
+    ------
+    InputError
+        A name no record declares, with the closest known one.
+    """
+    known = [name for record in records for name in record.specs()]
+    renamed = {old: new for record in records for old, new in record.renamed.items()}
+    for key in settings:
+        if key not in known:
+            hint = (f"; did you mean {renamed[key]} (its new name)?" if key in renamed
+                    else did_you_mean(str(key), known, listing=False))
+            raise InputError(f"unknown option {shown(key)}{hint}; the options are {', '.join(known)}")
+    return [{k: v for k, v in settings.items() if k in record.specs()} for record in records]
+
+
+def _converted(spec: Spec, value):
+    """A valid value with ints as ``int`` and numbers as ``float``."""
+    if value is None or spec.kind not in ("int", "float"):
+        return value
+    return int(value) if spec.kind == "int" else float(value)
+
+
+def renamed_keywords(overrides: dict, renamed: dict[str, str], function: str) -> dict:
+    """``overrides`` with former keyword names of ``function`` replaced by their new ones, each with a
+    DeprecationWarning (the shims of one release)."""
+    overrides = dict(overrides)
+    for old in set(overrides) & set(renamed):
+        new = renamed[old]
+        if new in overrides:
+            raise InputError(f"{function}: give {new} only ({old} is its former name)")
+        warnings.warn(f"{function}({old}=...) is deprecated; write {new}={shown(overrides[old])}",
+                      DeprecationWarning, stacklevel=3)
+        overrides[new] = overrides.pop(old)
+    return overrides
 
 
 class Record:
@@ -124,16 +171,16 @@ class Record:
 
     #: How messages name the record's settings ("EMD option max_imfs ...").
     label: ClassVar[str] = "option"
+    #: Former names of settings, accepted by :meth:`of` for one release with a DeprecationWarning.
+    renamed: ClassVar[dict[str, str]] = {}
 
     def __post_init__(self):
         for name, spec in self.specs().items():
             value = getattr(self, name)
             if not spec.accepts(value):
-                raise InputError(f"{self.label} option {name} must be {spec.expected()}; got {shown(value)}")
-            if spec.kind == "float" and value is not None:
-                object.__setattr__(self, name, float(value))
-            if spec.kind == "int" and value is not None:
-                object.__setattr__(self, name, int(value))
+                raise InputError(f"{self.label} option {name} must be {spec.expected()}; got {shown(value)} "
+                                 f"({spec.doc})")
+            object.__setattr__(self, name, _converted(spec, value))
 
     @classmethod
     def specs(cls) -> dict[str, Spec]:
@@ -163,8 +210,33 @@ class Record:
         else:
             raise InputError(f"{cls.label} options must be a {cls.__name__} or a dict; got {shown(value)}")
         settings.update(overrides)
+        given = sorted(set(settings) & set(cls.renamed))
+        for old in given:
+            new = cls.renamed[old]
+            warnings.warn(f"{cls.label} option {old} is now called {new}; write {new}={shown(settings[old])}",
+                          DeprecationWarning, stacklevel=3)
+            settings[new] = settings.pop(old)
         cls.check_names(settings)
-        return dataclasses.replace(value, **settings) if isinstance(value, cls) else cls(**settings)
+        try:
+            return dataclasses.replace(value, **settings) if isinstance(value, cls) else cls(**settings)
+        except InputError as exc:
+            if not given:
+                raise
+            raise InputError(f"{exc} (given as {', '.join(given)})") from None
+
+    @classmethod
+    def check(cls, name: str, value):
+        """``value`` if it is a valid setting ``name`` of this record (ints stay ints, numbers become floats).
+
+        Raises
+        ------
+        InputError
+            ``"NAME must be ..., got VALUE"``.
+        """
+        spec = cls.specs()[name]
+        if not spec.accepts(value):
+            raise InputError(f"{name} must be {spec.expected()}, got {shown(value)}")
+        return _converted(spec, value)
 
     @classmethod
     def check_names(cls, settings) -> None:

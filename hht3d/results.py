@@ -41,7 +41,7 @@ def load_result(path, *, storage_options: dict | None = None) -> HHTResult:
     >>> from hht3d.geometry.signals import mean_curvature
     >>> from hht3d.results import load_result
     >>> spot = load(data_path("spot.ply"))
-    >>> result = hht(spot, mean_curvature(spot), emd={"max_imfs": 2})
+    >>> result = hht(spot, mean_curvature(spot), max_imfs=2)
     >>> again = load_result(result.save(Path(tempfile.mkdtemp()) / "spot_hht.npz"))
     >>> np.array_equal(again.imfs, result.imfs), np.allclose(again.spectrum.mean_frequency(), result.spectrum.mean_frequency(), rtol=1e-12)
     (True, True)

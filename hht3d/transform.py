@@ -11,6 +11,7 @@ pipeline's ``hht`` step.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from operator import attrgetter
@@ -20,20 +21,21 @@ from typing import Callable, Protocol
 import numpy as np
 
 from . import io
-from .decomposition.decompose import emd as decompose
-from .decomposition.ensemble import combine_eemd, eemd_member, ensemble_settings
-from .decomposition.options import EMDOptions, EnsembleOptions
+from .decomposition.decompose import emd
+from .decomposition.ensemble import combine_eemd, eemd_member
+from .decomposition.options import EMD_DEFAULTS, EMDOptions, EnsembleOptions
 from .decomposition.quality import Quality, decomposition_quality
-from .errors import InputError
+from .errors import InputError, shown
 from .geometry.surface import Surface
 from .geometry.validation import check_signal
+from .records import route
 from .spectral.monogenic_signal import MonogenicSignal, monogenic_from_potential
-from .spectral.options import RieszOptions
+from .spectral.options import RIESZ_DEFAULTS, RieszOptions
 from .spectral.riesz_transform import fractional_laplacian
 from .spectral.spectrum import HilbertSpectrum
 
-__all__ = ["HHTResult", "hht", "hht_stages", "decomposition_stage", "Stages", "RESULT_ARRAYS", "FIELDS",
-           "IMF_FIELDS", "field_imf"]
+__all__ = ["HHTResult", "HHTOptions", "hht", "hht_stages", "hht_settings", "decomposition_stage", "Stages",
+           "RESULT_ARRAYS", "FIELDS", "IMF_FIELDS", "field_imf"]
 
 #: The arrays of a saved result (:meth:`HHTResult.arrays`), each by the attribute of the result it holds;
 #: a mesh adds ``faces``.
@@ -58,6 +60,59 @@ def field_imf(name) -> int | None:
     if kind in IMF_FIELDS and number.isascii() and number.isdigit() and not number.startswith("0"):
         return int(number)
     return None
+
+
+#: The parts of :class:`HHTOptions`, by the record each holds.
+PARTS = {"emd": EMDOptions, "riesz": RieszOptions, "ensemble": EnsembleOptions}
+
+
+@dataclass(frozen=True)
+class HHTOptions:
+    """The settings of one HHT: EMD's, the Riesz transform's and, for ensemble EMD, the ensemble's.
+
+    ``ensemble=None`` decomposes by plain EMD.  :meth:`of` routes flat
+    settings by name to the record that declares them (their names are
+    disjoint), so ``HHTOptions.of(max_imfs=3, tol=1e-6)`` sets one EMD and
+    one Riesz setting.
+    """
+
+    emd: EMDOptions = EMD_DEFAULTS
+    riesz: RieszOptions = RIESZ_DEFAULTS
+    ensemble: EnsembleOptions | None = None
+
+    @classmethod
+    def of(cls, value=None, /, **overrides) -> "HHTOptions":
+        """From ``None``, an :class:`HHTOptions` or a dict of parts (``{"emd": {...}, "riesz": ...}``)
+        and/or flat settings, with flat ``overrides``; an ensemble setting turns ensemble EMD on.
+
+        Raises
+        ------
+        InputError
+            A setting no record declares (with the closest name), or an invalid value.
+        """
+        if value is None or isinstance(value, cls):
+            base, flat = value or cls(), {}
+        elif isinstance(value, dict):
+            base = cls(**{k: None if k == "ensemble" and v is None else PARTS[k].of(v)
+                          for k, v in value.items() if k in PARTS})
+            flat = {k: v for k, v in value.items() if k not in PARTS}
+        else:
+            raise InputError(f"HHT options must be an HHTOptions or a dict; got {shown(value)}")
+        emd, riesz, ensemble = route({**flat, **overrides}, *PARTS.values())
+        return cls(EMDOptions.of(base.emd, **emd), RieszOptions.of(base.riesz, **riesz),
+                   None if base.ensemble is None and not ensemble else EnsembleOptions.of(base.ensemble, **ensemble))
+
+
+def hht_settings(options, overrides: dict, function: str) -> HHTOptions:
+    """:meth:`HHTOptions.of`, accepting for one release the former keywords ``emd=``, ``riesz=`` and
+    ``ensemble=`` of ``function`` with a DeprecationWarning."""
+    former = {k: overrides.pop(k) for k in PARTS if k in overrides}
+    if former:
+        warnings.warn(f"{function}({'=, '.join(former)}=) is deprecated: pass the settings by name "
+                      "(max_imfs=3, tol=1e-6) or as options", DeprecationWarning, stacklevel=3)
+        base = HHTOptions.of(options)
+        options = {**{k: getattr(base, k) for k in PARTS}, **former}
+    return HHTOptions.of(options, **overrides)
 
 
 @dataclass
@@ -189,65 +244,61 @@ class _Eager:
         return run
 
     def potential(self, surface, imfs, riesz: RieszOptions, backend: str | None):
-        return self.task("riesz", fractional_laplacian)(surface, imfs, -0.5, riesz.method, riesz.tol,
-                                                         riesz.eigenpairs, backend)
+        return self.task("riesz", fractional_laplacian)(surface, imfs, -0.5, riesz, backend=backend)
 
 
 def _imfs(decomposition) -> np.ndarray:
     return decomposition.imfs
 
 
-def decomposition_stage(stages: Stages, surface, signal, emd: EMDOptions, ensemble: EnsembleOptions | None,
+def decomposition_stage(stages: Stages, surface, signal, options: EMDOptions, ensemble: EnsembleOptions | None,
                         backend: str | None):
     """EMD (one stage ``emd``), or EEMD: one ``eemd_member`` stage per member, then ``eemd_combine``."""
     if ensemble is None:
-        return stages.task("emd", decompose)(surface, signal, emd, backend=backend)
+        return stages.task("emd", emd)(surface, signal, options, backend=backend)
     member = stages.task("eemd_member", eemd_member)
-    members = [member(surface, signal, i, ensemble, emd, backend) for i in range(ensemble.ensemble_size)]
+    members = [member(surface, signal, i, options, ensemble, backend) for i in range(ensemble.ensemble_size)]
     return stages.task("eemd_combine", combine_eemd)(surface, signal, members)
 
 
-def hht_stages(stages: Stages, surface, signal, *, emd: EMDOptions | dict | None = None,
-               riesz: RieszOptions | dict | None = None, ensemble: EnsembleOptions | dict | None = None,
-               backend: str | None = None) -> dict:
+def hht_stages(stages: Stages, surface, signal, options: HHTOptions | dict | None = None, *,
+               backend: str | None = None, **overrides) -> dict:
     """The HHT's stages in order (Alg. 2), by name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
 
     The one list of the stages: :func:`hht` runs it at once, :func:`hht3d.graph.transform`
-    as lazy tasks, and the pipeline's ``hht`` step through the graph.  The settings (records
-    or dicts) are checked here, before the first stage.
+    as lazy tasks, and the pipeline's ``hht`` step through the graph.  The settings
+    (as for :func:`hht`) are checked here, before the first stage.
     """
-    if ensemble is None:
-        emd = EMDOptions.of(emd)
-    else:
-        emd, ensemble = ensemble_settings(emd, ensemble, {})
-    riesz = RieszOptions.of(riesz)
-    decomposition = decomposition_stage(stages, surface, signal, emd, ensemble, backend)
+    options = hht_settings(options, overrides, "hht_stages")
+    riesz = options.riesz
+    decomposition = decomposition_stage(stages, surface, signal, options.emd, options.ensemble, backend)
     imfs = stages.task("imfs", _imfs)(decomposition)
     potential = stages.potential(surface, imfs, riesz, backend)
-    mono = stages.task("monogenic", monogenic_from_potential)(surface, imfs, potential, riesz.gradient,
-                                                             riesz.frequency)
+    mono = stages.task("monogenic", monogenic_from_potential)(surface, imfs, potential, riesz)
     result = stages.task("hht", HHTResult.from_parts)(surface, signal, decomposition, mono, riesz.as_dict())
     return {"emd": decomposition, "imfs": imfs, "riesz": potential, "monogenic": mono, "hht": result}
 
 
-def hht(surface: Surface, signal, *, emd: EMDOptions | dict | None = None, riesz: RieszOptions | dict | None = None,
-        ensemble: EnsembleOptions | dict | None = None, backend: str | None = None) -> HHTResult:
+def hht(surface: Surface, signal, options: HHTOptions | dict | None = None, *, backend: str | None = None,
+        **overrides) -> HHTResult:
     """Hilbert–Huang transform of a surface signal: EMD, then Algorithm 2 on all IMFs.
 
     Parameters
     ----------
     surface : Surface
     signal : (n,) array_like
-    emd : EMDOptions or dict, optional
-        Settings of :func:`hht3d.decomposition.emd` (``max_imfs``, ``stopping``, ...).
-    riesz : RieszOptions or dict, optional
-        Settings of the Riesz transform and Eq. 23 (``method``, ``tol``, ``frequency``, ...;
-        see :func:`hht3d.spectral.monogenic`).
-    ensemble : EnsembleOptions or dict, optional
-        Decompose by ensemble EMD with these settings (``ensemble_size``, ``noise_std``,
-        ``seed``) instead of EMD.
+    options : HHTOptions or dict, optional
+        The settings of :func:`hht3d.decomposition.emd` (``max_imfs``, ``stopping``, ...),
+        of the Riesz transform and Eq. 23 (``potential``, ``tol``, ``frequency``, ...; see
+        :func:`hht3d.spectral.monogenic`) and, to decompose by ensemble EMD instead of EMD,
+        of the ensemble (``ensemble_size``, ``noise_std``, ``seed``): an :class:`HHTOptions`,
+        a dict of its parts (``{"emd": {...}, "riesz": {...}}``) or of settings by name.
     backend : str, optional
         Sparse solver of :mod:`hht3d.linalg` for EMD and the Riesz transform.
+    **overrides
+        Settings by name, each sent to the record that declares it (``max_imfs=2, tol=1e-6``).
+        The former keywords ``emd=``, ``riesz=`` and ``ensemble=`` are accepted for one
+        release with a DeprecationWarning.
 
     Returns
     -------
@@ -259,7 +310,7 @@ def hht(surface: Surface, signal, *, emd: EMDOptions | dict | None = None, riesz
     >>> from hht3d import data_path, hht, load
     >>> from hht3d.geometry.signals import mean_curvature
     >>> surface = load(data_path("spot.ply"))
-    >>> result = hht(surface, mean_curvature(surface), emd={"max_imfs": 2})
+    >>> result = hht(surface, mean_curvature(surface), max_imfs=2)
     >>> result.n_imfs, result.monogenic.frequency.shape
     (2, (2, 2930))
     >>> result.quality.ok
@@ -268,7 +319,7 @@ def hht(surface: Surface, signal, *, emd: EMDOptions | dict | None = None, riesz
     1e-08
     """
     stages = _Eager()
-    result = hht_stages(stages, surface, signal, emd=emd, riesz=riesz, ensemble=ensemble, backend=backend)["hht"]
+    result = hht_stages(stages, surface, signal, hht_settings(options, overrides, "hht"), backend=backend)["hht"]
     spent = stages.seconds
     result.info["seconds"] = {"emd": sum(spent.get(k, 0.0) for k in ("emd", "eemd_member", "eemd_combine")),
                               "spectra": spent.get("riesz", 0.0) + spent.get("monogenic", 0.0)}

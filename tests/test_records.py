@@ -61,3 +61,67 @@ def test_emd_takes_a_record_a_dict_or_overrides_alike():
     assert a.info["options"] == b.info["options"] == c.info["options"]
     np.testing.assert_array_equal(a.imfs, b.imfs)
     np.testing.assert_array_equal(a.imfs, c.imfs)
+
+
+def _ranged_declarations():
+    """``(setting name, module:line)`` of every option(...), Spec(...) and Param(...) call in hht3d/ with a
+    minimum= or maximum= keyword; an option or Spec is named by the field or variable it is assigned to,
+    a Param by its first argument."""
+    import ast
+    from pathlib import Path
+
+    import hht3d
+
+    root = Path(hht3d.__file__).parent
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        targets = {}
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Assign, ast.AnnAssign)) and isinstance(node.value, ast.Call):
+                target = node.targets[0] if isinstance(node, ast.Assign) else node.target
+                if isinstance(target, ast.Name):
+                    targets[id(node.value)] = target.id
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.Call) or not {k.arg for k in node.keywords} & {"minimum", "maximum"}:
+                continue
+            func = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", "")
+            if func == "Param" and node.args and isinstance(node.args[0], ast.Constant):
+                name = node.args[0].value
+            elif func in ("option", "Spec"):
+                name = targets.get(id(node))
+            else:
+                continue
+            found.append((name, f"{path.relative_to(root.parent)}:{node.lineno}"))
+    return found
+
+
+def test_each_setting_declares_its_range_once():
+    """One vocabulary: a setting's range is written in one place; the others read it (option(like=...),
+    record_params)."""
+    places = {}
+    for name, where in _ranged_declarations():
+        places.setdefault(name, []).append(where)
+    assert len(places) > 20  # the walk finds the declarations
+    twice = {name: where for name, where in places.items() if len(where) > 1}
+    assert not twice, f"ranges declared more than once: {twice}"
+
+
+def test_renamed_settings_warn_and_name_the_replacement():
+    """RieszOptions.method is RieszOptions.potential; the former name works for one release."""
+    with pytest.warns(DeprecationWarning, match="write potential='spectral'"):
+        assert RieszOptions.of(method="spectral") == RieszOptions(potential="spectral")
+    with pytest.warns(DeprecationWarning), pytest.raises(InputError, match="given as method"):
+        RieszOptions.of({"method": "eig"})
+    with pytest.warns(DeprecationWarning, match="POTENTIALS"):
+        from hht3d.spectral import METHODS
+    from hht3d.spectral import POTENTIALS
+    assert METHODS == POTENTIALS
+
+
+def test_a_record_checks_one_setting():
+    from hht3d.geometry import SurfaceOptions
+
+    assert SurfaceOptions.check("n_neighbors", 3) == 3
+    with pytest.raises(InputError, match=r"n_neighbors must be an integer in \[3, 256\], got 2"):
+        SurfaceOptions.check("n_neighbors", 2)

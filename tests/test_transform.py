@@ -37,7 +37,7 @@ def test_decomposition_and_spectra(result):
     assert 10 < median < 14
     spectrum = result.spectrum
     assert spectrum.mean_frequency().shape == (result.n_imfs,)
-    assert result.info["riesz"]["method"] == "quadrature"
+    assert result.info["riesz"]["potential"] == "quadrature"
     assert set(result.info["seconds"]) == {"emd", "spectra"}
 
 
@@ -114,3 +114,38 @@ def test_hht_settings_reach_every_stage(frequency):
     other = monogenic(spot, result.imfs, frequency="gradient" if frequency == "phase" else "phase", gradient="fem")
     assert np.abs(other.frequency - direct.frequency).max() > 0.1 * direct.frequency.max()
     assert result.info["riesz"]["frequency"] == frequency
+
+
+def test_record_field_names_are_disjoint():
+    """hht's flat settings are routed by name: no two records of an HHT declare the same one."""
+    from hht3d.decomposition import EMDOptions, EnsembleOptions
+    from hht3d.spectral import RieszOptions
+    from hht3d.transform import PARTS
+
+    names = [name for record in (EMDOptions, RieszOptions, EnsembleOptions) for name in record.specs()]
+    assert len(names) == len(set(names))
+    assert set(PARTS.values()) == {EMDOptions, RieszOptions, EnsembleOptions}
+
+
+def test_one_call_shape_and_the_former_keywords():
+    """Flat settings, HHTOptions and a dict of parts give one result; emd=/riesz=/ensemble= warn."""
+    from hht3d.decomposition import EMDOptions
+    from hht3d.spectral import RieszOptions
+    from hht3d.transform import HHTOptions
+
+    surface = Surface(*icosphere(2))
+    f = surface.vertices[:, 0] + 0.3 * surface.vertices[:, 1] ** 3
+    flat = hht(surface, f, max_imfs=1, tol=1e-6)
+    record = hht(surface, f, HHTOptions(emd=EMDOptions(max_imfs=1), riesz=RieszOptions(tol=1e-6)))
+    parts = hht(surface, f, {"emd": {"max_imfs": 1}, "riesz": {"tol": 1e-6}})
+    with pytest.warns(DeprecationWarning, match="hht\\(emd=, riesz=\\) is deprecated"):
+        former = hht(surface, f, emd={"max_imfs": 1}, riesz={"tol": 1e-6})
+    for other in (record, parts, former):
+        np.testing.assert_array_equal(other.imfs, flat.imfs)
+        np.testing.assert_array_equal(other.monogenic.frequency, flat.monogenic.frequency)
+    assert HHTOptions.of(ensemble_size=3).ensemble.ensemble_size == 3
+    assert HHTOptions.of(max_imfs=2).ensemble is None
+    with pytest.raises(InputError, match="did you mean potential"):
+        hht(surface, f, method="spectral")  # the flat namespace keeps method free
+    with pytest.raises(InputError, match="did you mean 'max_imfs'"):
+        hht(surface, f, max_imf=2)

@@ -18,7 +18,7 @@ A band-stop of the Hilbert spectrum moves vertices and keeps the faces
 >>> from hht3d.geometry.signals import mean_curvature
 >>> from hht3d.apps import BandStop, filter_geometry, prominent_features
 >>> surface = load(data_path("spot.ply"))
->>> result = hht(surface, mean_curvature(surface), emd={"max_imfs": 3})
+>>> result = hht(surface, mean_curvature(surface), max_imfs=3)
 >>> smooth = filter_geometry(result, BandStop(low=40.0, high=120.0, width=10.0))  # a Surface: hht3d.io.surface_to_open3d(smooth)
 >>> bool(np.abs(smooth.vertices - surface.vertices).max() > 0), np.array_equal(smooth.faces, surface.faces)
 (True, True)
@@ -26,24 +26,26 @@ A band-stop of the Hilbert spectrum moves vertices and keeps the faces
 >>> bool(set(features.vertices) <= set(range(surface.n_vertices)))
 True
 """
-from .baselines import (HKS_TIME_FRACTION, heat_kernel_signature, hks_features, imf_enhancement,
-                        manifold_harmonics_filter)
-from .features import FEATURE_EMD_OPTIONS, FeatureResult, features_from_counts, merge_hits, prominent_features, repeatability
+from .baselines import (HKS_TIME_FRACTION, EnhancementOptions, HarmonicFilterOptions, HKSOptions,
+                        heat_kernel_signature, hks_features, imf_enhancement, manifold_harmonics_filter)
+from .features import (FEATURE_EMD_OPTIONS, FeatureOptions, FeatureResult, features_from_counts, merge_hits,
+                       prominent_features, repeatability)
 from .filters import (GAINS, BandBoost, BandStop, Constant, Gain, HighBoost, LowPass, PiecewiseLinear,
                       filter_signal, gains_of, make_gain)
-from .reconstruction import (BOUNDARY_WEIGHT, INTERIOR_WEIGHT, automatic_weight, check_mean_curvature_signal,
-                             edit_frequency, filter_geometry, position_weights, reconstruct, reconstruct_from_change)
+from .reconstruction import (BOUNDARY_WEIGHT, INTERIOR_WEIGHT, FilterOptions, ReconstructionOptions, automatic_weight,
+                             check_mean_curvature_signal, edit_frequency, filter_geometry, position_weights,
+                             reconstruct, reconstruct_from_change)
 
 __all__ = [
     # filters (Eq. 26)
     "Gain", "Constant", "LowPass", "HighBoost", "BandStop", "BandBoost", "PiecewiseLinear", "GAINS",
     "make_gain", "gains_of", "filter_signal",
     # reconstruction (Eq. 27)
-    "INTERIOR_WEIGHT", "BOUNDARY_WEIGHT", "position_weights", "reconstruct", "reconstruct_from_change",
+    "ReconstructionOptions", "FilterOptions", "INTERIOR_WEIGHT", "BOUNDARY_WEIGHT", "position_weights", "reconstruct", "reconstruct_from_change",
     "check_mean_curvature_signal", "filter_geometry", "edit_frequency", "automatic_weight",
     # features (Sec. 5.2)
-    "FEATURE_EMD_OPTIONS", "FeatureResult", "prominent_features", "features_from_counts", "merge_hits", "repeatability",
+    "FeatureOptions", "FEATURE_EMD_OPTIONS", "FeatureResult", "prominent_features", "features_from_counts", "merge_hits", "repeatability",
     # baselines
-    "imf_enhancement", "manifold_harmonics_filter", "heat_kernel_signature", "hks_features",
+    "EnhancementOptions", "HarmonicFilterOptions", "HKSOptions", "imf_enhancement", "manifold_harmonics_filter", "heat_kernel_signature", "hks_features",
     "HKS_TIME_FRACTION",
 ]

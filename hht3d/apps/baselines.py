@@ -19,35 +19,80 @@ instantaneous frequency of :mod:`hht3d.spectral.monogenic_signal`, so the gains 
 from __future__ import annotations
 
 import math
+import numbers
+import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..decomposition.extrema import local_extrema
+from ..decomposition.options import MAX_IMFS
 from ..errors import InputError
 from ..geometry.signals import fluctuation
+from ..records import Record, option
 from ..spectral.eigenpairs import smallest_eigenpairs
+from ..spectral.options import RieszOptions
 from ..geometry.surface import Surface
-from ..geometry.validation import as_imfs, check_distance, check_surface, finite
-from .features import FeatureResult, features_from_counts
+from ..geometry.validation import as_imfs, check_surface
+from .features import FeatureOptions, FeatureResult, features_from_counts
 from .filters import evaluate_gain
-from .reconstruction import BOUNDARY_WEIGHT, INTERIOR_WEIGHT, reconstruct_from_change
+from .reconstruction import ReconstructionOptions, reconstruct_from_change
 
 __all__ = [
+    "EnhancementOptions",
+    "HarmonicFilterOptions",
+    "HKSOptions",
     "imf_enhancement",
     "manifold_harmonics_filter",
     "heat_kernel_signature",
     "hks_features",
     "HKS_TIME_FRACTION",
+    "MAX_FACTOR",
 ]
 
 #: Default HKS time as a fraction of ``t_max = 4 ln 10 / λ_1`` (Sun et al. 2009).
 HKS_TIME_FRACTION = 0.1
+#: IMF factor of the enhancement baseline (far above useful values; stops a typo).
+MAX_FACTOR = 1e3
+_EIGENPAIRS = RieszOptions.specs()["eigenpairs"]
 
 
-def imf_enhancement(surface: Surface, imfs, factor: float = 2.5, *, index: int = 0,
-                    interior_weight: float = INTERIOR_WEIGHT, boundary_weight: float = BOUNDARY_WEIGHT,
-                    weights=None, backend: str | None = None, name: str | None = None,
-                    preserve_scale: bool = True) -> Surface:
+@dataclass(frozen=True)
+class EnhancementOptions(ReconstructionOptions):
+    """The settings of :func:`imf_enhancement`: the IMF and its factor, and the reconstruction's."""
+
+    label = "IMF enhancement"
+
+    factor: float = option(2.5, "multiply the IMF by this", minimum=-MAX_FACTOR, maximum=MAX_FACTOR)
+    index: int = option(0, "which IMF, from 0 (the finest)", minimum=0, maximum=MAX_IMFS - 1)
+
+
+@dataclass(frozen=True)
+class HarmonicFilterOptions(Record):
+    """The settings of :func:`manifold_harmonics_filter`."""
+
+    label = "manifold harmonics"
+
+    eigenpairs: int = option(300, "Laplacian eigenpairs of the basis", like=_EIGENPAIRS)
+    keep_remainder: bool = option(True, "keep the part of the shape beyond the basis")
+
+
+@dataclass(frozen=True)
+class HKSOptions(Record):
+    """The settings of :func:`hks_features` (and the ``eigenpairs`` of :func:`heat_kernel_signature`)."""
+
+    label = "HKS"
+
+    time: float | None = option(None, "diffusion time (default: a fraction of 4 ln 10 / λ1)", kind="float",
+                                minimum=0, open_minimum=True)
+    eigenpairs: int = option(100, "eigenpairs in the heat-kernel sum", like=_EIGENPAIRS)
+    ring: int = option(2, "neighbourhood in edges", like=FeatureOptions.specs()["ring"])
+    merge_radius: float | None = option(None, "merge maxima closer than this (model units)",
+                                        like=FeatureOptions.specs()["merge_radius"])
+
+
+def imf_enhancement(surface: Surface, imfs, options: EnhancementOptions | dict | None = None, *, weights=None,
+                    backend: str | None = None, name: str | None = None, **overrides) -> Surface:
     """Hu et al. (2014): multiply one IMF of the mean curvature by ``factor`` and reconstruct.
 
     The signal becomes ``s' = s + (factor − 1) f_index`` everywhere, whatever
@@ -60,35 +105,36 @@ def imf_enhancement(surface: Surface, imfs, factor: float = 2.5, *, index: int =
     surface : Surface
     imfs : (k, n) array_like, EMDResult or HHTResult
         IMFs of ``mean_curvature(surface)``.
-    factor : float
-        Default 2.5 (the paper's Fig. 6b).
-    index : int
-        Which IMF, from 0 (the finest, IMF1).
-    interior_weight, boundary_weight, weights, backend, name, preserve_scale
+    options : EnhancementOptions or dict, optional
+        ``factor`` (default 2.5, the paper's Fig. 6b; formerly the third
+        positional argument, still accepted as a number for one release with a
+        DeprecationWarning), ``index`` (which IMF, from 0, the finest, IMF1)
+        and the settings of :func:`~hht3d.apps.reconstruction.reconstruct_from_change`.
+    weights, backend, name
         See :func:`~hht3d.apps.reconstruction.reconstruct_from_change`.
+    **overrides
+        Settings that replace those of ``options``.
 
     Returns
     -------
     Surface
     """
+    if isinstance(options, numbers.Real):
+        warnings.warn(f"imf_enhancement(surface, imfs, {options!r}) is deprecated; write factor={options!r}",
+                      DeprecationWarning, stacklevel=2)
+        options = {"factor": options}
+    options = EnhancementOptions.of(options, **overrides)
     surface = check_surface(surface)
     f = as_imfs(surface, imfs)
-    factor = finite("factor", factor)
-    if int(index) != index or not 0 <= index < len(f):
-        raise InputError(f"IMF index must be an integer in [0, {len(f)}), got {index!r}")
-    return reconstruct_from_change(surface, (factor - 1.0) * f[int(index)], interior_weight=interior_weight,
-                                   boundary_weight=boundary_weight, weights=weights, backend=backend,
-                                   name=name, preserve_scale=preserve_scale)
+    if not options.index < len(f):
+        raise InputError(f"IMF index must be an integer in [0, {len(f)}), got {options.index!r}")
+    reconstruction = ReconstructionOptions.of({k: getattr(options, k) for k in ReconstructionOptions.specs()})
+    return reconstruct_from_change(surface, (options.factor - 1.0) * f[options.index], reconstruction,
+                                   weights=weights, backend=backend, name=name)
 
 
-def _check_count(eigenpairs) -> int:
-    if isinstance(eigenpairs, bool) or int(eigenpairs) != eigenpairs or eigenpairs < 1:
-        raise InputError(f"eigenpairs must be a positive integer, got {eigenpairs!r}")
-    return int(eigenpairs)
-
-
-def manifold_harmonics_filter(surface: Surface, gain, *, eigenpairs: int = 300, keep_remainder: bool = True,
-                              backend: str | None = None, name: str | None = None) -> Surface:
+def manifold_harmonics_filter(surface: Surface, gain, options: HarmonicFilterOptions | dict | None = None, *,
+                              backend: str | None = None, name: str | None = None, **overrides) -> Surface:
     """Vallet & Lévy (2008): filter the coordinates in the manifold-harmonic basis.
 
     With M-orthonormal eigenvectors ``φ_j`` (``L φ_j = λ_j M φ_j``) and
@@ -109,24 +155,26 @@ def manifold_harmonics_filter(surface: Surface, gain, *, eigenpairs: int = 300, 
     surface : Surface
     gain : callable
         ``μ(ω)`` with ``ω = √λ`` (e.g. :class:`~hht3d.apps.filters.BandBoost`).
-    eigenpairs : int
-        Number of eigenpairs (default 300, the paper's choice for Eq. 18).
-    keep_remainder : bool
+    options : HarmonicFilterOptions or dict, optional
+        ``eigenpairs`` (default 300, the paper's choice for Eq. 18) and ``keep_remainder``.
     backend : str, optional
         Sparse solver for the eigensolver's shift-invert.
     name : str, optional
         Default ``"<name>_mhb"``.
+    **overrides
+        Settings that replace those of ``options``.
 
     Returns
     -------
     Surface
     """
+    options = HarmonicFilterOptions.of(options, **overrides)
     surface = check_surface(surface)
-    values, vectors = smallest_eigenpairs(surface, _check_count(eigenpairs), backend=backend)
+    values, vectors = smallest_eigenpairs(surface, options.eigenpairs, backend=backend)
     mu = evaluate_gain(gain, np.sqrt(values))
     v = surface.vertices
     coefficients = vectors.T @ (surface.mass_diagonal[:, None] * v)  # (p, 3)
-    if keep_remainder:
+    if options.keep_remainder:
         new = v + vectors @ ((mu - 1.0)[:, None] * coefficients)
     else:
         centroid = v - fluctuation(surface, v.T).T
@@ -161,35 +209,34 @@ def heat_kernel_signature(surface: Surface, times, *, eigenpairs: int = 100,
     t = np.asarray(times, dtype=np.float64)
     if t.ndim > 1 or t.size == 0 or not np.all(np.isfinite(t)) or np.any(t <= 0):
         raise InputError(f"HKS times must be positive finite numbers, got {times!r}")
-    values, vectors = smallest_eigenpairs(surface, _check_count(eigenpairs), backend=backend)
+    values, vectors = smallest_eigenpairs(surface, HKSOptions.check("eigenpairs", eigenpairs), backend=backend)
     labels = surface.component_labels
     component_area = np.bincount(labels, weights=surface.mass_diagonal)
     hks = np.exp(-np.outer(np.atleast_1d(t), values)) @ (vectors ** 2).T + 1.0 / component_area[labels]
     return hks[0] if t.ndim == 0 else hks
 
 
-def hks_features(surface: Surface, *, time: float | None = None, eigenpairs: int = 100, ring: int = 2,
-                 merge_radius: float | None = None, backend: str | None = None) -> FeatureResult:
+def hks_features(surface: Surface, options: HKSOptions | dict | None = None, *, backend: str | None = None,
+                 **overrides) -> FeatureResult:
     """Sun et al. (2009): feature points as the local maxima of the HKS at one time.
 
     A vertex is a feature when its ``k_t(x, x)`` is at least that of every
     vertex in its ``ring``-ring and larger than one of them
-    (:func:`hht3d.decomposition.local_extrema`, ``rule="strict"``).
+    (:func:`hht3d.decomposition.local_extrema`, ``extrema="relaxed"`` with ``ratio=1``).
 
     Parameters
     ----------
     surface : Surface
-    time : float, optional
-        Diffusion time; default ``HKS_TIME_FRACTION · 4 ln 10 / λ_1``, a
-        fraction of the largest time of Sun et al.'s range, which scales
-        with the model (so the features do not depend on its size).
-    eigenpairs : int
-        Eigenpairs in the HKS sum (default 100).
-    ring : int
-        Neighbourhood in edges (default 2, as Sun et al.).
-    merge_radius : float, optional
-        Merge maxima closer than this (model units), keeping the largest HKS.
+    options : HKSOptions or dict, optional
+        ``time``: diffusion time; default ``HKS_TIME_FRACTION · 4 ln 10 / λ_1``,
+        a fraction of the largest time of Sun et al.'s range, which scales with
+        the model (so the features do not depend on its size).  ``eigenpairs``:
+        eigenpairs in the HKS sum (default 100).  ``ring``: neighbourhood in
+        edges (default 2, as Sun et al.).  ``merge_radius``: merge maxima closer
+        than this (model units), keeping the largest HKS.
     backend : str, optional
+    **overrides
+        Settings that replace those of ``options``.
 
     Returns
     -------
@@ -197,13 +244,13 @@ def hks_features(surface: Surface, *, time: float | None = None, eigenpairs: int
         One scale: ``maxima[0]`` are the local maxima, ``minima[0]`` is
         empty, ``counts`` are 1.
     """
+    options = HKSOptions.of(options, **overrides)
     surface = check_surface(surface)
-    check_distance("merge_radius", merge_radius)
-    count = _check_count(eigenpairs)
+    time = options.time
     if time is None:
-        values, _ = smallest_eigenpairs(surface, count, backend=backend)
+        values, _ = smallest_eigenpairs(surface, options.eigenpairs, backend=backend)
         time = HKS_TIME_FRACTION * 4.0 * math.log(10.0) / float(values[0])
-    hks = heat_kernel_signature(surface, finite("time", time), eigenpairs=count, backend=backend)
-    maxima, _ = local_extrema(surface, hks, rule="strict", ring=ring)
-    return features_from_counts(surface, [maxima], [np.empty(0, dtype=np.int64)], 1, merge_radius,
+    hks = heat_kernel_signature(surface, time, eigenpairs=options.eigenpairs, backend=backend)
+    maxima, _ = local_extrema(surface, hks, extrema="relaxed", ring=options.ring, ratio=1.0)
+    return features_from_counts(surface, [maxima], [np.empty(0, dtype=np.int64)], 1, options.merge_radius,
                                 scores=hks)

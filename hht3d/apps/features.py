@@ -7,7 +7,7 @@ local maximum of ``f_k`` when
     |N⁺_{f_k}(v_i)| ≥ t |N_2(i)|,   N⁺_{f_k}(v_i) = {j ∈ N_2(i) : f_k(v_i) ≥ f_k(v_j)},
 
 with ``N_2(i)`` its two-ring and ``t = 0.8`` by default (minima likewise
-with ``≤``); :func:`hht3d.decomposition.local_extrema` with ``rule="relaxed"``.  Counting
+with ``≤``); :func:`hht3d.decomposition.local_extrema` with ``extrema="relaxed"``.  Counting
 over the ``K`` IMFs how often each vertex is an extremum, the *prominent*
 features are the vertices counted at least ``⌈K/2⌉`` times (the paper's
 "half of the decomposition IMF number"; ``fraction`` changes it).
@@ -42,15 +42,36 @@ from scipy.spatial import cKDTree
 
 from ..decomposition.extrema import local_extrema
 from ..decomposition.options import EMDOptions
-from ..errors import InputError
 from ..geometry.surface import Surface
-from ..geometry.validation import as_imfs, check_distance, check_surface
+from ..geometry.validation import as_imfs, check_surface
+from ..records import Record, option
 
-__all__ = ["FEATURE_EMD_OPTIONS", "FeatureResult", "prominent_features", "features_from_counts", "merge_hits", "repeatability"]
+__all__ = ["FEATURE_EMD_OPTIONS", "FeatureOptions", "FeatureResult", "prominent_features", "features_from_counts",
+           "merge_hits", "repeatability", "merge_distance"]
 
 
 #: EMD options for feature detection: one fixed tension, no cancellation guard (module notes).
 FEATURE_EMD_OPTIONS = EMDOptions(cancellation_tolerance=None)
+_EMD = EMDOptions.specs()
+
+
+@dataclass(frozen=True)
+class FeatureOptions(Record):
+    """The settings of :func:`prominent_features` (Sec. 5.2)."""
+
+    label = "feature"
+
+    ratio: float = option(0.8, "a maximum is >= this fraction of its ring", like=_EMD["ratio"])
+    ring: int = option(2, "neighbourhood in edges", like=_EMD["ring"])
+    fraction: float = option(0.5, "hit: extremum of at least this fraction of the IMFs", minimum=0, maximum=1,
+                             open_minimum=True)
+    merge_radius: float | None = option(None, "merge hits closer than this (model units)", kind="float",
+                                        minimum=0)
+
+
+def merge_distance(radius) -> float:
+    """A merge radius checked (a distance in model units, ``>= 0``); ``None`` is 0."""
+    return FeatureOptions.check("merge_radius", radius) or 0.0
 
 
 @dataclass(frozen=True)
@@ -146,7 +167,7 @@ def features_from_counts(surface: Surface, maxima, minima, min_count: int,
     scores : (n,) array_like, optional
         Ranks hits within a merged group (default: the counts).
     """
-    r = check_distance("merge_radius", merge_radius)
+    r = merge_distance(merge_radius)
     n = surface.n_vertices
     counts = np.zeros(n, dtype=np.int64)
     for mx, mn in zip(maxima, minima):
@@ -164,8 +185,8 @@ def features_from_counts(surface: Surface, maxima, minima, min_count: int,
                          hits=hits, groups=groups)
 
 
-def prominent_features(surface: Surface, imfs, *, ratio: float = 0.8, ring: int = 2,
-                       fraction: float = 0.5, merge_radius: float | None = None) -> FeatureResult:
+def prominent_features(surface: Surface, imfs, options: FeatureOptions | dict | None = None,
+                       **overrides) -> FeatureResult:
     """Prominent features: vertices that are IMF extrema at many scales (Sec. 5.2).
 
     Parameters
@@ -173,35 +194,28 @@ def prominent_features(surface: Surface, imfs, *, ratio: float = 0.8, ring: int 
     surface : Surface
     imfs : (k, n) array_like, EMDResult or HHTResult
         IMFs of a shape signal, e.g. ``emd(surface, mean_curvature(surface))``.
-    ratio : float
-        The paper's ``t`` in ``(0.5, 1]``: a maximum is ``>=`` at least this
-        fraction of its ``ring``-ring (default 0.8).
-    ring : int
-        Neighbourhood in edges (default 2, the paper's two-ring).
-    fraction : float
-        A vertex is a hit when it is an extremum (maximum or minimum) of at
-        least ``⌈fraction · k⌉`` IMFs; default 0.5, the paper's half of the
-        IMF number.  In ``(0, 1]``.
-    merge_radius : float, optional
-        Merge hits closer than this (model units) into one feature point.
+    options : FeatureOptions or dict, optional
+        ``ratio``: the paper's ``t`` in ``(0.5, 1]``, a maximum is ``>=`` at
+        least this fraction of its ``ring``-ring (default 0.8).  ``ring``:
+        neighbourhood in edges (default 2, the paper's two-ring).
+        ``fraction``: a vertex is a hit when it is an extremum (maximum or
+        minimum) of at least ``⌈fraction · k⌉`` IMFs; default 0.5, the paper's
+        half of the IMF number, in ``(0, 1]``.  ``merge_radius``: merge hits
+        closer than this (model units) into one feature point.
+    **overrides
+        Settings that replace those of ``options``.
 
     Returns
     -------
     FeatureResult
     """
+    options = FeatureOptions.of(options, **overrides)
     check_surface(surface)
     f = as_imfs(surface, imfs)
-    try:
-        fraction = float(fraction)
-    except (TypeError, ValueError):
-        raise InputError(f"fraction must be a number, got {fraction!r}") from None
-    if not 0 < fraction <= 1:
-        raise InputError(f"fraction must lie in (0, 1], got {fraction!r}")
-    check_distance("merge_radius", merge_radius)
-    extrema = [local_extrema(surface, fk, rule="relaxed", ring=ring, ratio=ratio) for fk in f]
-    min_count = max(1, math.ceil(fraction * len(f) - 1e-9))
+    extrema = [local_extrema(surface, fk, extrema="relaxed", ring=options.ring, ratio=options.ratio) for fk in f]
+    min_count = max(1, math.ceil(options.fraction * len(f) - 1e-9))
     return features_from_counts(surface, [e[0] for e in extrema], [e[1] for e in extrema], min_count,
-                                merge_radius)
+                                options.merge_radius)
 
 
 def repeatability(points, reference, radius: float) -> float:
@@ -213,7 +227,7 @@ def repeatability(points, reference, radius: float) -> float:
     """
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     q = np.asarray(reference, dtype=np.float64).reshape(-1, 3)
-    radius = check_distance("merge_radius", radius)
+    radius = merge_distance(radius)
     if len(p) == 0:
         return float("nan")
     if len(q) == 0:

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..geometry.validation import finite
+from ..records import Record, Spec, option
 
 __all__ = [
     "Gain",
@@ -66,17 +66,6 @@ __all__ = [
 ]
 
 
-def _finite(name: str, value) -> float:
-    return finite(f"gain parameter {name}", value)
-
-
-def _non_negative(name: str, value) -> float:
-    x = _finite(name, value)
-    if x < 0:
-        raise InputError(f"gain parameter {name} must be >= 0 (frequencies are non-negative), got {value!r}")
-    return x
-
-
 def _rise(omega: np.ndarray, edge: float, width: float) -> np.ndarray:
     """0 below an edge, 1 above it; a raised cosine over ``edge ± width/2`` when ``width > 0``."""
     if width == 0:
@@ -88,6 +77,8 @@ def _rise(omega: np.ndarray, edge: float, width: float) -> np.ndarray:
 class Gain:
     """Base class of the gains: ``gain(omega)`` returns ``μ(ω)`` with the shape of ``omega``."""
 
+    label = "gain"
+
     def __call__(self, omega) -> np.ndarray:
         return self._evaluate(np.asarray(omega, dtype=np.float64))
 
@@ -96,20 +87,30 @@ class Gain:
 
 
 @dataclass(frozen=True)
-class Constant(Gain):
+class Constant(Gain, Record):
     """``μ(ω) = value`` everywhere; ``Constant(1.0)`` leaves the signal unchanged."""
 
-    value: float = 1.0
-
-    def __post_init__(self):
-        object.__setattr__(self, "value", _finite("value", self.value))
+    value: float = option(1.0, "the gain at every frequency")
 
     def _evaluate(self, omega):
         return np.full(omega.shape, self.value)
 
 
+#: Edge frequencies and transition widths, radians per unit length, are non-negative.
+_FREQUENCY = Spec("a frequency, radians per unit length", "float", minimum=0)
+
+
+def _width():
+    return option(0.0, "width of the raised-cosine transition (0: sharp)", like=_FREQUENCY)
+
+
+def _edge(doc: str):
+    """A required edge frequency."""
+    return option(dataclasses.MISSING, doc, like=_FREQUENCY)
+
+
 @dataclass(frozen=True, kw_only=True)
-class LowPass(Gain):
+class LowPass(Gain, Record):
     """Keep frequencies up to ``cutoff``, multiply higher ones by ``stop`` (default 0).
 
     Parameters
@@ -122,21 +123,16 @@ class LowPass(Gain):
         Gain above the cutoff.
     """
 
-    cutoff: float
-    width: float = 0.0
-    stop: float = 0.0
-
-    def __post_init__(self):
-        object.__setattr__(self, "cutoff", _non_negative("cutoff", self.cutoff))
-        object.__setattr__(self, "width", _non_negative("width", self.width))
-        object.__setattr__(self, "stop", _finite("stop", self.stop))
+    cutoff: float = _edge("edge frequency, radians per unit length")
+    width: float = _width()
+    stop: float = option(0.0, "gain above the cutoff")
 
     def _evaluate(self, omega):
         return 1.0 + (self.stop - 1.0) * _rise(omega, self.cutoff, self.width)
 
 
 @dataclass(frozen=True, kw_only=True)
-class HighBoost(Gain):
+class HighBoost(Gain, Record):
     """High-frequency enhancement: multiply frequencies above ``cutoff`` by ``factor``.
 
     Parameters
@@ -149,24 +145,21 @@ class HighBoost(Gain):
         Width of the raised-cosine transition (0: sharp).
     """
 
-    cutoff: float
-    factor: float = 2.0
-    width: float = 0.0
-
-    def __post_init__(self):
-        object.__setattr__(self, "cutoff", _non_negative("cutoff", self.cutoff))
-        object.__setattr__(self, "factor", _finite("factor", self.factor))
-        object.__setattr__(self, "width", _non_negative("width", self.width))
+    cutoff: float = _edge("edge frequency, radians per unit length")
+    factor: float = option(2.0, "gain above the cutoff")
+    width: float = _width()
 
     def _evaluate(self, omega):
         return 1.0 + (self.factor - 1.0) * _rise(omega, self.cutoff, self.width)
 
 
-def _check_band(low, high, width) -> tuple[float, float, float]:
-    low, high = _non_negative("low", low), _non_negative("high", high)
-    if not low < high:
-        raise InputError(f"a band needs low < high, got low={low!r}, high={high!r}")
-    return low, high, _non_negative("width", width)
+class _Band(Record):
+    """A band ``(low, high]``: checked like every record, then ``low < high``."""
+
+    def __post_init__(self):
+        super().__post_init__()
+        if not self.low < self.high:
+            raise InputError(f"a band needs low < high, got low={self.low!r}, high={self.high!r}")
 
 
 def _band(omega: np.ndarray, low: float, high: float, width: float) -> np.ndarray:
@@ -175,7 +168,7 @@ def _band(omega: np.ndarray, low: float, high: float, width: float) -> np.ndarra
 
 
 @dataclass(frozen=True, kw_only=True)
-class BandStop(Gain):
+class BandStop(Gain, _Band):
     """Multiply frequencies in the band ``(low, high]`` by ``stop`` (default 0), keep the rest.
 
     Parameters
@@ -188,24 +181,17 @@ class BandStop(Gain):
         Gain inside the band.
     """
 
-    low: float
-    high: float
-    width: float = 0.0
-    stop: float = 0.0
-
-    def __post_init__(self):
-        low, high, width = _check_band(self.low, self.high, self.width)
-        object.__setattr__(self, "low", low)
-        object.__setattr__(self, "high", high)
-        object.__setattr__(self, "width", width)
-        object.__setattr__(self, "stop", _finite("stop", self.stop))
+    low: float = _edge("lower band edge, radians per unit length")
+    high: float = _edge("upper band edge, radians per unit length")
+    width: float = _width()
+    stop: float = option(0.0, "gain inside the band")
 
     def _evaluate(self, omega):
         return 1.0 + (self.stop - 1.0) * _band(omega, self.low, self.high, self.width)
 
 
 @dataclass(frozen=True, kw_only=True)
-class BandBoost(Gain):
+class BandBoost(Gain, _Band):
     """Band enhancement: multiply frequencies in ``(low, high]`` by ``factor``, keep the rest.
 
     Parameters
@@ -218,17 +204,10 @@ class BandBoost(Gain):
         Width of each raised-cosine edge (0: sharp).
     """
 
-    low: float
-    high: float
-    factor: float = 2.0
-    width: float = 0.0
-
-    def __post_init__(self):
-        low, high, width = _check_band(self.low, self.high, self.width)
-        object.__setattr__(self, "low", low)
-        object.__setattr__(self, "high", high)
-        object.__setattr__(self, "width", width)
-        object.__setattr__(self, "factor", _finite("factor", self.factor))
+    low: float = _edge("lower band edge, radians per unit length")
+    high: float = _edge("upper band edge, radians per unit length")
+    factor: float = option(2.0, "gain inside the band")
+    width: float = _width()
 
     def _evaluate(self, omega):
         return 1.0 + (self.factor - 1.0) * _band(omega, self.low, self.high, self.width)

@@ -75,6 +75,7 @@ does to the enclosed volume: ``benchmarks/results/design_notes.md``.
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -85,12 +86,13 @@ from ..decomposition.quality import QualityWarning
 from ..geometry.signals import fluctuation
 from ..geometry.signals import mean_curvature
 from ..geometry.surface import Surface
-from ..geometry.validation import check_signal, check_surface, positive
+from ..geometry.validation import check_signal, check_surface
+from ..records import Record, option
 from .filters import decomposition_parts, evaluate_gain
 
-__all__ = ["position_weights", "reconstruct", "reconstruct_from_change", "filter_geometry", "edit_frequency",
-           "automatic_weight", "check_mean_curvature_signal", "INTERIOR_WEIGHT", "BOUNDARY_WEIGHT",
-           "STIFFNESS_FRACTION", "DISPLACEMENT_LIMIT"]
+__all__ = ["ReconstructionOptions", "FilterOptions", "position_weights", "reconstruct", "reconstruct_from_change",
+           "filter_geometry", "edit_frequency", "automatic_weight", "check_mean_curvature_signal", "INTERIOR_WEIGHT",
+           "BOUNDARY_WEIGHT", "STIFFNESS_FRACTION", "DISPLACEMENT_LIMIT", "MAX_WEIGHT"]
 
 #: Default position weight ``μ`` of interior vertices (paper, Sec. 5.1).
 INTERIOR_WEIGHT = 0.01
@@ -108,6 +110,39 @@ _UNCHANGED = 1e-12
 DISPLACEMENT_LIMIT = 0.05
 #: The HHT signal must equal the surface's mean curvature to this relative accuracy.
 _SIGNAL_RTOL = 1e-8
+#: Position weights μ of Eq. 27 (the paper's are 0.01 and 1); far above useful values, it stops a typo.
+MAX_WEIGHT = 1e6
+
+
+@dataclass(frozen=True)
+class ReconstructionOptions(Record):
+    """The settings of :func:`reconstruct` and :func:`reconstruct_from_change` (Eq. 27; module notes)."""
+
+    label = "reconstruction"
+
+    interior_weight: float = option(INTERIOR_WEIGHT, "position weight μ of interior vertices (Eq. 27)", minimum=0,
+                                    maximum=MAX_WEIGHT, open_minimum=True)
+    boundary_weight: float = option(BOUNDARY_WEIGHT, "position weight μ of boundary vertices (Eq. 27)", minimum=0,
+                                    maximum=MAX_WEIGHT, open_minimum=True)
+    preserve_scale: bool = option(True, "remove the mean curvature change per component")
+
+
+_WEIGHTS = ReconstructionOptions.specs()
+_AUTOMATIC = "; null: from the gain, positions hold below a third of the lowest edited frequency"
+
+
+@dataclass(frozen=True)
+class FilterOptions(Record):
+    """The settings of :func:`filter_geometry`: :class:`ReconstructionOptions` whose weights follow the gain
+    when left out."""
+
+    label = "geometry filter"
+
+    interior_weight: float | None = option(None, _WEIGHTS["interior_weight"].doc + _AUTOMATIC,
+                                           like=_WEIGHTS["interior_weight"])
+    boundary_weight: float | None = option(None, _WEIGHTS["boundary_weight"].doc + _AUTOMATIC,
+                                           like=_WEIGHTS["boundary_weight"])
+    preserve_scale: bool = option(True, _WEIGHTS["preserve_scale"].doc, like=_WEIGHTS["preserve_scale"])
 
 
 def position_weights(surface: Surface, interior_weight: float = INTERIOR_WEIGHT,
@@ -118,24 +153,23 @@ def position_weights(surface: Surface, interior_weight: float = INTERIOR_WEIGHT,
     component undetermined).
     """
     surface = check_surface(surface)
-    interior = positive("interior_weight", interior_weight)
-    boundary = positive("boundary_weight", boundary_weight)
+    interior = ReconstructionOptions.check("interior_weight", interior_weight)
+    boundary = ReconstructionOptions.check("boundary_weight", boundary_weight)
     return np.where(surface.boundary_vertices, boundary, interior)
 
 
-def _weights(surface: Surface, interior_weight, boundary_weight, weights) -> np.ndarray:
+def _weights(surface: Surface, options: ReconstructionOptions, weights) -> np.ndarray:
     if weights is None:
-        return position_weights(surface, interior_weight, boundary_weight)
+        return position_weights(surface, options.interior_weight, options.boundary_weight)
     mu = check_signal(surface, weights, "weights")
     if np.any(mu <= 0):
         raise InputError(f"weights must all be > 0; {int(np.sum(mu <= 0))} are not")
     return mu
 
 
-def reconstruct_from_change(surface: Surface, change, *, interior_weight: float = INTERIOR_WEIGHT,
-                            boundary_weight: float = BOUNDARY_WEIGHT, weights=None,
-                            backend: str | None = None, name: str | None = None,
-                            preserve_scale: bool = True) -> Surface:
+def reconstruct_from_change(surface: Surface, change, options: ReconstructionOptions | dict | None = None, *,
+                            weights=None, backend: str | None = None, name: str | None = None,
+                            **overrides) -> Surface:
     """New surface whose mean-curvature signal changed by ``change = s' − s`` (Eq. 27).
 
     Solves ``(L M⁻¹ L + W) (V' − V) = L diag(s' − s) N`` (see the module
@@ -149,29 +183,32 @@ def reconstruct_from_change(surface: Surface, change, *, interior_weight: float 
         Mesh (open or closed, any number of components) or point cloud.
     change : (n,) array_like
         ``s' − s``, the change of the signal of Eq. (24).
-    interior_weight, boundary_weight : float
-        The paper's ``μ`` for interior and boundary vertices (defaults 0.01
-        and 1.0), weights of the squared position residual in units of the
-        mean vertex area (module notes, "Weights").
+    options : ReconstructionOptions or dict, optional
+        ``interior_weight``, ``boundary_weight``: the paper's ``μ`` for
+        interior and boundary vertices (defaults 0.01 and 1.0), weights of the
+        squared position residual in units of the mean vertex area (module
+        notes, "Weights").  ``preserve_scale``: remove the area-weighted mean
+        of ``change`` per connected component (module notes, "Scale");
+        default True.
     weights : (n,) array_like, optional
-        Per-vertex ``μ_i`` (all > 0), overriding the two above.
+        Per-vertex ``μ_i`` (all > 0), overriding the two weights.
     backend : str, optional
         Sparse solver of :mod:`hht3d.linalg.backends`.
     name : str, optional
         Name of the new surface; default ``"<name>_filtered"``.
-    preserve_scale : bool
-        Remove the area-weighted mean of ``change`` per connected component
-        (module notes, "Scale"); default True.
+    **overrides
+        Settings that replace those of ``options``.
 
     Returns
     -------
     Surface
     """
+    options = ReconstructionOptions.of(options, **overrides)
     surface = check_surface(surface)
     ds = check_signal(surface, change, "signal change")
-    if preserve_scale:
+    if options.preserve_scale:
         ds = fluctuation(surface, ds)
-    mu = _weights(surface, interior_weight, boundary_weight, weights)
+    mu = _weights(surface, options, weights)
     area = surface.mass_diagonal
     mean_area = float(np.mean(area))
     w = mu * area / mean_area ** 2
@@ -190,10 +227,8 @@ def reconstruct_from_change(surface: Surface, change, *, interior_weight: float 
                    n_neighbors=surface.n_neighbors, name=name or f"{surface.name}_filtered")
 
 
-def reconstruct(surface: Surface, signal, *, interior_weight: float = INTERIOR_WEIGHT,
-                boundary_weight: float = BOUNDARY_WEIGHT, weights=None,
-                backend: str | None = None, name: str | None = None,
-                preserve_scale: bool = True) -> Surface:
+def reconstruct(surface: Surface, signal, options: ReconstructionOptions | dict | None = None, *, weights=None,
+                backend: str | None = None, name: str | None = None, **overrides) -> Surface:
     """New surface whose mean-curvature signal (Eq. 24) is ``signal`` (Eq. 27).
 
     ``s = mean_curvature(surface)`` is the reference; the vertices move by
@@ -206,19 +241,18 @@ def reconstruct(surface: Surface, signal, *, interior_weight: float = INTERIOR_W
     signal : (n,) array_like
         The filtered signal ``s'`` (e.g. from
         :func:`hht3d.apps.filter_signal`).
-    interior_weight, boundary_weight, weights, backend, name, preserve_scale
+    options, weights, backend, name, **overrides
         See :func:`reconstruct_from_change`.
 
     Returns
     -------
     Surface
     """
+    options = ReconstructionOptions.of(options, **overrides)
     surface = check_surface(surface)
     target = check_signal(surface, signal, "filtered signal")
-    return reconstruct_from_change(surface, target - mean_curvature(surface),
-                                   interior_weight=interior_weight, boundary_weight=boundary_weight,
-                                   weights=weights, backend=backend, name=name,
-                                   preserve_scale=preserve_scale)
+    return reconstruct_from_change(surface, target - mean_curvature(surface), options, weights=weights,
+                                   backend=backend, name=name)
 
 
 def check_mean_curvature_signal(surface: Surface, signal) -> None:
@@ -261,9 +295,8 @@ def automatic_weight(surface: Surface, frequency: float) -> float:
     return float(np.mean(surface.mass_diagonal)) ** 2 * (STIFFNESS_FRACTION * frequency) ** 4
 
 
-def filter_geometry(result, gain, *, interior_weight: float | None = None, boundary_weight: float | None = None,
-                    weights=None, backend: str | None = None, name: str | None = None,
-                    preserve_scale: bool = True) -> Surface:
+def filter_geometry(result, gain, options: FilterOptions | dict | None = None, *, weights=None,
+                    backend: str | None = None, name: str | None = None, **overrides) -> Surface:
     """Hilbert-spectrum geometry filtering: Eq. (26) on the mean curvature, then Eq. (27).
 
     Parameters
@@ -272,8 +305,9 @@ def filter_geometry(result, gain, *, interior_weight: float | None = None, bound
         :func:`hht3d.transform.hht` of ``mean_curvature(surface)``.
     gain : callable
         ``μ(ω)``, e.g. :class:`~hht3d.apps.filters.BandStop`.
-    interior_weight, boundary_weight : float, optional
-        The ``μ`` of Eq. (27) (see :func:`reconstruct_from_change`).  By
+    options : FilterOptions or dict, optional
+        ``interior_weight``, ``boundary_weight``: the ``μ`` of Eq. (27) (see
+        :func:`reconstruct_from_change`), and ``preserve_scale``.  By
         default the interior weight follows the gain: positions hold only
         below a third of the lowest frequency it edits (:func:`edit_frequency`,
         :func:`automatic_weight`), and the boundary weight is
@@ -283,8 +317,10 @@ def filter_geometry(result, gain, *, interior_weight: float | None = None, bound
         rad/unit lowered the distance to the clean sphere 1.6× with the
         paper's 0.01 and 3.3× with the automatic weight.  The largest
         displacement is checked (:data:`DISPLACEMENT_LIMIT`).
-    weights, backend, name, preserve_scale
+    weights, backend, name
         See :func:`reconstruct_from_change`.
+    **overrides
+        Settings that replace those of ``options``.
 
     Returns
     -------
@@ -298,6 +334,7 @@ def filter_geometry(result, gain, *, interior_weight: float | None = None, bound
     The change ``s' − s = Σ_k (μ(ω_k) − 1) f_k`` is formed directly, so a
     gain of 1 moves no vertex at all.
     """
+    options = FilterOptions.of(options, **overrides)
     surface = check_surface(getattr(result, "surface", None))
     imfs, _, frequency = decomposition_parts(result)
     check_mean_curvature_signal(surface, result.signal)
@@ -309,14 +346,15 @@ def filter_geometry(result, gain, *, interior_weight: float | None = None, bound
                       "get gain 1): the surface is returned unchanged; is the cutoff beyond the spectrum?",
                       QualityWarning, stacklevel=2)
         return _copy(surface, name)
-    if weights is None and interior_weight is None:
-        interior_weight = automatic_weight(surface, edited)
-    if boundary_weight is None:
-        boundary_weight = BOUNDARY_RATIO * (INTERIOR_WEIGHT if interior_weight is None else interior_weight)
+    interior, boundary = options.interior_weight, options.boundary_weight
+    if weights is None and interior is None:
+        interior = automatic_weight(surface, edited)
+    if boundary is None:
+        boundary = BOUNDARY_RATIO * (INTERIOR_WEIGHT if interior is None else interior)
     change = np.sum((mu - 1.0) * imfs, axis=0)
-    return reconstruct_from_change(surface, change, interior_weight=INTERIOR_WEIGHT if interior_weight is None
-                                   else interior_weight, boundary_weight=boundary_weight, weights=weights,
-                                   backend=backend, name=name, preserve_scale=preserve_scale)
+    return reconstruct_from_change(surface, change, weights=weights, backend=backend, name=name,
+                                   interior_weight=INTERIOR_WEIGHT if interior is None else interior,
+                                   boundary_weight=boundary, preserve_scale=options.preserve_scale)
 
 
 def _copy(surface: Surface, name: str | None) -> Surface:

@@ -112,7 +112,9 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=RE
         Options of the fsspec back-end of URL inputs and outputs; the workers
         receive them with the URLs and read and write the files themselves.
     **hht_options
-        Passed to :func:`hht3d.graph.stages.transform` (EMD and Riesz options).
+        Passed to :func:`hht3d.graph.stages.transform`: the HHT's settings by name
+        (``max_imfs=4``, ``potential="spectral"``, ...) and ``riesz_tasks``
+        (:class:`hht3d.graph.tasks.GraphOptions`).
 
     Raises
     ------
@@ -171,7 +173,7 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     >>> from hht3d.dataset import run_dataset
     >>> out = Path(tempfile.mkdtemp())
     >>> rows = run_dataset([data_path("spot.ply")], out, scheduler="synchronous", progress=False,
-    ...                    emd={"max_imfs": 2})
+    ...                    max_imfs=2)
     >>> [(row.status, row.vertices, row.imfs) for row in rows]
     [('ok', 2930, 2)]
     >>> sorted(path.name for path in out.iterdir() if not path.name.startswith("."))

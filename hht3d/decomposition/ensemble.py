@@ -6,11 +6,15 @@ as tasks of their own, and :func:`combine_eemd` averages them.
 """
 from __future__ import annotations
 
+import numbers
+import warnings
+
 import numpy as np
 
 from ..errors import InputError
 from ..geometry.surface import Surface
-from ..geometry.validation import check_int, check_signal, check_surface
+from ..geometry.validation import check_signal, check_surface
+from ..records import route
 from .decompose import EMDResult, emd, result_with_quality
 from .envelopes import envelope_energies
 from .options import EMDOptions, EnsembleOptions
@@ -27,13 +31,12 @@ def ensemble_settings(options, ensemble, overrides: dict) -> tuple[EMDOptions, E
     InputError
         An override that neither record has, or an invalid setting.
     """
-    names = set(EnsembleOptions.specs())
-    return (EMDOptions.of(options, **{k: v for k, v in overrides.items() if k not in names}),
-            EnsembleOptions.of(ensemble, **{k: v for k, v in overrides.items() if k in names}))
+    emd_overrides, ensemble_overrides = route(overrides, EMDOptions, EnsembleOptions)
+    return EMDOptions.of(options, **emd_overrides), EnsembleOptions.of(ensemble, **ensemble_overrides)
 
 
-def eemd_member(surface: Surface, signal, member_index: int, ensemble: EnsembleOptions,
-                options: EMDOptions, backend: str | None = None) -> EMDResult:
+def eemd_member(surface: Surface, signal, member_index: int, options: EMDOptions, ensemble: EnsembleOptions,
+                backend: str | None = None) -> EMDResult:
     """EMD of the signal plus one seeded white-noise realisation (Wu & Huang 2009).
 
     Parameters
@@ -45,10 +48,12 @@ def eemd_member(surface: Surface, signal, member_index: int, ensemble: EnsembleO
         ``numpy.random.default_rng(SeedSequence(seed, spawn_key=(member_index,)))``,
         i.e. the ``member_index``-th child of ``SeedSequence(seed).spawn``, so
         members are independent and reproducible in any order or process.
-    ensemble : EnsembleOptions
-        The seed and the noise's standard deviation relative to the signal's.
     options : EMDOptions
         The settings of each member's :func:`~hht3d.decomposition.emd`.
+    ensemble : EnsembleOptions
+        The seed and the noise's standard deviation relative to the signal's.
+        (The two records come in :func:`eemd`'s order; the former order,
+        ensemble first, is accepted for one release with a DeprecationWarning.)
     backend : str, optional
         Sparse solver of :mod:`hht3d.linalg`.
 
@@ -59,7 +64,12 @@ def eemd_member(surface: Surface, signal, member_index: int, ensemble: EnsembleO
         the signal plus noise); average members with :func:`combine_eemd`.
     """
     f = check_signal(check_surface(surface), signal)
-    check_int("member_index", member_index, 0)
+    if isinstance(options, EnsembleOptions) and isinstance(ensemble, EMDOptions):
+        warnings.warn("eemd_member(surface, signal, i, ensemble, options) is deprecated: pass the EMD options "
+                      "first, as to eemd", DeprecationWarning, stacklevel=2)
+        options, ensemble = ensemble, options
+    if isinstance(member_index, bool) or not isinstance(member_index, numbers.Integral) or member_index < 0:
+        raise InputError(f"member_index must be an integer >= 0, got {member_index!r}")
     rng = np.random.default_rng(np.random.SeedSequence(ensemble.seed, spawn_key=(int(member_index),)))
     noise = ensemble.noise_std * np.std(f) * rng.standard_normal(len(f))
     with quality_warnings_muted():  # a noisy member's quality is not the ensemble's
@@ -142,7 +152,7 @@ def eemd(surface: Surface, signal, options: EMDOptions | dict | None = None, *,
     options, ensemble = ensemble_settings(options, ensemble, overrides)
     f = check_signal(check_surface(surface), signal)
     held = envelope_energies(surface)  # the surface caches them weakly: held, the members build them once
-    members = [eemd_member(surface, f, i, ensemble, options, backend) for i in range(ensemble.ensemble_size)]
+    members = [eemd_member(surface, f, i, options, ensemble, backend) for i in range(ensemble.ensemble_size)]
     del held
     result = combine_eemd(surface, f, members)
     result.info.update(seed=ensemble.seed, noise_std=ensemble.noise_std)

@@ -57,9 +57,9 @@ import scipy.sparse as sp
 from .. import linalg
 from ..errors import InputError
 from ..geometry.surface import Surface
-from ..geometry.validation import check_choice, check_signal, check_surface, nonnegative
+from ..geometry.validation import check_signal, check_surface
 from .extrema import extrema_spacing
-from .options import EMD_DEFAULTS, ENVELOPES, start_tension
+from .options import EMDOptions, start_tension
 
 __all__ = ["envelope_operator", "envelope_interpolation", "EnvelopeSolver", "envelope_energies", "MASS_FLOOR"]
 
@@ -154,12 +154,12 @@ def envelope_energies(surface: Surface) -> _EnvelopeEnergies:
     return energies
 
 
-def envelope_operator(surface: Surface, envelope: str = "biharmonic", *, tension: float = EMD_DEFAULTS.tension,
-                      spacing: float | None = None) -> sp.csr_matrix:
+def envelope_operator(surface: Surface, options: EMDOptions | dict | None = None, *, spacing: float | None = None,
+                      **overrides) -> sp.csr_matrix:
     """The energy matrix ``Q`` of the envelope interpolation (Eqs. 8–11).
 
-    ``Q = L M⁻¹ L`` for ``"biharmonic"`` (thin-plate energy, the paper's
-    choice; on a line it gives cubic splines), ``Q = L M⁻¹ L + (τ/d)² L``
+    ``Q = L M⁻¹ L`` for ``envelope="biharmonic"`` (thin-plate energy, the
+    paper's choice; on a line it gives cubic splines), ``Q = L M⁻¹ L + (τ/d)² L``
     for ``"tension"`` and ``Q = L`` for ``"harmonic"`` (membrane energy,
     piecewise-linear on a line).  ``Q`` is symmetric PSD, stored on the
     pattern shared by all envelopes with every diagonal entry present.
@@ -167,14 +167,16 @@ def envelope_operator(surface: Surface, envelope: str = "biharmonic", *, tension
     Parameters
     ----------
     surface : Surface
-    envelope : {"biharmonic", "tension", "harmonic"}
-    tension : float
-        ``τ >= 0`` of ``"tension"``.
+    options : EMDOptions or dict, optional
+        Its ``envelope`` (default ``"tension"``, as EMD's) and ``tension`` ``τ``.
     spacing : float, optional
         ``d`` of ``"tension"`` (e.g. :func:`extrema_spacing`); required for it.
+    **overrides
+        Settings that replace those of ``options`` (``envelope="biharmonic"``).
     """
-    start = start_tension(check_choice(envelope, ENVELOPES, "envelope"), nonnegative("tension", tension))
-    if envelope == "tension" and spacing is None:
+    options = EMDOptions.of(options, **overrides)
+    start = start_tension(options.envelope, options.tension)
+    if options.envelope == "tension" and spacing is None:
         raise InputError("the tension envelope needs the extrema spacing d (see extrema_spacing)")
     energies = envelope_energies(check_surface(surface))
     return energies.matrix(energies.data(start, spacing or 1.0)).copy()  # the caller's own arrays
@@ -217,8 +219,8 @@ class EnvelopeSolver:
         return factor.solve(rhs)
 
 
-def envelope_interpolation(surface: Surface, values, constrained, *, envelope: str = "biharmonic",
-                           tension: float = EMD_DEFAULTS.tension, backend: str | None = None) -> np.ndarray:
+def envelope_interpolation(surface: Surface, values, constrained, options: EMDOptions | dict | None = None, *,
+                           backend: str | None = None, **overrides) -> np.ndarray:
     """Interpolate ``values`` from the ``constrained`` vertices (Eq. 11).
 
     Solves ``min gᵀQg`` subject to ``g_C = values_C`` with ``Q`` from
@@ -231,18 +233,21 @@ def envelope_interpolation(surface: Surface, values, constrained, *, envelope: s
         Only the entries at ``constrained`` are used.
     constrained : (n,) bool array_like or int indices
         The vertices ``C``; every connected component needs at least one.
-    envelope : {"biharmonic", "tension", "harmonic"}
-    tension : float
-        ``τ`` of ``"tension"``; the spacing ``d`` is :func:`extrema_spacing` of ``|C|``.
+    options : EMDOptions or dict, optional
+        Its ``envelope`` (default ``"tension"``, as EMD's) and ``tension`` ``τ``; the
+        spacing ``d`` of ``"tension"`` is :func:`extrema_spacing` of ``|C|``.
     backend : str, optional
         Sparse solver of :mod:`hht3d.linalg.backends`.
+    **overrides
+        Settings that replace those of ``options`` (``envelope="biharmonic"``).
 
     Returns
     -------
     (n,) ndarray
     """
+    options = EMDOptions.of(options, **overrides)
     f = check_signal(check_surface(surface), values)
-    start = start_tension(check_choice(envelope, ENVELOPES, "envelope"), nonnegative("tension", tension))
+    start = start_tension(options.envelope, options.tension)
     c = np.asarray(constrained)
     if c.dtype == bool and c.shape != f.shape:
         raise InputError(f"constrained mask has shape {c.shape}; expected {f.shape}")

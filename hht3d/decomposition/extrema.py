@@ -19,10 +19,10 @@ import math
 
 import numpy as np
 
-from ..errors import InputError
 from ..geometry.surface import Surface
-from ..geometry.validation import check_choice, check_signal, check_surface
-from .options import EXTREMA_RULES
+from ..geometry.validation import check_signal, check_surface
+from ..records import renamed_keywords
+from .options import EMDOptions
 
 __all__ = ["local_extrema", "extrema_masks", "extrema_spacing", "TIE_RTOL"]
 
@@ -30,26 +30,27 @@ __all__ = ["local_extrema", "extrema_masks", "extrema_spacing", "TIE_RTOL"]
 TIE_RTOL = 1e-9
 
 
-def local_extrema(surface: Surface, f, *, rule: str = "strict", ring: int | None = None,
-                  ratio: float = 0.8, tie_rtol: float = TIE_RTOL) -> tuple[np.ndarray, np.ndarray]:
+def local_extrema(surface: Surface, f, options: EMDOptions | dict | None = None, *, tie_rtol: float = TIE_RTOL,
+                  **overrides) -> tuple[np.ndarray, np.ndarray]:
     """Indices of the local maxima and minima of a per-vertex signal.
 
     Parameters
     ----------
     surface : Surface
     f : (n,) array_like
-    rule : {"strict", "relaxed"}
-        ``"strict"``: ``f_i`` is ``≥`` every neighbour in its ``ring``-ring.
-        ``"relaxed"``: the rule of Sec. 5.2, ``f_i ≥ f_j`` for at least
-        a fraction ``ratio`` of its ``ring``-ring, ``|N⁺(i)| ≥ t |N_k(i)|``.
-        Minima likewise with ``≤``.
-    ring : int, optional
-        Neighbourhood size in edges; default 1 for ``"strict"`` and 2 for
-        ``"relaxed"`` (the paper's two-ring).
-    ratio : float
-        The paper's ``t`` in ``(0.5, 1]``; used by ``"relaxed"`` only.
+    options : EMDOptions or dict, optional
+        The extremum settings of :class:`~hht3d.decomposition.options.EMDOptions`:
+        ``extrema`` (formerly the keyword ``rule``): ``"strict"``, ``f_i`` is
+        ``≥`` every neighbour in its 1-ring; ``"relaxed"``, the rule of
+        Sec. 5.2, ``f_i ≥ f_j`` for at least a fraction ``ratio`` (the
+        paper's ``t`` in ``(0.5, 1]``) of its ``ring``-ring,
+        ``|N⁺(i)| ≥ t |N_k(i)|`` (default the two-ring).  ``"relaxed"`` with
+        ``ratio=1`` is the strict rule on the ``ring``-ring.  Minima likewise
+        with ``≤``.
     tie_rtol : float
         Values closer than ``tie_rtol · (max f − min f)`` count as equal.
+    **overrides
+        Settings that replace those of ``options``.
 
     Returns
     -------
@@ -67,20 +68,16 @@ def local_extrema(surface: Surface, f, *, rule: str = "strict", ring: int | None
     envelope solve) is still one ridge; the tolerance scales with the signal
     and ignores constant offsets.
     """
-    is_max, is_min = extrema_masks(surface, check_signal(check_surface(surface), f), rule, ring, ratio, tie_rtol)
+    options = EMDOptions.of(options, **renamed_keywords(overrides, {"rule": "extrema"}, "local_extrema"))
+    is_max, is_min = extrema_masks(surface, check_signal(check_surface(surface), f), options, tie_rtol)
     return np.flatnonzero(is_max), np.flatnonzero(is_min)
 
 
-def extrema_masks(surface: Surface, f: np.ndarray, rule: str, ring: int | None,
-                   ratio: float, tie_rtol: float = TIE_RTOL) -> tuple[np.ndarray, np.ndarray]:
-    """Boolean maximum and minimum masks (see :func:`local_extrema`)."""
-    check_choice(rule, EXTREMA_RULES, "extrema rule")
-    if rule == "strict":
-        ring, ratio = (1 if ring is None else ring), 1.0
-    else:
-        ring = 2 if ring is None else ring
-        if not 0.5 < ratio <= 1:
-            raise InputError(f"extrema ratio must lie in (0.5, 1], got {ratio!r}")
+def extrema_masks(surface: Surface, f: np.ndarray, options: EMDOptions,
+                  tie_rtol: float = TIE_RTOL) -> tuple[np.ndarray, np.ndarray]:
+    """Boolean maximum and minimum masks of the ``extrema``, ``ring`` and ``ratio`` of ``options``
+    (see :func:`local_extrema`)."""
+    ring, ratio = (1, 1.0) if options.extrema == "strict" else (options.ring, options.ratio)
     adj = surface.ring(ring)
     degree = np.diff(adj.indptr)
     rows = np.repeat(np.arange(len(f)), degree)

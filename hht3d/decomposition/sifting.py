@@ -102,8 +102,7 @@ class Sifter:
     def extrema(self, h: np.ndarray):
         """Maximum and minimum masks plus the mask of components lacking either."""
         o = self.options
-        is_max, is_min = extrema_masks(self.surface, h, o.extrema,
-                                        1 if o.extrema == "strict" else o.ring, o.ratio)
+        is_max, is_min = extrema_masks(self.surface, h, o)
         if not o.boundary_extrema:
             is_max, is_min = is_max & ~self.boundary, is_min & ~self.boundary
         has_max = np.bincount(self.labels[is_max], minlength=self.n_components) > 0

@@ -17,13 +17,27 @@ from . import operators as ops
 from .cleaning import CleanReport, clean_mesh, clean_points
 from .normals import estimate_point_normals, principal_axes
 from ..errors import InputError
+from ..records import Record, option
 
-__all__ = ["Surface", "MIN_VERTICES", "LAPLACIANS"]
+__all__ = ["Surface", "SurfaceOptions", "MIN_VERTICES", "LAPLACIANS", "MAX_NEIGHBORS"]
 
 #: The fewest vertices a surface may have (a tetrahedron).
 MIN_VERTICES = 4
 #: Mesh Laplacians; point clouds always use ``robust_laplacian.point_cloud_laplacian``.
 LAPLACIANS = ("cotan", "robust")
+#: Neighbours of the point-cloud Laplacian and normals (far above useful values; stops a typo).
+MAX_NEIGHBORS = 256
+
+
+@dataclass(frozen=True)
+class SurfaceOptions(Record):
+    """The operator settings of a :class:`Surface` (and of :func:`hht3d.io.load`)."""
+
+    label = "surface"
+
+    laplacian: str = option("cotan", "mesh Laplacian (point clouds always use the robust one)", choices=LAPLACIANS)
+    n_neighbors: int = option(30, "neighbours of the point-cloud Laplacian and normals", minimum=3,
+                              maximum=MAX_NEIGHBORS)
 
 
 @dataclass(frozen=True)
@@ -66,10 +80,10 @@ class Surface:
         self.vertices = _as_vertices(vertices, self.name)
         n = len(self.vertices)
         self.faces = _as_faces(faces, n, self.name)
-        if laplacian not in LAPLACIANS:
-            raise InputError(f"{self.name}: unknown laplacian {laplacian!r}; choose one of {LAPLACIANS}")
-        if n_neighbors < 3:
-            raise InputError(f"{self.name}: n_neighbors must be >= 3, got {n_neighbors}")
+        try:
+            SurfaceOptions(laplacian, n_neighbors)
+        except InputError as exc:
+            raise InputError(f"{self.name}: {exc}") from None
         if self.faces is None:
             _check_cloud(self.vertices, int(n_neighbors), self.name)
         self.laplacian = laplacian

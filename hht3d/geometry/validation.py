@@ -1,34 +1,21 @@
-"""Checks of user input shared by the core: surfaces, signals, choices, integers, numbers.
+"""Checks of user input shared by the core: surfaces, signals and IMFs, arrays of per-vertex values.
 
 Every function either returns the checked value (converted where that is
 the point, e.g. a signal to a float64 array) or raises
 :class:`~hht3d.errors.InputError` with a message that names the argument,
 what it must be and what was given.  Modules check their arguments with
 these instead of writing their own; a new check belongs here when a second
-module needs it.
+module needs it.  Scalar settings are checked by the option records that
+declare them (:mod:`hht3d.records`).
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from ..errors import InputError, did_you_mean
+from ..errors import InputError
 from .surface import Surface
 
-__all__ = [
-    "check_surface",
-    "check_signal",
-    "as_signals",
-    "as_imfs",
-    "check_choice",
-    "did_you_mean",
-    "check_int",
-    "nonnegative",
-    "finite",
-    "positive",
-    "check_distance",
-]
+__all__ = ["check_surface", "check_signal", "as_signals", "as_imfs"]
 
 
 def check_surface(surface) -> Surface:
@@ -108,59 +95,3 @@ def as_imfs(surface: Surface, imfs) -> np.ndarray:
     if not np.all(np.isfinite(a)):
         raise InputError("imfs have NaN or infinite values")
     return a
-
-
-def check_choice(value, choices, what: str, *, suggest: bool = False):
-    """``value`` if it is one of ``choices``; ``suggest`` adds the closest one to the message."""
-    if value not in choices:
-        hint = did_you_mean(str(value), choices, listing=False) if suggest else ""
-        raise InputError(f"unknown {what} {value!r}; choose one of {choices}{hint}")
-    return value
-
-
-def check_int(name: str, value, minimum: int) -> int:
-    """``value`` if it is an integer (not a bool) ``>= minimum``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return value
-
-
-def nonnegative(name: str, value) -> float:
-    """``value`` as a float if it is a real number (not a bool or a string), finite and ``>= 0``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) \
-            or not np.isfinite(value) or value < 0:
-        raise InputError(f"{name} must be a finite number >= 0, got {value!r}")
-    return float(value)
-
-
-def _number(name: str, value) -> float:
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number, got {value!r}") from None
-
-
-def finite(name: str, value) -> float:
-    """``float(value)`` if that is a finite number."""
-    x = _number(name, value)
-    if not math.isfinite(x):
-        raise InputError(f"{name} must be finite, got {value!r}")
-    return x
-
-
-def positive(name: str, value) -> float:
-    """``float(value)`` if that is a finite number ``> 0``."""
-    x = _number(name, value)
-    if not (math.isfinite(x) and x > 0):
-        raise InputError(f"{name} must be a finite number > 0, got {value!r}")
-    return x
-
-
-def check_distance(name: str, value) -> float:
-    """A length in model units: ``float(value)``, finite and ``>= 0``; ``None`` is 0."""
-    if value is None:
-        return 0.0
-    x = _number(name, value)
-    if not (math.isfinite(x) and x >= 0):
-        raise InputError(f"{name} must be a finite distance >= 0, got {value!r}")
-    return x

@@ -12,7 +12,7 @@ Examples
 >>> from hht3d import data_path, graph
 >>> s = graph.load(data_path("spot.ply"))
 >>> f = graph.signal(s, "mean_curvature")
->>> lazy = graph.hht(s, f, emd={"max_imfs": 2})    # EMD -> Riesz shift groups -> spectra
+>>> lazy = graph.hht(s, f, max_imfs=2)    # EMD -> Riesz shift groups -> spectra
 >>> (result,) = graph.compute(lazy, scheduler="synchronous", progress=False)
 >>> result.n_imfs
 2
@@ -53,7 +53,7 @@ from ..geometry.surface import Surface
 from ..io.read import load as _load
 from ..spectral.monogenic_signal import monogenic_from_potential as _monogenic_from_potential
 from ..spectral.options import RieszOptions
-from ..transform import HHTResult, decomposition_stage, hht_stages
+from ..transform import HHTOptions, HHTResult, decomposition_stage, hht_settings, hht_stages
 from ..execution import compute
 from .tasks import Builder, as_key, from_surface, resident, riesz_potential
 
@@ -113,8 +113,8 @@ def mirror(func: Callable[P, Any], build: Callable | None = None, *, settle: Cal
     return lazy
 
 
-def _load_tasks(builder: Builder, path, **options):
-    return builder.task("load", _load)(str(path), **options)
+def _load_tasks(builder: Builder, path, options=None, **keywords):
+    return builder.task("load", _load)(str(path), options, **keywords)
 
 
 load = mirror(_load, _load_tasks)
@@ -160,20 +160,19 @@ def monogenic(surface: Surface, imfs, options: RieszOptions | dict | None = None
     options = RieszOptions.of(options, **overrides)
     builder = Builder(riesz_tasks=riesz_tasks)
     potential = builder.potential(surface, imfs, options, backend)
-    return builder.task("monogenic", _monogenic_from_potential)(surface, imfs, potential, options.gradient,
-                                                               options.frequency)
+    return builder.task("monogenic", _monogenic_from_potential)(surface, imfs, potential, options)
 
 
 monogenic_from_potential = mirror(_monogenic_from_potential)
 
 
-def transform(builder: Builder, surface, signal, *, emd: EMDOptions | dict | None = None,
-              riesz: RieszOptions | dict | None = None, ensemble: EnsembleOptions | dict | None = None,
-              backend: str | None = None, riesz_tasks: int | None = None) -> dict:
+def transform(builder: Builder, surface, signal, options: HHTOptions | dict | None = None, *,
+              backend: str | None = None, riesz_tasks: int | None = None, **overrides) -> dict:
     """The tasks of one HHT by stage name (:func:`hht3d.transform.hht_stages`): ``emd``, ``imfs``,
-    ``riesz``, ``monogenic``, ``hht``.  Settings are checked now, before any task runs."""
-    return hht_stages(Builder(builder.guard, riesz_tasks), surface, signal, emd=emd, riesz=riesz,
-                      ensemble=ensemble, backend=backend)
+    ``riesz``, ``monogenic``, ``hht``.  Settings (as for :func:`hht3d.hht`) are checked now, before
+    any task runs."""
+    options = hht_settings(options, overrides, "transform")
+    return hht_stages(Builder(builder.guard, riesz_tasks), surface, signal, options, backend=backend)
 
 
 def transform_file(builder: Builder, path, signal: str = "mean_curvature", load_options: dict | None = None,
@@ -184,9 +183,8 @@ def transform_file(builder: Builder, path, signal: str = "mean_curvature", load_
     return {"load": surface, "signal": values, **transform(builder, surface, values, **options)}
 
 
-def hht(surface: Surface, signal, *, emd: EMDOptions | dict | None = None, riesz: RieszOptions | dict | None = None,
-        ensemble: EnsembleOptions | dict | None = None, backend: str | None = None,
-        riesz_tasks: int | None = None) -> Delayed:
+def hht(surface: Surface, signal, options: HHTOptions | dict | None = None, *, backend: str | None = None,
+        riesz_tasks: int | None = None, **overrides) -> Delayed:
     """Lazy :func:`hht3d.hht`: the tasks of :func:`transform` (``riesz_tasks`` shift groups of the
     Riesz quadrature, default one per worker).  Arguments as the eager function's.
 
@@ -198,17 +196,16 @@ def hht(surface: Surface, signal, *, emd: EMDOptions | dict | None = None, riesz
     >>> from hht3d import data_path, graph
     >>> from hht3d.geometry.signals import mean_curvature
     >>> surface = hht3d.load(data_path("spot.ply"))
-    >>> lazy = graph.hht(graph.from_surface(surface), mean_curvature(surface), emd={"max_imfs": 2},
-    ...                  riesz_tasks=2)
+    >>> lazy = graph.hht(graph.from_surface(surface), mean_curvature(surface), max_imfs=2, riesz_tasks=2)
     >>> (result,) = graph.compute(lazy, scheduler="synchronous", progress=False)
-    >>> eager = hht3d.hht(surface, mean_curvature(surface), emd={"max_imfs": 2})
+    >>> eager = hht3d.hht(surface, mean_curvature(surface), max_imfs=2)
     >>> np.array_equal(result.imfs, eager.imfs)
     True
     >>> np.allclose(result.monogenic.riesz, eager.monogenic.riesz, rtol=0, atol=1e-10)
     True
     """
-    return transform(_PLAIN, surface, signal, emd=emd, riesz=riesz, ensemble=ensemble, backend=backend,
-                     riesz_tasks=riesz_tasks)["hht"]
+    options = hht_settings(options, overrides, "hht")
+    return transform(_PLAIN, surface, signal, options, backend=backend, riesz_tasks=riesz_tasks)["hht"]
 
 
 def save(result, path, *, storage_options: dict | None = None):

@@ -20,26 +20,41 @@ import contextlib
 import functools
 import threading
 from collections import OrderedDict
+from dataclasses import dataclass
 
 import numpy as np
 from dask import delayed
 from dask.base import tokenize
 
 from ..geometry.surface import Surface
-from ..geometry.validation import check_int
 from ..linalg.backends import default_backend
-from ..spectral.options import RIESZ_DEFAULTS, RieszOptions
+from ..records import Record, option
+from ..spectral.options import RieszOptions
 from ..spectral.quadrature import combine_quadrature_parts, quadrature_part, quadrature_plan
 from ..spectral.riesz_transform import fractional_laplacian
 from ..spectral.shifts import shift_analysis
 from ..execution.workers import worker_count
 
-__all__ = ["Builder", "resident", "as_key", "from_surface", "riesz_potential", "RESIDENT_SURFACES",
-           "ARRAY_KEY_SIZE"]
+__all__ = ["Builder", "GraphOptions", "resident", "as_key", "from_surface", "riesz_potential", "RESIDENT_SURFACES",
+           "ARRAY_KEY_SIZE", "MAX_RIESZ_TASKS"]
 
 #: Arrays with more entries than this enter a graph as a key of their own (shared by reference);
 #: smaller ones are copied into each task, where a key would cost more than the copy.
 ARRAY_KEY_SIZE = 64
+
+
+#: Shift-group tasks of the Riesz quadrature, which has about 60 shifts even at the finest tol.
+MAX_RIESZ_TASKS = 64
+
+
+@dataclass(frozen=True)
+class GraphOptions(Record):
+    """How a graph splits its work beyond the method's settings."""
+
+    label = "graph"
+
+    riesz_tasks: int | None = option(None, "parallel shift-group tasks of the quadrature (default: one per "
+                                     "worker)", kind="int", minimum=1, maximum=MAX_RIESZ_TASKS)
 
 
 class Builder:
@@ -57,7 +72,7 @@ class Builder:
 
     def __init__(self, guard=None, riesz_tasks: int | None = None):
         self.guard = guard
-        self.riesz_tasks = riesz_tasks
+        self.riesz_tasks = GraphOptions.check("riesz_tasks", riesz_tasks)
 
     def task(self, step: str, func):
         """A ``dask.delayed`` of ``func`` named after ``step``.
@@ -76,8 +91,7 @@ class Builder:
     def potential(self, surface, imfs, riesz: RieszOptions, backend: str | None):
         """``L^{-1/2}`` of the IMFs as :func:`riesz_potential`'s tasks (the ``Stages`` of
         :func:`hht3d.transform.hht_stages`)."""
-        return riesz_potential(surface, imfs, method=riesz.method, tol=riesz.tol, eigenpairs=riesz.eigenpairs,
-                               backend=backend, riesz_tasks=self.riesz_tasks, builder=self)
+        return riesz_potential(surface, imfs, riesz, backend=backend, riesz_tasks=self.riesz_tasks, builder=self)
 
 
 #: Geometries whose caches a process keeps across tasks (the least recently used is dropped).
@@ -172,22 +186,22 @@ def as_key(value):
     return value
 
 
-def riesz_potential(surface, imfs, *, method: str = RIESZ_DEFAULTS.method, tol: float = RIESZ_DEFAULTS.tol,
-                    eigenpairs: int = RIESZ_DEFAULTS.eigenpairs, backend: str | None = None,
-                    riesz_tasks: int | None = None, builder: Builder | None = None):
-    """Lazy ``L^{-1/2}`` of all IMFs, ``(k, n)``.
+def riesz_potential(surface, imfs, options: RieszOptions | dict | None = None, *, backend: str | None = None,
+                    riesz_tasks: int | None = None, builder: Builder | None = None, **overrides):
+    """Lazy ``L^{-1/2}`` of all IMFs, ``(k, n)``, with the ``potential``, ``tol`` and ``eigenpairs`` of
+    ``options`` (:class:`~hht3d.spectral.options.RieszOptions`, with ``overrides``).
 
-    ``method="quadrature"``: a bounds task, ``riesz_tasks`` shift-group tasks
+    ``potential="quadrature"``: a bounds task, ``riesz_tasks`` shift-group tasks
     (:func:`hht3d.spectral.quadrature_part`; default one per worker of the
     scheduler, :func:`hht3d.execution.workers.worker_count`) and a summing task.
-    Other methods: one task (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`).
+    Other potentials: one task (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`).
     """
+    options = RieszOptions.of(options, **overrides)
     builder = Builder() if builder is None else builder
-    if method != "quadrature":
-        return builder.task("riesz", fractional_laplacian)(
-            surface, imfs, -0.5, method, tol, eigenpairs, backend)
-    riesz_tasks = worker_count() if riesz_tasks is None else check_int("riesz_tasks", riesz_tasks, 1)
-    plan = builder.task("riesz_bounds", _quadrature_plan)(surface, tol, backend)
+    if options.potential != "quadrature":
+        return builder.task("riesz", fractional_laplacian)(surface, imfs, -0.5, options, backend=backend)
+    riesz_tasks = GraphOptions.check("riesz_tasks", riesz_tasks) or worker_count()
+    plan = builder.task("riesz_bounds", _quadrature_plan)(surface, options.tol, backend)
     part = builder.task("riesz_shifts", _quadrature_part)
     parts = [part(surface, imfs, plan, group, riesz_tasks, backend) for group in range(riesz_tasks)]
     return builder.task("riesz_sum", combine_quadrature_parts)(surface, parts)

@@ -17,12 +17,12 @@ from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS, check_regular_file
 from .manifest import check_overwrites, is_recorded, new_run_id, record
 from .open3d import surface_from_open3d, surface_to_open3d
 from .paths import check_name, check_output_location, confined, resolve_inputs
-from .read import PlyHeader, data_path, load, read_npz, read_npz_shapes, read_ply_header
+from .read import LoadOptions, PlyHeader, data_path, load, read_npz, read_npz_shapes, read_ply_header
 from .write import field_colors, write_colored_ply, write_npz, write_ply
 from ..geometry.normals import estimate_point_normals
 from . import storage, uploads
 
-__all__ = ["MESH_EXTENSIONS", "POINT_CLOUD_EXTENSIONS", "data_path", "load", "PlyHeader", "read_ply_header",
+__all__ = ["MESH_EXTENSIONS", "POINT_CLOUD_EXTENSIONS", "data_path", "load", "LoadOptions", "PlyHeader", "read_ply_header",
            "read_npz", "read_npz_shapes", "surface_from_open3d", "surface_to_open3d", "estimate_point_normals",
            "atomic_path", "check_output_paths", "remove_stale_parts", "check_regular_file", "check_overwrites",
            "is_recorded", "new_run_id", "record", "check_name", "check_output_location", "confined",

@@ -18,12 +18,13 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, one_line
-from ..geometry.surface import Surface
+from ..geometry.surface import Surface, SurfaceOptions
+from ..records import option
 from ..open3d_quiet import quiet_open3d
 from .formats import MESH_EXTENSIONS, PLY_RESERVED, POINT_CLOUD_EXTENSIONS, check_extension, check_regular_file, usable_name
 from .references import check_references
 
-__all__ = ["data_path", "MESH_EXTENSIONS", "POINT_CLOUD_EXTENSIONS", "load", "PlyHeader", "read_ply_header",
+__all__ = ["data_path", "MESH_EXTENSIONS", "POINT_CLOUD_EXTENSIONS", "load", "LoadOptions", "PlyHeader", "read_ply_header",
            "read_npz_shapes"]
 
 
@@ -44,8 +45,17 @@ def data_path(name: str) -> Path:
     return Path(str(resources.files("hht3d") / "data" / name))
 
 
-def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int = 30,
-         name: str | None = None, storage_options: dict | None = None) -> Surface:
+@dataclass(frozen=True)
+class LoadOptions(SurfaceOptions):
+    """The settings of :func:`load`: cleaning, and the :class:`~hht3d.geometry.surface.SurfaceOptions`."""
+
+    label = "load"
+
+    clean: bool = option(True, "weld duplicate vertices, drop degenerate faces and unused vertices")
+
+
+def load(path, options: LoadOptions | dict | None = None, *, name: str | None = None,
+         storage_options: dict | None = None, **overrides) -> Surface:
     """Load a triangle mesh or point cloud as a :class:`~hht3d.geometry.surface.Surface`.
 
     Parameters
@@ -53,16 +63,17 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
     path : str or Path
         PLY, OBJ, OFF, STL, GLB, GLTF (meshes); PLY, PCD, XYZ, XYZN, PTS (points);
         a local path or an fsspec URL (``s3://bucket/scan.ply``, :mod:`hht3d.io.storage`).
-    clean : bool
-        Weld duplicate vertices and drop degenerate/duplicate faces and
-        unreferenced vertices (:mod:`hht3d.geometry.cleaning`); the report is in
-        ``surface.clean_report``.
-    laplacian, n_neighbors
-        Passed to :class:`~hht3d.geometry.surface.Surface`.
+    options : LoadOptions or dict, optional
+        ``clean``: weld duplicate vertices and drop degenerate/duplicate faces and
+        unreferenced vertices (:mod:`hht3d.geometry.cleaning`; the report is in
+        ``surface.clean_report``); ``laplacian`` and ``n_neighbors``: passed to
+        :class:`~hht3d.geometry.surface.Surface`.
     name : str, optional
         Defaults to the file stem.
     storage_options : dict, optional
         For a URL: options of its fsspec back-end (endpoint, region, ...).
+    **overrides
+        Settings that replace those of ``options`` (``clean=False``).
 
     Raises
     ------
@@ -76,11 +87,11 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
     >>> surface.n_vertices, len(surface.faces), surface.is_mesh
     (2930, 5856, True)
     """
+    options = LoadOptions.of(options, **overrides)
     from .storage import is_url, load_url, local_path
     path = local_path(path)
     if is_url(path):  # object storage: through a temporary local copy
-        return load_url(load, path, storage_options, clean=clean, laplacian=laplacian, n_neighbors=n_neighbors,
-                        name=name)
+        return load_url(load, path, storage_options, options=options, name=name)
     path = Path(path)
     check_regular_file(path)
     check_extension(path)
@@ -95,9 +106,9 @@ def load(path, *, clean: bool = True, laplacian: str = "cotan", n_neighbors: int
         data = _read_open3d_points(path)
     if len(data["vertices"]) == 0:
         raise InputError(f"{path}: the file holds no vertices (empty or unreadable geometry)")
-    options = dict(laplacian=laplacian, n_neighbors=n_neighbors, name=name or path.stem)
+    settings = dict(laplacian=options.laplacian, n_neighbors=options.n_neighbors, name=name or path.stem)
     try:
-        surface = Surface.cleaned(**data, **options) if clean else Surface(**data, **options)
+        surface = Surface.cleaned(**data, **settings) if options.clean else Surface(**data, **settings)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
     return surface

@@ -21,7 +21,7 @@ This layer adds configuration only: nothing in the core knows YAML exists.
 """
 from ..output_formats import FORMATS, Format
 from .params import Param
-from .plan import Execution, Output, Pipeline, Step
+from .plan import ExecutionOptions, Output, Pipeline, Step
 from .registry import OPERATIONS, Operation, Slot
 from .runner import failures, pipeline_graph, run_pipeline
 from .document import apply_overrides
@@ -29,7 +29,17 @@ from .validation import VERSION, builtin_models, load_pipeline, parse_pipeline
 
 __all__ = [
     "VERSION", "load_pipeline", "parse_pipeline", "apply_overrides", "builtin_models",
-    "Pipeline", "Execution", "Step", "Output",
+    "Pipeline", "ExecutionOptions", "Step", "Output",
     "OPERATIONS", "Operation", "Slot", "Param", "FORMATS", "Format",
     "pipeline_graph", "run_pipeline", "failures",
 ]
+
+
+def __getattr__(name: str):
+    """``Execution``, the former name of :class:`ExecutionOptions`, for one release."""
+    if name == "Execution":
+        import warnings
+
+        warnings.warn("hht3d.pipeline.Execution is now ExecutionOptions", DeprecationWarning, stacklevel=2)
+        return ExecutionOptions
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -9,15 +9,14 @@ adds the closest known name to messages about unknown names.
 from __future__ import annotations
 
 import dataclasses
-import inspect
-import math
 from dataclasses import dataclass
 
 from ..apps.filters import GAINS, make_gain
 from ..errors import InputError, PipelineError, did_you_mean, one_line, shown
+from ..records import KINDS as RECORD_KINDS
 from ..records import Record, Spec
 
-__all__ = ["Param", "REQUIRED", "did_you_mean", "record_params", "with_defaults", "yaml_text"]
+__all__ = ["Param", "REQUIRED", "did_you_mean", "record_params", "yaml_text"]
 
 
 class _Required:
@@ -27,10 +26,9 @@ class _Required:
 
 #: Default of a parameter that must be given.
 REQUIRED = _Required()
-#: Default to be read from the signature of the core function (see :func:`with_defaults`).
-_SIGNATURE = object()
 
-KINDS = ("int", "float", "bool", "str", "choice", "gain")
+#: The kinds of :data:`hht3d.records.KINDS` and ``"gain"``.
+KINDS = (*RECORD_KINDS, "gain")
 
 
 def yaml_text(value) -> str:
@@ -52,19 +50,20 @@ def _what(value) -> str:
 
 @dataclass(frozen=True)
 class Param:
-    """One parameter: name, type, default, range or choices, description.
+    """One parameter: a name, a default and the allowed values of a :class:`~hht3d.records.Spec`.
 
-    ``kind`` is ``"int"``, ``"float"``, ``"bool"``, ``"str"``, ``"choice"``
-    (one of ``choices``) or ``"gain"`` (a mapping ``{kind: band_stop, ...}``
-    of :func:`hht3d.apps.make_gain`).  A default of ``None`` or ``nullable``
-    makes ``null`` an allowed value; :data:`REQUIRED` makes the parameter
-    mandatory.
+    ``kind`` is a :data:`hht3d.records.KINDS` kind or ``"gain"`` (a mapping
+    ``{kind: band_stop, ...}`` of :func:`hht3d.apps.make_gain`), the one kind
+    option records lack.  A default of ``None`` or ``nullable`` makes ``null``
+    an allowed value; :data:`REQUIRED` makes the parameter mandatory.  The
+    parameters of a setting declared in an option record are made by
+    :func:`record_params`, never written again.
     """
 
     name: str
     kind: str
     doc: str
-    default: object = _SIGNATURE
+    default: object = REQUIRED
     choices: tuple = ()
     minimum: float | None = None
     maximum: float | None = None
@@ -76,9 +75,20 @@ class Param:
         if self.kind not in KINDS:
             raise ValueError(f"parameter {self.name}: unknown kind {self.kind!r}")
 
+    @classmethod
+    def of_spec(cls, name: str, spec: Spec, default) -> "Param":
+        """The parameter of a record's setting: its spec under ``name`` with ``default``."""
+        return cls(name, default=default, **dataclasses.asdict(spec))
+
     @property
     def required(self) -> bool:
         return self.default is REQUIRED
+
+    @property
+    def spec(self) -> Spec:
+        """The parameter's allowed values as an option :class:`~hht3d.records.Spec`."""
+        return Spec(self.doc, self.kind, self.choices, self.minimum, self.maximum, self.open_minimum,
+                    self.open_maximum, self.nullable or self.default is None)
 
     def describe(self) -> str:
         """The type and range, e.g. ``int >= 0``, ``float in (0.5, 1]``, ``sd | s_number | fixed``."""
@@ -86,17 +96,8 @@ class Param:
             return " | ".join(map(str, self.choices))
         if self.kind == "gain":
             return f"gain {{kind: {' | '.join(GAINS)}, ...}}"
-        text = self.kind + self._range()
-        return f"{text} or null" if self.default is None or self.nullable else text
-
-    @property
-    def spec(self) -> Spec:
-        """The parameter's allowed values as an option :class:`~hht3d.records.Spec`."""
-        return Spec(self.doc, self.kind, self.choices, self.minimum, self.maximum, self.open_minimum,
-                    self.open_maximum, self.nullable)
-
-    def _range(self) -> str:
-        return self.spec.range_text()
+        text = self.kind + self.spec.range_text()
+        return f"{text} or null" if self.spec.nullable else text
 
     def check(self, value, where: str):
         """The checked value (ints stay ints, gains become :class:`~hht3d.apps.Gain` objects).
@@ -106,40 +107,16 @@ class Param:
         PipelineError
             ``"{where}: parameter NAME must be ..., got ..."``.
         """
-        if value is None and (self.default is None or self.nullable):
-            return None
-        if self.kind == "choice":
-            if value not in self.choices:
-                raise PipelineError(f"{where}: parameter {self.name} must be one of "
-                                    f"{', '.join(map(str, self.choices))}; got {_what(value)}"
-                                    f"{did_you_mean(value, self.choices, listing=False)}")
-            return value
         if self.kind == "gain":
             return _gain(value, f"{where}: parameter {self.name}")
-        if self.kind == "bool":
-            if not isinstance(value, bool):
-                self._fail(where, value)
-            return value
-        if self.kind == "str":
-            if not isinstance(value, str):
-                self._fail(where, value)
-            return value
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or (self.kind == "int" and not isinstance(value, int)) or not math.isfinite(value):
-            self._fail(where, value)
-        if not self._in_range(value):
-            self._fail(where, value)
-        return value if self.kind == "int" else float(value)
-
-    def _in_range(self, x) -> bool:
-        return self.spec.in_range(x)
-
-    def _fail(self, where: str, value):
-        article = {"int": "an integer", "float": "a number", "bool": "true or false", "str": "a string"}
-        expected = article[self.kind] + self._range()
+        spec = self.spec
+        if spec.accepts(value):
+            return value if value is None or self.kind != "float" else float(value)
+        expected = spec.expected(null="")
         if value is None and self.kind in ("int", "float"):
             expected += " (not null)"
-        raise PipelineError(f"{where}: parameter {self.name} must be {expected}; got {_what(value)}")
+        hint = did_you_mean(value, self.choices, listing=False) if self.kind == "choice" else ""
+        raise PipelineError(f"{where}: parameter {self.name} must be {expected}; got {_what(value)}{hint}")
 
 
 def _gain(value, where: str):
@@ -164,17 +141,5 @@ def _gain(value, where: str):
 def record_params(record: type[Record]) -> tuple[Param, ...]:
     """One parameter per setting of an option record, with the record's default, range and description."""
     defaults = record.defaults()
-    return tuple(Param(name, spec.kind, spec.doc, default=defaults[name], choices=spec.choices,
-                       minimum=spec.minimum, maximum=spec.maximum, open_minimum=spec.open_minimum,
-                       open_maximum=spec.open_maximum, nullable=spec.nullable)
+    return tuple(Param.of_spec(name, spec, REQUIRED if defaults[name] is dataclasses.MISSING else defaults[name])
                  for name, spec in record.specs().items())
-
-
-def with_defaults(func, *params: Param) -> tuple[Param, ...]:
-    """``params`` with every unset default read from the signature of ``func``.
-
-    Keeps the documented defaults of ``hht3d ops`` equal to the core's own.
-    """
-    signature = inspect.signature(func).parameters
-    return tuple(dataclasses.replace(p, default=signature[p.name].default) if p.default is _SIGNATURE else p
-                 for p in params)

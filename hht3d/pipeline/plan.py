@@ -10,12 +10,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..dataset.summary import summary_paths
+from ..decomposition.options import EnsembleOptions
+from ..execution import MAX_WORKERS, SCHEDULERS
 from ..io.storage import join, parent_name, stem
 from ..output_formats import Format
+from ..records import Record, option
 from .params import yaml_text
 from .registry import Operation
 
-__all__ = ["FILE", "Execution", "Step", "Output", "Pipeline"]
+__all__ = ["FILE", "ExecutionOptions", "Step", "Output", "Pipeline"]
 
 #: Reference of a ``file`` slot: the input file of the item being processed.
 FILE = "<input file>"
@@ -25,14 +28,19 @@ PLACEHOLDERS = ("stem", "parent", "name")
 
 
 @dataclass(frozen=True)
-class Execution:
-    """Where and how the graph runs (:func:`hht3d.execution.schedulers.compute`)."""
+class ExecutionOptions(Record):
+    """The ``execution`` block: where and how the graph runs (:func:`hht3d.execution.schedulers.compute`),
+    and the default seed of randomised steps.  Its settings are also the checks of the CLI's
+    ``--scheduler`` and ``--workers``."""
 
-    scheduler: str = "threads"
-    workers: int | None = None
-    address: str | None = None
-    progress: bool = True
-    seed: int = 0
+    label = "execution"
+
+    scheduler: str = option("threads", "Dask scheduler", choices=SCHEDULERS)
+    workers: int | None = option(None, "threads, processes or cluster workers (default: one per core)", kind="int",
+                                 minimum=1, maximum=MAX_WORKERS)
+    address: str | None = option(None, "address of a running dask.distributed scheduler", kind="str")
+    progress: bool = option(True, "progress bar on stderr")
+    seed: int = option(0, "default seed of randomised steps", like=EnsembleOptions.specs()["seed"])
 
 
 @dataclass(frozen=True)
@@ -102,7 +110,7 @@ class Pipeline:
 
     name: str
     source: str
-    execution: Execution
+    execution: ExecutionOptions
     inputs: tuple[Path, ...]
     steps: tuple[Step, ...]
     outputs: tuple[Output, ...]

@@ -16,9 +16,9 @@ features   :class:`~hht3d.apps.FeatureResult`
 
 An operation is data: the core function it runs, its slots (the
 function's leading positional arguments, in order), its output kind and its
-parameters (the function's keyword arguments, with types and ranges;
-defaults read from the function's signature by
-:func:`~hht3d.pipeline.params.with_defaults`).
+parameters (the function's keyword arguments: the settings of its option
+record, read by :func:`~hht3d.pipeline.params.record_params`, so that a
+type, range, default or description is written once, beside the function).
 :meth:`Operation.tasks` makes the step's lazy task from that alone.  An
 operation whose work is several tasks (EEMD members, the HHT stages) names
 a ``build`` function of :mod:`hht3d.graph.stages` instead.  ``hht3d ops`` prints
@@ -26,12 +26,13 @@ this registry.
 
 Adding an operation
 -------------------
-Write the core function (e.g. in :mod:`hht3d.apps`), then add one entry to
-:data:`OPERATIONS`::
+Write the core function (e.g. in :mod:`hht3d.apps`) taking ``(…, options=None,
+**overrides)`` with its settings in an option record beside it
+(``SmoothOptions`` with ``time: float = option(1.0, "diffusion time", minimum=0)``),
+then add one entry to :data:`OPERATIONS`::
 
     Operation("smooth", "heat-flow smoothing of a signal", (_SURFACE, _SIGNAL_IN), "signal",
-              with_defaults(smooth, Param("time", "float", "diffusion time", minimum=0)),
-              func=smooth),
+              record_params(SmoothOptions), func=smooth),
 
 Its lazy twin, if wanted outside pipelines, is one line in
 :mod:`hht3d.graph.stages`: ``smooth = mirror(smooth)``.
@@ -41,20 +42,26 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+import dataclasses
+
 from .. import graph, linalg
 from ..apps import (filter_geometry, filter_signal, hks_features, imf_enhancement, manifold_harmonics_filter,
                     prominent_features, reconstruct)
+from ..apps.baselines import EnhancementOptions, HarmonicFilterOptions, HKSOptions
+from ..apps.features import FeatureOptions
+from ..apps.reconstruction import FilterOptions, ReconstructionOptions
 from ..decomposition.decompose import emd
-from ..decomposition.options import MAX_ENSEMBLE, MAX_IMFS, MAX_RING, MAX_SEED, EMDOptions, EnsembleOptions
+from ..decomposition.ensemble import ensemble_settings
+from ..decomposition.options import EMDOptions, EnsembleOptions
 from ..errors import InputError, PipelineError, shown
-from ..io.read import load
-from ..spectral.options import MAX_EIGENPAIRS, RieszOptions
+from ..graph.tasks import GraphOptions
+from ..io.read import LoadOptions, load
+from ..spectral.options import RieszOptions
 from ..transform import decomposition_stage
 from ..geometry.signals import SIGNALS, check_signal_path, signal
-from ..geometry.surface import LAPLACIANS
-from .params import REQUIRED, Param, did_you_mean, record_params, with_defaults
+from .params import REQUIRED, Param, did_you_mean, record_params
 
-__all__ = ["Slot", "Operation", "OPERATIONS", "operation"]
+__all__ = ["Slot", "Operation", "OPERATIONS", "RENAMED", "operation"]
 
 
 class _Solvers(Sequence):
@@ -143,34 +150,19 @@ class Operation:
         return None if self.vertices is None else self.vertices(params)
 
 
-# -- upper bounds -----------------------------------------------------------------------------------
-# Every numeric parameter has a range, which `hht3d ops` prints.  The upper bounds lie far above
-# useful values; they stop a typo from hanging validation or a run (a billion EEMD tasks, 100,000
-# shift-group tasks, a dense block of a million eigenvectors).  Parameters in model units
-# (merge_radius, time, gain frequencies) scale with the model and are only required to be finite.
-# The settings of EMD, EEMD and the Riesz transform declare theirs in their option records.
-
-#: Shift-group tasks of the Riesz quadrature, which has about 60 shifts even at the finest tol.
-MAX_RIESZ_TASKS = 64
-#: Neighbours of the point-cloud Laplacian and normals.
-MAX_NEIGHBORS = 256
-#: Position weights μ of Eq. 27 (the paper's are 0.01 and 1).
-MAX_WEIGHT = 1e6
-#: IMF factor of the enhancement baseline.
-MAX_FACTOR = 1e3
-
-
 # -- parameters -------------------------------------------------------------------------------------
+# Every numeric parameter has a range, which `hht3d ops` prints; each is declared once, in the option
+# record beside the function that uses it (records.option), with an upper bound far above useful
+# values that stops a typo from hanging validation or a run.  Parameters in model units
+# (merge_radius, time, gain frequencies) scale with the model and are only required to be finite.
+
+#: Former parameter names and their new ones, named in the message that refuses them.
+RENAMED = dict(RieszOptions.renamed)
+
 _BACKEND = Param("backend", "choice", "sparse solver (default: the fastest installed)", default=None,
                  choices=SOLVERS)
 
-LOAD = with_defaults(
-    load,
-    Param("clean", "bool", "weld duplicate vertices, drop degenerate faces and unused vertices"),
-    Param("laplacian", "choice", "mesh Laplacian (point clouds always use the robust one)", choices=LAPLACIANS),
-    Param("n_neighbors", "int", "neighbours of the point-cloud Laplacian and normals", minimum=3,
-          maximum=MAX_NEIGHBORS),
-)
+LOAD = record_params(LoadOptions)
 
 SIGNAL = (
     Param("kind", "choice", "which signal; mean_curvature is Eq. 24", default=REQUIRED,
@@ -181,71 +173,20 @@ SIGNAL = (
 
 EMD = (*record_params(EMDOptions), _BACKEND)
 
-_SEED = Param("seed", "int", "EEMD noise seed (default: execution.seed)", default=None, minimum=0,
-              maximum=MAX_SEED)
-ENSEMBLE = (*(p for p in record_params(EnsembleOptions) if p.name != "seed"), _SEED)
 
-_RIESZ_TASKS = Param("riesz_tasks", "int", "parallel shift-group tasks of the quadrature (default: one per "
-                     "worker)", default=None, minimum=1, maximum=MAX_RIESZ_TASKS)
-SPECTRA = (*record_params(RieszOptions), _RIESZ_TASKS)
-
-HHT = (
-    *record_params(EMDOptions),
-    Param("ensemble_size", "int", "use EEMD with this many members (default: plain EMD)", default=None,
-          minimum=1, maximum=MAX_ENSEMBLE),
-    *(p for p in ENSEMBLE if p.name != "ensemble_size"),
-    *SPECTRA,
-    _BACKEND,
-)
-
-def _weights(func, when_null: str = "") -> tuple[Param, ...]:
-    """The Eq. 27 position weights of ``func`` (reconstruct or filter_geometry), its defaults."""
-    return with_defaults(
-        func,
-        Param("interior_weight", "float", f"position weight μ of interior vertices (Eq. 27){when_null}", minimum=0,
-              maximum=MAX_WEIGHT, open_minimum=True),
-        Param("boundary_weight", "float", f"position weight μ of boundary vertices (Eq. 27){when_null}", minimum=0,
-              maximum=MAX_WEIGHT, open_minimum=True),
-        Param("preserve_scale", "bool", "remove the mean curvature change per component"),
-    )
+def _optional(params: tuple[Param, ...], **docs: str) -> tuple[Param, ...]:
+    """``params`` with those named in ``docs`` made optional (default null), described anew."""
+    return tuple(dataclasses.replace(p, default=None, doc=docs[p.name]) if p.name in docs else p for p in params)
 
 
-_WEIGHTS = _weights(reconstruct)
-_FILTER_WEIGHTS = _weights(filter_geometry, "; null: from the gain, positions hold below a third of the "
-                                                 "lowest edited frequency")
+ENSEMBLE = _optional(record_params(EnsembleOptions), seed="EEMD noise seed (default: execution.seed)")
+SPECTRA = (*record_params(RieszOptions), *record_params(GraphOptions))
+HHT = (*record_params(EMDOptions),
+       *_optional(ENSEMBLE, ensemble_size="use EEMD with this many members (default: plain EMD)"),
+       *SPECTRA, _BACKEND)
+
 _GAIN = Param("gain", "gain", "μ(ω) of the instantaneous frequency, e.g. {kind: band_stop, low: 8, high: 20}",
               default=REQUIRED)
-
-FEATURES = with_defaults(
-    prominent_features,
-    Param("ratio", "float", "a maximum is >= this fraction of its ring", minimum=0.5, maximum=1,
-          open_minimum=True),
-    Param("ring", "int", "neighbourhood in edges", minimum=1, maximum=MAX_RING),
-    Param("fraction", "float", "hit: extremum of at least this fraction of the IMFs", minimum=0, maximum=1,
-          open_minimum=True),
-    Param("merge_radius", "float", "merge hits closer than this (model units)", minimum=0),
-)
-
-HKS = with_defaults(
-    hks_features,
-    Param("time", "float", "diffusion time (default: a fraction of 4 ln 10 / λ1)", minimum=0,
-          open_minimum=True),
-    Param("eigenpairs", "int", "eigenpairs in the heat-kernel sum", minimum=1, maximum=MAX_EIGENPAIRS),
-    Param("ring", "int", "neighbourhood in edges", minimum=1, maximum=MAX_RING),
-    Param("merge_radius", "float", "merge maxima closer than this (model units)", minimum=0),
-) + (_BACKEND,)
-
-ENHANCE = with_defaults(
-    imf_enhancement,
-    Param("factor", "float", "multiply the IMF by this", minimum=-MAX_FACTOR, maximum=MAX_FACTOR),
-    Param("index", "int", "which IMF, from 0 (the finest)", minimum=0, maximum=MAX_IMFS - 1),
-) + _WEIGHTS + (_BACKEND,)
-
-MHB = with_defaults(
-    manifold_harmonics_filter,
-    Param("eigenpairs", "int", "Laplacian eigenpairs of the basis", minimum=1, maximum=MAX_EIGENPAIRS),
-    Param("keep_remainder", "bool", "keep the part of the shape beyond the basis"),
-) + (_BACKEND,)
 
 
 # -- checks and builders -------------------------------------------------------------------------
@@ -266,26 +207,24 @@ def _check_signal(params, where):
 
 
 def _eigenpair_vertices(params) -> tuple[str, int] | None:
-    """``k`` eigenpairs exclude the constant mode, so need ``k + 1`` vertices (with method spectral)."""
-    if params.get("method", "spectral") != "spectral":
+    """``k`` eigenpairs exclude the constant mode, so need ``k + 1`` vertices (with potential spectral)."""
+    if params.get("potential", "spectral") != "spectral":
         return None
     return "eigenpairs", params["eigenpairs"] + 1
 
 
-def _hht_tasks(builder, surface, signal, **params):
-    """The HHT's stages (:func:`hht3d.graph.transform`) from the step's flat parameters."""
-    emd, riesz, ensemble = ({k: params[k] for k in record.specs() if k in params}
-                            for record in (EMDOptions, RieszOptions, EnsembleOptions))
-    stages = graph.transform(builder, surface, signal, emd=emd, riesz=riesz,
-                             ensemble=ensemble if ensemble["ensemble_size"] is not None else None,
-                             backend=params["backend"], riesz_tasks=params["riesz_tasks"])
+def _hht_tasks(builder, surface, signal, *, backend, riesz_tasks, **settings):
+    """The HHT's stages (:func:`hht3d.graph.transform`) from the step's flat settings; EEMD when
+    ``ensemble_size`` is given."""
+    if settings["ensemble_size"] is None:
+        settings = {k: v for k, v in settings.items() if k not in EnsembleOptions.specs()}
+    stages = graph.transform(builder, surface, signal, backend=backend, riesz_tasks=riesz_tasks, **settings)
     return {**stages, "result": stages["hht"]}
 
 
-def _eemd_tasks(builder, surface, signal, **params):
-    """EEMD's member and averaging tasks from the step's flat parameters."""
-    emd, ensemble = (record.of({k: params[k] for k in record.specs()}) for record in (EMDOptions, EnsembleOptions))
-    return decomposition_stage(builder, surface, signal, emd, ensemble, params["backend"])
+def _eemd_tasks(builder, surface, signal, *, backend, **settings):
+    """EEMD's member and averaging tasks from the step's flat settings."""
+    return decomposition_stage(builder, surface, signal, *ensemble_settings(None, None, settings), backend)
 
 
 _SURFACE = Slot("surface", ("surface",))
@@ -309,17 +248,19 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
               (_HHT,), "signal", (_GAIN,), func=filter_signal),
     Operation("filter_geometry", "Hilbert-spectrum filtering of the mean curvature and new positions "
                                  "(Eqs. 26-27)",
-              (_HHT,), "surface", (_GAIN, *_FILTER_WEIGHTS, _BACKEND), func=filter_geometry),
+              (_HHT,), "surface", (_GAIN, *record_params(FilterOptions), _BACKEND), func=filter_geometry),
     Operation("reconstruct", "new positions whose mean curvature is the given signal (Eq. 27)",
-              (_SURFACE, _SIGNAL_IN), "surface", (*_WEIGHTS, _BACKEND), func=reconstruct),
+              (_SURFACE, _SIGNAL_IN), "surface", (*record_params(ReconstructionOptions), _BACKEND), func=reconstruct),
     Operation("features", "prominent feature points from IMF extrema counts (Sec. 5.2)",
-              (_SURFACE, _IMFS), "features", FEATURES, func=prominent_features),
+              (_SURFACE, _IMFS), "features", record_params(FeatureOptions), func=prominent_features),
     Operation("hks_features", "baseline: maxima of the heat kernel signature (Sun et al. 2009)",
-              (_SURFACE,), "features", HKS, func=hks_features, vertices=_eigenpair_vertices),
+              (_SURFACE,), "features", (*record_params(HKSOptions), _BACKEND), func=hks_features,
+              vertices=_eigenpair_vertices),
     Operation("imf_enhancement", "baseline: scale one IMF of the mean curvature (Hu et al. 2014)",
-              (_SURFACE, _IMFS), "surface", ENHANCE, func=imf_enhancement),
+              (_SURFACE, _IMFS), "surface", (*record_params(EnhancementOptions), _BACKEND), func=imf_enhancement),
     Operation("manifold_harmonics_filter", "baseline: filter in the Laplacian eigenbasis (Vallet & Lévy 2008)",
-              (_SURFACE,), "surface", (_GAIN, *MHB), func=manifold_harmonics_filter, vertices=_eigenpair_vertices),
+              (_SURFACE,), "surface", (_GAIN, *record_params(HarmonicFilterOptions), _BACKEND),
+              func=manifold_harmonics_filter, vertices=_eigenpair_vertices),
 )}
 
 

@@ -61,12 +61,11 @@ from pathlib import Path
 from ..errors import InputError, PipelineError, shown
 from ..io import data_path, read_ply_header
 from ..io.storage import is_url, resolve_locations
-from ..execution import MAX_WORKERS, SCHEDULERS
 from .document import YAMLMapping, add_implicit_load, apply_overrides, as_mapping, at, known_keys, read_yaml
 from .output_checks import FILE_KEYS, OUTPUTS_KEYS, check_plan_outputs, read_outputs
-from .params import Param, did_you_mean
-from .plan import FILE, Execution, Pipeline, Step
-from .registry import MAX_SEED, OPERATIONS, operation
+from .params import did_you_mean, record_params
+from .plan import FILE, ExecutionOptions, Pipeline, Step
+from .registry import OPERATIONS, RENAMED, operation
 from .storage_options import storage_options
 
 __all__ = ["VERSION", "EXECUTION", "TOP_KEYS", "STEP_KEYS", "OUTPUTS_KEYS", "FILE_KEYS", "load_pipeline",
@@ -79,14 +78,7 @@ VERSION = 1
 TOP_KEYS = ("version", "name", "execution", "storage_options", "inputs", "steps", "outputs")
 STEP_KEYS = ("id", "op", "from", "params")
 #: Parameters of the ``execution`` block (also the checks of the CLI's --scheduler and --workers).
-EXECUTION = (
-    Param("scheduler", "choice", "Dask scheduler", default="threads", choices=SCHEDULERS),
-    Param("workers", "int", "threads, processes or cluster workers (default: one per core)", default=None,
-          minimum=1, maximum=MAX_WORKERS),
-    Param("address", "str", "address of a running dask.distributed scheduler", default=None),
-    Param("progress", "bool", "progress bar on stderr", default=True),
-    Param("seed", "int", "default seed of randomised steps", default=0, minimum=0, maximum=MAX_SEED),
-)
+EXECUTION = record_params(ExecutionOptions)
 _ID_CHARS = set(string.ascii_letters + string.digits + "_-")
 #: The longest step id.
 MAX_ID = 64
@@ -200,12 +192,12 @@ class Validator:
             raise PipelineError(f"{at(doc, 'version')}: unsupported pipeline version {shown(doc['version'])}; "
                                 f"this hht3d reads version {VERSION}")
 
-    def _execution(self, block) -> Execution:
+    def _execution(self, block) -> ExecutionOptions:
         block = as_mapping(block, at(block), "execution")
         known_keys(block, [p.name for p in EXECUTION], "execution")
         values = {p.name: p.check(block[p.name], f"{at(block, p.name)}: execution") if p.name in block
                   else p.default for p in EXECUTION}
-        return Execution(**values)
+        return ExecutionOptions(**values)
 
     def _inputs(self, doc) -> tuple[Path | str, ...]:
         if "inputs" not in doc or doc["inputs"] in (None, [], ""):
@@ -230,7 +222,7 @@ class Validator:
             raise PipelineError(f"{where}: inputs: {exc}") from None
 
     # -- steps ----------------------------------------------------------------------------------
-    def _steps(self, doc, execution: Execution) -> tuple[Step, ...]:
+    def _steps(self, doc, execution: ExecutionOptions) -> tuple[Step, ...]:
         raw = doc.get("steps")
         if not isinstance(raw, list) or not raw:
             raise PipelineError(f"{at(doc, 'steps') if 'steps' in doc else self.source}: steps must be a "
@@ -246,7 +238,7 @@ class Validator:
                  for i, (step_id, op, params, given) in enumerate(parsed)]
         return _ordered(steps, entries)
 
-    def _step(self, entry, execution: Execution):
+    def _step(self, entry, execution: ExecutionOptions):
         known_keys(entry, STEP_KEYS, "a step")
         where = at(entry, "op")
         if "op" not in entry:
@@ -261,8 +253,10 @@ class Validator:
         for key in raw:
             if op.param(key) is None:
                 known = [p.name for p in op.params]
-                raise PipelineError(f"{at(raw, key)}: {context}: unknown parameter {shown(key)}"
-                                    f"{did_you_mean(key, known)} (`hht3d ops {op.name}` lists them)")
+                hint = (f"; did you mean {RENAMED[key]}? ({key} was renamed {RENAMED[key]} in 0.2.0)"
+                        if RENAMED.get(key) in known else did_you_mean(key, known))
+                raise PipelineError(f"{at(raw, key)}: {context}: unknown parameter {shown(key)}{hint} "
+                                    f"(`hht3d ops {op.name}` lists them)")
         params = {}
         for p in op.params:
             if p.name in raw:

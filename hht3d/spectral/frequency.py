@@ -24,8 +24,8 @@ in the units of Eq. 23.  Gains of Eq. 26
 (:mod:`hht3d.apps.filters`) and the Hilbert spectrum use the same numbers, so
 a cutoff read off the spectrum acts where the spectrum shows it.
 
-Estimators (``method``)
------------------------
+Estimators (``frequency``)
+--------------------------
 ``"phase"`` (default)
     The phase increment along every edge ``(i, j)`` of the gradient
     stencil, ``Δψ_ij = arg(z_j z̄_i)`` with ``z = f + i q``, ``q = Rf·o_i``
@@ -75,10 +75,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError
-from .options import FREQUENCY_METHODS, RIESZ_DEFAULTS
+from ..records import renamed_keywords
+from .options import FREQUENCY_METHODS, RieszOptions
 from .riesz_transform import vertex_gradient
 from ..geometry.surface import Surface
-from ..geometry.validation import check_choice
 
 __all__ = ["FREQUENCY_METHODS", "instantaneous_frequency"]
 
@@ -99,8 +99,8 @@ _MIN_RESPONSE = 0.05
 _THREAD_EDGES = 4_000_000
 
 
-def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = RIESZ_DEFAULTS.frequency,
-                            gradient: str = RIESZ_DEFAULTS.gradient) -> np.ndarray:
+def instantaneous_frequency(surface: Surface, signals, riesz, options: RieszOptions | dict | None = None,
+                            **overrides) -> np.ndarray:
     """Instantaneous frequency ``ω = |∇φ|`` (Eq. 23) of ``k`` signals from their Riesz transforms.
 
     Parameters
@@ -110,13 +110,15 @@ def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = R
         The signals ``f`` (e.g. IMFs).
     riesz : (k, n, 3) ndarray
         Their Riesz transforms ``R f`` (tangent vectors).
-    method : {"phase", "gradient"}
-        Estimator; see the module notes.  ``"phase"`` is exact for sampled
-        plane waves up to the resolution limit; ``"gradient"`` is the paper's
-        Eq. 23 computed with vertex gradients.
-    gradient : {"lsq", "fem"}
-        Vertex gradient operator (:meth:`hht3d.geometry.surface.Surface.gradient`)
-        the estimator uses, as for the Riesz transform.
+    options : RieszOptions or dict, optional
+        ``frequency``: the estimator (module notes; formerly the keyword
+        ``method``): ``"phase"`` is exact for sampled plane waves up to the
+        resolution limit, ``"gradient"`` is the paper's Eq. 23 computed with
+        vertex gradients.  ``gradient``: the vertex gradient operator
+        (:meth:`hht3d.geometry.surface.Surface.gradient`) the estimator uses,
+        as for the Riesz transform.
+    **overrides
+        Settings that replace those of ``options``.
 
     The ``"phase"`` route reads the signals in parallel threads, one per
     core this process may use (``OMP_NUM_THREADS`` where set); the result
@@ -128,16 +130,17 @@ def instantaneous_frequency(surface: Surface, signals, riesz, *, method: str = R
         Radians per model unit of length, ``>= 0``; 0 where ``f`` and ``Rf``
         vanish (no amplitude) and at vertices without neighbours.
     """
-    check_choice(method, FREQUENCY_METHODS, "frequency method")
+    options = RieszOptions.of(options, **renamed_keywords(overrides, {"method": "frequency"},
+                                                           "instantaneous_frequency"))
     f = np.asarray(signals, dtype=np.float64)
     r = np.asarray(riesz, dtype=np.float64)
     if f.ndim != 2 or r.shape != (*f.shape, 3) or f.shape[1] != surface.n_vertices:
         raise InputError(f"signals must have shape (k, {surface.n_vertices}) and their Riesz transforms "
                          f"(k, {surface.n_vertices}, 3), got {f.shape} and {r.shape}")
     f, r = _unit_scale(f, r)
-    if method == "gradient":
-        return _gradient_frequency(surface, f, r, gradient)
-    stencil = _stencil(surface, gradient)
+    if options.frequency == "gradient":
+        return _gradient_frequency(surface, f, r, options.gradient)
+    stencil = _stencil(surface, options.gradient)
     with ThreadPoolExecutor(_threads(len(f), len(stencil.rows))) as pool:  # NumPy and SciPy's sparse products release the GIL
         rows = list(pool.map(lambda fi, ri: _phase_frequency(stencil, fi, ri), f, r))
     return np.array(rows).reshape(f.shape)

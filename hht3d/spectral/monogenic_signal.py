@@ -27,10 +27,10 @@ import numpy as np
 from ..errors import InputError
 from .frequency import instantaneous_frequency
 from .resolution import ResolutionReport, resolution_report, resolvable_from_area
-from .options import FREQUENCY_METHODS, GRADIENTS, RIESZ_DEFAULTS, RieszOptions
+from .options import RieszOptions
 from .riesz_transform import fractional_laplacian, vertex_gradient
 from ..geometry.surface import Surface
-from ..geometry.validation import as_signals, check_choice, check_surface
+from ..geometry.validation import as_signals, check_surface
 
 __all__ = ["MonogenicSignal", "monogenic", "monogenic_from_potential"]
 
@@ -112,7 +112,7 @@ def monogenic(surface: Surface, imfs, options: RieszOptions | dict | None = None
         ``frequency`` (the estimator of Eq. 23,
         :func:`hht3d.spectral.frequency.instantaneous_frequency`: edge phase
         increments, exact for plane waves up to the resolution limit, or the
-        paper's gradients of the sampled fields), and ``method``, ``tol``,
+        paper's gradients of the sampled fields), and ``potential``, ``tol``,
         ``eigenpairs`` (how ``L^{-1/2}`` is applied, see
         :func:`hht3d.spectral.riesz_transform.fractional_laplacian`);
         default :data:`~hht3d.spectral.options.RIESZ_DEFAULTS`.
@@ -144,16 +144,16 @@ def monogenic(surface: Surface, imfs, options: RieszOptions | dict | None = None
     """
     options = RieszOptions.of(options, **overrides)
     f = _signals(surface, imfs)
-    potential = fractional_laplacian(surface, f, -0.5, options.method, options.tol, options.eigenpairs, backend)
-    return monogenic_from_potential(surface, f, potential, options.gradient, options.frequency)
+    potential = fractional_laplacian(surface, f, -0.5, options, backend=backend)
+    return monogenic_from_potential(surface, f, potential, options)
 
 
 def _signals(surface: Surface, imfs) -> np.ndarray:
     return as_signals(check_surface(surface), imfs, "imfs")[0]
 
 
-def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = RIESZ_DEFAULTS.gradient,
-                             frequency: str = RIESZ_DEFAULTS.frequency) -> MonogenicSignal:
+def monogenic_from_potential(surface: Surface, imfs, potential, options: RieszOptions | dict | None = None,
+                             **overrides) -> MonogenicSignal:
     """Monogenic signal from precomputed ``L^{-1/2}`` of the IMFs (Eqs. 16, 20–23).
 
     Parameters
@@ -163,22 +163,22 @@ def monogenic_from_potential(surface: Surface, imfs, potential, gradient: str = 
     potential : array_like, shape of ``imfs``
         ``L^{-1/2}`` of the IMFs, e.g. from
         :func:`hht3d.spectral.combine_quadrature_parts`.
-    gradient : {"lsq", "fem"}
-    frequency : {"phase", "gradient"}
-        Estimator of Eq. 23; see :func:`monogenic`.
+    options : RieszOptions or dict, optional
+        ``gradient`` and ``frequency`` (the estimator of Eq. 23) are used; see :func:`monogenic`.
+    **overrides
+        Settings that replace those of ``options``.
 
     Returns
     -------
     MonogenicSignal
     """
+    options = RieszOptions.of(options, **overrides)
     f = _signals(surface, imfs)
     u = as_signals(surface, potential, "potential")[0]
     if u.shape != f.shape:
         raise InputError(f"potential has shape {u.shape}; the imfs have {f.shape}")
-    check_choice(gradient, GRADIENTS, "gradient")
-    check_choice(frequency, FREQUENCY_METHODS, "frequency")
-    rf = vertex_gradient(surface, u, gradient)
+    rf = vertex_gradient(surface, u, options.gradient)
     q = np.hypot(np.hypot(rf[..., 0], rf[..., 1]), rf[..., 2])  # no overflow at 1e200, no underflow at 1e-200
-    omega = instantaneous_frequency(surface, f, rf, method=frequency, gradient=gradient)
+    omega = instantaneous_frequency(surface, f, rf, options)
     return MonogenicSignal(imfs=f, riesz=rf, amplitude=np.hypot(f, q), phase=np.arctan2(q, f),
                            frequency=omega, area=surface.mass_diagonal.copy())

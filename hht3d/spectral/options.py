@@ -13,20 +13,21 @@ Examples
 >>> from hht3d.spectral.options import RIESZ_DEFAULTS, RieszOptions
 >>> RIESZ_DEFAULTS.tol, RIESZ_DEFAULTS.eigenpairs
 (1e-08, 300)
->>> RieszOptions.of(method="spectral").as_dict()
-{'gradient': 'lsq', 'frequency': 'phase', 'method': 'spectral', 'tol': 1e-08, 'eigenpairs': 300}
+>>> RieszOptions.of(potential="spectral").as_dict()
+{'gradient': 'lsq', 'frequency': 'phase', 'potential': 'spectral', 'tol': 1e-08, 'eigenpairs': 300}
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 from ..records import Record, option
 
-__all__ = ["RieszOptions", "RIESZ_DEFAULTS", "METHODS", "GRADIENTS", "FREQUENCY_METHODS", "MIN_TOL",
+__all__ = ["RieszOptions", "RIESZ_DEFAULTS", "POTENTIALS", "GRADIENTS", "FREQUENCY_METHODS", "MIN_TOL",
            "MAX_EIGENPAIRS"]
 
-#: Ways to apply ``L^{-α}`` (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`).
-METHODS = ("quadrature", "spectral", "dense")
+#: Ways to apply ``L^{-α}``, the potential (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`).
+POTENTIALS = ("quadrature", "spectral", "dense")
 #: Vertex gradients: Eq. (17) least squares, or area-averaged per-face FEM gradients.
 GRADIENTS = ("lsq", "fem")
 #: Estimators of Eq. 23 (:func:`hht3d.spectral.frequency.instantaneous_frequency`).
@@ -44,24 +45,34 @@ class RieszOptions(Record):
     ``gradient``: vertex gradient of the Riesz transform and of ``∇φ``
     (Eq. 17 least squares, or area-averaged FEM gradients on meshes);
     ``frequency``: estimator of Eq. 23
-    (:func:`hht3d.spectral.frequency.instantaneous_frequency`); ``method``:
+    (:func:`hht3d.spectral.frequency.instantaneous_frequency`); ``potential``:
     how ``L^{-1/2}`` is applied
-    (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`); ``tol``:
-    relative accuracy of the quadrature; ``eigenpairs``: non-zero eigenpairs
-    of ``method="spectral"``.
+    (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`; formerly
+    ``method``, still accepted by :meth:`of` with a DeprecationWarning);
+    ``tol``: relative tolerance of the quadrature; ``eigenpairs``: non-zero
+    eigenpairs of ``potential="spectral"``.
     """
 
     label = "Riesz"
+    renamed = {"method": "potential"}
 
     gradient: str = option("lsq", "tangent gradient of the monogenic signal", choices=GRADIENTS)
-    frequency: str = option("phase", "Eq. 23 estimator: edge phase increments (exact for plane waves up to the "
-                            "resolution limit) or the paper's gradients", choices=FREQUENCY_METHODS)
-    method: str = option("quadrature", "L^{-1/2}: exact quadrature, spectral truncation or dense",
-                         choices=METHODS)
-    tol: float = option(1e-8, "relative accuracy of the quadrature", minimum=MIN_TOL, maximum=1,
+    frequency: str = option("phase", "frequency method of Eq. 23: edge phase increments (exact for plane waves up "
+                            "to the resolution limit) or the paper's gradients", choices=FREQUENCY_METHODS)
+    potential: str = option("quadrature", "L^{-1/2}: exact quadrature, spectral truncation or dense",
+                            choices=POTENTIALS)
+    tol: float = option(1e-8, "relative tolerance of the quadrature", minimum=MIN_TOL, maximum=1,
                         open_maximum=True)
-    eigenpairs: int = option(300, "eigenpairs of method: spectral", minimum=1, maximum=MAX_EIGENPAIRS)
+    eigenpairs: int = option(300, "eigenpairs of potential: spectral", minimum=1, maximum=MAX_EIGENPAIRS)
 
 
 #: The defaults of every function taking Riesz settings.
 RIESZ_DEFAULTS = RieszOptions()
+
+
+def __getattr__(name: str):
+    """``METHODS``, the former name of :data:`POTENTIALS`, for one release."""
+    if name == "METHODS":
+        warnings.warn("hht3d.spectral.METHODS is now POTENTIALS", DeprecationWarning, stacklevel=2)
+        return POTENTIALS
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -17,13 +17,13 @@ Kernel
 ------
 ``λ = 0`` belongs to the functions that are constant on each connected
 component (``surface.component_labels``); ``λ^{-α}`` is undefined there.
-Every method therefore projects the kernel out: the M-weighted mean of each
+Every potential therefore projects the kernel out: the M-weighted mean of each
 component is removed from the input, ``f̃ = f − (1_cᵀ M f)/(1_cᵀ M 1_c)``
 (:func:`fluctuation`), and the result is M-orthogonal to the kernel too.
 So ``L^{-1/2}`` of a constant is zero and ``L^{-1/2} f == L^{-1/2} f̃``.
 
-Methods
--------
+Potentials (``RieszOptions.potential``)
+---------------------------------------
 ``"quadrature"`` (default)
     The whole spectrum without eigenvectors: the elliptic midpoint rule of
     Hale, Higham & Trefethen (2008) for ``A^{-1/2}``, ``A = M⁻¹L``,
@@ -64,17 +64,16 @@ import numpy as np
 from ..errors import InputError
 from ..geometry.signals import fluctuation
 from ..geometry.surface import Surface
-from ..geometry.validation import as_signals, check_choice, check_surface
+from ..geometry.validation import as_signals, check_surface
 from .eigenpairs import apply_eigenpairs, dense_eigenpairs, smallest_eigenpairs
-from .options import METHODS, RIESZ_DEFAULTS, RieszOptions
+from .options import RIESZ_DEFAULTS, RieszOptions
 from .quadrature import quadrature_sum
 
 __all__ = ["fractional_laplacian", "riesz", "vertex_gradient"]
 
 
-def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str = RIESZ_DEFAULTS.method,
-                         tol: float = RIESZ_DEFAULTS.tol, eigenpairs: int = RIESZ_DEFAULTS.eigenpairs,
-                         backend: str | None = None) -> np.ndarray:
+def fractional_laplacian(surface: Surface, f, power: float = -0.5, options: RieszOptions | dict | None = None, *,
+                         backend: str | None = None, **overrides) -> np.ndarray:
     """Apply ``L^{power}`` of the generalized problem ``L φ = λ M φ`` (Eqs. 13, 15, 18).
 
     Parameters
@@ -86,18 +85,17 @@ def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str =
         Exponent; ``-0.5`` gives ``L^{-1/2}`` of the Riesz transform.
         ``"quadrature"`` supports only ``-0.5``; the eigen-methods any
         non-zero power.
-    method : {"quadrature", "spectral", "dense"}
-        See the module notes.  ``"quadrature"`` is exact to ``tol``;
-        ``"spectral"`` is the paper's truncation to ``eigenpairs`` modes;
-        ``"dense"`` is the exact reference (at most
-        :data:`DENSE_MAX_VERTICES` vertices).
-    tol : float
-        Relative accuracy of ``"quadrature"`` in the M-norm; sets the number
-        of shifted solves (about 17 for a condition number of 1e6 at 1e-8).
-    eigenpairs : int
-        Non-zero eigenpairs used by ``"spectral"`` (the paper uses 300).
+    options : RieszOptions or dict, optional
+        ``potential`` (module notes): ``"quadrature"`` is exact to ``tol``
+        (relative, in the M-norm; about 17 shifted solves for a condition
+        number of 1e6 at 1e-8), ``"spectral"`` the paper's truncation to
+        ``eigenpairs`` non-zero modes (the paper uses 300), ``"dense"`` the
+        exact reference (at most :data:`DENSE_MAX_VERTICES` vertices).
+        The other settings are not used here.
     backend : str, optional
         Sparse solver of :mod:`hht3d.linalg`.
+    **overrides
+        Settings that replace those of ``options``.
 
     Returns
     -------
@@ -118,29 +116,29 @@ def fractional_laplacian(surface: Surface, f, power: float = -0.5, method: str =
     >>> bool(np.abs(np.sqrt(2) * u - z).max() < 1e-3)
     True
     """
+    options = RieszOptions.of(options, **overrides)
     surface = check_surface(surface)
     a, single = as_signals(surface, f)
-    check_choice(method, METHODS, "method")
     if not np.isfinite(power) or power == 0:
         raise InputError(f"power must be a finite non-zero number, got {power!r}")
     g = fluctuation(surface, a)
     if len(g) == 0:  # no signals (e.g. an EMD that found no IMF)
         return g
-    if method == "quadrature":
+    if options.potential == "quadrature":
         if power != -0.5:
-            raise InputError(f"method='quadrature' computes power=-0.5 only, got power={power}; "
-                             "use method='spectral' or 'dense' for other powers")
-        out = quadrature_sum(surface, g, tol, backend)
+            raise InputError(f"potential='quadrature' computes power=-0.5 only, got power={power}; "
+                             "use potential='spectral' or 'dense' for other powers")
+        out = quadrature_sum(surface, g, options.tol, backend)
     else:
-        values, vectors = (dense_eigenpairs(surface) if method == "dense"
-                           else smallest_eigenpairs(surface, eigenpairs, backend=backend))
+        values, vectors = (dense_eigenpairs(surface) if options.potential == "dense"
+                           else smallest_eigenpairs(surface, options.eigenpairs, backend=backend))
         out = apply_eigenpairs(surface, g, values, vectors, power)
     return out[0] if single else out
 
 
 def riesz(surface: Surface, f, options: RieszOptions | dict | None = None, *, backend: str | None = None,
           **overrides) -> np.ndarray:
-    """Riesz transform ``R f = ∇ L^{-1/2} f`` (Eqs. 14, 16; Eq. 18 with ``method="spectral"``).
+    """Riesz transform ``R f = ∇ L^{-1/2} f`` (Eqs. 14, 16; Eq. 18 with ``potential="spectral"``).
 
     Parameters
     ----------
@@ -149,7 +147,7 @@ def riesz(surface: Surface, f, options: RieszOptions | dict | None = None, *, ba
     options : RieszOptions or dict, optional
         ``gradient`` (tangent-plane least squares of Eq. 17, meshes and point
         clouds, or area-averaged per-face FEM gradients, meshes) and
-        ``method``, ``tol``, ``eigenpairs`` as in :func:`fractional_laplacian`;
+        ``potential``, ``tol``, ``eigenpairs`` as in :func:`fractional_laplacian`;
         default :data:`~hht3d.spectral.options.RIESZ_DEFAULTS`.
     backend : str, optional
         Sparse solver of :mod:`hht3d.linalg`.
@@ -177,7 +175,7 @@ def riesz(surface: Surface, f, options: RieszOptions | dict | None = None, *, ba
     1.0
     """
     options = RieszOptions.of(options, **overrides)
-    u = fractional_laplacian(surface, f, -0.5, options.method, options.tol, options.eigenpairs, backend)
+    u = fractional_laplacian(surface, f, -0.5, options, backend=backend)
     return vertex_gradient(surface, u, options.gradient)
 
 

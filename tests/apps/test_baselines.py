@@ -16,8 +16,8 @@ from hht3d.apps import BandStop, Constant, heat_kernel_signature, hks_features, 
 
 def test_imf_enhancement(bumps):
     surface, _, pattern, result = bumps
-    assert np.array_equal(imf_enhancement(surface, result, 1.0).vertices, surface.vertices)
-    ratio = bump_amplitude(surface, imf_enhancement(surface, result, 2.0).vertices, pattern) / AMPLITUDE
+    assert np.array_equal(imf_enhancement(surface, result, factor=1.0).vertices, surface.vertices)
+    ratio = bump_amplitude(surface, imf_enhancement(surface, result, factor=2.0).vertices, pattern) / AMPLITUDE
     assert 1.5 <= ratio <= 2.2, ratio  # measured 1.96: IMF1 holds the bumps here
 
 

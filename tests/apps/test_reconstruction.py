@@ -276,7 +276,7 @@ def test_bad_filter_and_reconstruction_inputs(bumps):
     with pytest.raises(InputError, match="mean-curvature"):
         filter_geometry(other, Constant(1.0))
     with pytest.raises(InputError):
-        imf_enhancement(surface, result, 2.0, index=result.n_imfs)
+        imf_enhancement(surface, result, factor=2.0, index=result.n_imfs)
     with pytest.raises(InputError):
         manifold_harmonics_filter(surface, Constant(1.0), eigenpairs=0)
     with pytest.raises(InputError):

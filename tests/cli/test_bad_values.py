@@ -52,7 +52,7 @@ CASES = {
     "max_sifts: 10**9": Case(validate("steps.hht.params.max_sifts=1000000000"), "max_sifts must be an integer in"),
     "n_neighbors: 10**6": Case(validate("steps.load.params.n_neighbors=1000000"), "n_neighbors must be an integer in"),
     # facts cheap to know are checked by validate
-    "eigenpairs above the vertex count": Case(validate("steps.hht.params.method=spectral"),
+    "eigenpairs above the vertex count": Case(validate("steps.hht.params.potential=spectral"),
                                               "eigenpairs: 300 needs at least 301 vertices, but", issue=True),
     "eigenpairs above the vertex count of a baseline": Case(
         validate("steps.hht.op=manifold_harmonics_filter",

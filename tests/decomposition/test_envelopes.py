@@ -38,7 +38,7 @@ def test_biharmonic_envelope_is_clamped_cubic_spline():
     errors = []
     for n_axial in (201, 401):
         surface, z, rings, values, f, mask = cylinder_knots(n_axial)
-        g = envelope_interpolation(surface, f, mask).reshape(n_axial, 8)
+        g = envelope_interpolation(surface, f, mask, envelope="biharmonic").reshape(n_axial, 8)
         assert np.ptp(g, axis=1).max() < 1e-10  # constant around each ring
         spline = CubicSpline(z[rings], values, bc_type="clamped")(z)
         errors.append(np.max(np.abs(g[:, 0] - spline)))
@@ -109,17 +109,17 @@ def test_envelope_matches_eliminated_system(small_sphere, backend):
     rng = np.random.default_rng(1)
     f = rng.standard_normal(s.n_vertices)
     mask = rng.random(s.n_vertices) < 0.1
-    g = envelope_interpolation(s, f, mask, backend=backend)
+    g = envelope_interpolation(s, f, mask, envelope="biharmonic", backend=backend)
     q = (s.stiffness @ sp.diags(1 / s.mass_diagonal) @ s.stiffness).tocsc()
     free = ~mask
     reference = spla.spsolve(q[free][:, free], -(q[free][:, mask] @ f[mask]))
     assert np.max(np.abs(g[mask] - f[mask])) <= 1e-8 * np.max(np.abs(f[mask]))
     assert np.max(np.abs(g[free] - reference)) <= 1e-8 * np.max(np.abs(reference))
-    assert envelope_operator(s).nnz >= q.nnz  # diagonal kept as explicit entries
-    mine = envelope_operator(s)  # the caller's own copy: changing it changes no later envelope
+    assert envelope_operator(s, envelope="biharmonic").nnz >= q.nnz  # diagonal kept as explicit entries
+    mine = envelope_operator(s, envelope="biharmonic")  # the caller's own copy: changing it changes no later envelope
     mine.data[:] = 0
     mine.eliminate_zeros()
-    np.testing.assert_array_equal(envelope_interpolation(s, f, mask, backend=backend), g)
+    np.testing.assert_array_equal(envelope_interpolation(s, f, mask, envelope="biharmonic", backend=backend), g)
 
 
 def test_envelope_energies_are_shared_while_in_use_and_freed_after(small_sphere):
@@ -141,4 +141,4 @@ def test_envelope_needs_a_constraint_per_component():
     mask = np.zeros(two.n_vertices, dtype=bool)
     mask[:5] = True
     with pytest.raises(InputError, match="no constrained vertex"):
-        envelope_interpolation(two, np.zeros(two.n_vertices), mask)
+        envelope_interpolation(two, np.zeros(two.n_vertices), mask, envelope="biharmonic")

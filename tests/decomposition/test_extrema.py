@@ -3,6 +3,7 @@ brute force."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from hht3d import Surface
 from hht3d.decomposition import local_extrema
@@ -54,3 +55,12 @@ def test_ring_rule_relaxes_strict_rule():
     expected = [i for i in range(s.n_vertices)
                 if np.sum(f[i] >= f[ring2[i]]) >= 0.8 * ring2[i].sum() and np.any(f[i] > f[ring2[i]])]
     assert local_extrema(s, f, rule="relaxed")[0].tolist() == expected
+
+
+def test_extrema_is_the_emd_setting_and_rule_its_former_name():
+    s = Surface(*grid(8, 8, jitter=0.2, seed=1), name="grid")
+    f = np.random.default_rng(2).standard_normal(s.n_vertices)
+    relaxed = local_extrema(s, f, extrema="relaxed", ring=2, ratio=0.8)
+    with pytest.warns(DeprecationWarning, match="write extrema='relaxed'"):
+        former = local_extrema(s, f, rule="relaxed", ring=2, ratio=0.8)
+    assert [e.tolist() for e in former] == [e.tolist() for e in relaxed]

@@ -108,5 +108,5 @@ def test_riesz_tasks_zero_is_named(inputs):
     from hht3d.errors import InputError
 
     surface = load(inputs / "good.ply")
-    with pytest.raises(InputError, match="riesz_tasks must be an integer >= 1, got 0"):
+    with pytest.raises(InputError, match=r"riesz_tasks must be an integer in \[1, 64\] or None, got 0"):
         graph.hht(surface, surface.vertices[:, 0], riesz_tasks=0)

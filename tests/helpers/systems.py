@@ -21,7 +21,7 @@ SINGLE_FACTOR = [b for b in BACKENDS if b in ("pardiso", "cholmod")]
 
 def envelope_system(surface, constrained: np.ndarray) -> sp.csr_matrix:
     """``[Q_FF 0; 0 diag(Q)_CC]`` on Q's full pattern, as EMD builds it (hht3d.decomposition.decompose notes)."""
-    q = envelope_operator(surface)
+    q = envelope_operator(surface, envelope="biharmonic")
     rows = np.repeat(np.arange(surface.n_vertices), np.diff(q.indptr))
     free = ~constrained
     data = q.data * (free[rows] & free[q.indices])

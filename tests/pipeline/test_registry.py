@@ -1,5 +1,6 @@
 """The operations (hht3d.pipeline.registry): a new one is one core function and one entry; every numeric parameter
 has an upper bound."""
+import dataclasses
 import textwrap
 
 import numpy as np
@@ -8,6 +9,7 @@ import pytest
 from hht3d.io import load
 from hht3d.geometry.signals import mean_curvature
 from hht3d.pipeline import OPERATIONS, parse_pipeline, run_pipeline
+from hht3d.records import Record, option
 from hht3d.pipeline.validation import EXECUTION
 
 
@@ -16,13 +18,18 @@ def _scaled(surface, signal, *, factor: float = 2.0):
     return factor * np.asarray(signal)
 
 
+@dataclasses.dataclass(frozen=True)
+class _ScaledOptions(Record):
+    factor: float = option(2.0, "the factor", minimum=0)
+
+
 def test_a_new_operation_is_one_core_function_and_one_entry(monkeypatch, tmp_path, mesh_file):
-    from hht3d.pipeline import Operation, Param, Slot
-    from hht3d.pipeline.params import with_defaults
+    from hht3d.pipeline import Operation, Slot
+    from hht3d.pipeline.params import record_params
 
     monkeypatch.setitem(OPERATIONS, "scaled", Operation(
         "scaled", "the signal times a factor", (Slot("surface", ("surface",)), Slot("signal", ("signal",))),
-        "signal", with_defaults(_scaled, Param("factor", "float", "the factor", minimum=0)), func=_scaled))
+        "signal", record_params(_ScaledOptions), func=_scaled))
     text = textwrap.dedent(f"""\
         version: 1
         execution: {{scheduler: synchronous, progress: false}}

@@ -16,7 +16,7 @@ from scipy.special import lpmv
 from hht3d.errors import InputError
 from hht3d.spectral import FREQUENCY_METHODS, instantaneous_frequency, resolvable_frequency
 from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
-from hht3d.spectral import fractional_laplacian
+from hht3d.spectral import fractional_laplacian, riesz
 from hht3d.geometry.surface import Surface
 from helpers.meshes import grid, icosphere
 
@@ -255,3 +255,12 @@ def test_option_reaches_hht_the_graph_and_the_pipeline():
     assert np.allclose(eager.monogenic.frequency, expected) and np.allclose(lazy.monogenic.frequency, expected)
     (param,) = [p for p in OPERATIONS["hht"].params if p.name == "frequency"]
     assert param.default == "phase" and tuple(param.choices) == FREQUENCY_METHODS
+
+
+def test_frequency_is_the_riesz_setting_and_method_its_former_name():
+    s = Surface(*icosphere(2))
+    f = np.stack([s.vertices[:, 0]])
+    r = riesz(s, f)
+    with pytest.warns(DeprecationWarning, match="write frequency='gradient'"):
+        former = instantaneous_frequency(s, f, r, method="gradient")
+    np.testing.assert_array_equal(former, instantaneous_frequency(s, f, r, frequency="gradient"))

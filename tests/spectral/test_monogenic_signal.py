@@ -58,7 +58,7 @@ def test_definitions_and_identity(cylinder, cylinder_waves):
 @pytest.mark.parametrize("frequency", ["phase", "gradient"])
 def test_from_potential_matches(cylinder, cylinder_waves, frequency):
     potential = fractional_laplacian(cylinder, cylinder_waves)
-    a = monogenic_from_potential(cylinder, cylinder_waves, potential, "fem", frequency)
+    a = monogenic_from_potential(cylinder, cylinder_waves, potential, gradient="fem", frequency=frequency)
     b = monogenic(cylinder, cylinder_waves, gradient="fem", frequency=frequency)
     assert np.allclose(a.frequency, b.frequency, atol=1e-12) and np.allclose(a.riesz, b.riesz, atol=1e-12)
     expected = instantaneous_frequency(cylinder, cylinder_waves, a.riesz, method=frequency, gradient="fem")
