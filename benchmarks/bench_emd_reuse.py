@@ -66,7 +66,7 @@ def replay(name: str, imfs: int, backend: str | None, rtol: float, max_cg: int, 
     surface = hht3d.load(model_path(name))
     mass = surface.mass_diagonal
     n = surface.n_vertices
-    q = envelope_operator(surface)
+    q = envelope_operator(surface, envelope="biharmonic")  # Q = L M⁻¹ L, which needs no spacing
     rows = np.repeat(np.arange(n), np.diff(q.indptr))
     diagonal = np.flatnonzero(q.indices == rows)
     backend = backend or linalg.default_backend()
