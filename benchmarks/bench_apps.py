@@ -34,6 +34,7 @@ Usage::
 
     python -m benchmarks.bench_apps [--models NAME ...]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -46,8 +47,18 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.common import (MESHES, fixed, machine_meta, mkl_environment, model_or_skip, model_path,
-                               peak_rss_mb, table, worker_json, write_results)
+from benchmarks.common import (
+    MESHES,
+    fixed,
+    machine_meta,
+    mkl_environment,
+    model_or_skip,
+    model_path,
+    peak_rss_mb,
+    table,
+    worker_json,
+    write_results,
+)
 
 NOISE = 0.15
 SEED = 0
@@ -73,8 +84,8 @@ def _load_result(name: str, scratch: Path):
 
 
 def stage_hht(name: str, scratch: Path) -> dict:
-    from hht3d.transform import hht
     from hht3d.geometry.signals import mean_curvature
+    from hht3d.transform import hht
 
     surface = _load(name)
     signal = mean_curvature(surface)
@@ -83,10 +94,16 @@ def stage_hht(name: str, scratch: Path) -> dict:
     result = hht(surface, signal)
     seconds = time.perf_counter() - t0
     result.save(scratch / f"{name}.npz")
-    return {"vertices": surface.n_vertices, "boundary_vertices": int(surface.boundary_vertices.sum()),
-            "imfs": result.n_imfs, "seconds": seconds, "emd_seconds": result.info["seconds"]["emd"],
-            "spectra_seconds": result.info["seconds"]["spectra"], "baseline_rss_mb": baseline,
-            "peak_rss_mb": peak_rss_mb()}
+    return {
+        "vertices": surface.n_vertices,
+        "boundary_vertices": int(surface.boundary_vertices.sum()),
+        "imfs": result.n_imfs,
+        "seconds": seconds,
+        "emd_seconds": result.info["seconds"]["emd"],
+        "spectra_seconds": result.info["seconds"]["spectra"],
+        "baseline_rss_mb": baseline,
+        "peak_rss_mb": peak_rss_mb(),
+    }
 
 
 def _cutoff(result) -> float:
@@ -103,8 +120,10 @@ def stage_filter(name: str, scratch: Path) -> dict:
     cutoff = _cutoff(result)
     baseline = peak_rss_mb()
     record = {"cutoff": cutoff, "baseline_rss_mb": baseline}
-    for label, gain in (("low_pass", LowPass(cutoff=cutoff, width=cutoff / 4)),
-                        ("high_boost", HighBoost(cutoff=cutoff, factor=2.5, width=cutoff / 4))):
+    for label, gain in (
+        ("low_pass", LowPass(cutoff=cutoff, width=cutoff / 4)),
+        ("high_boost", HighBoost(cutoff=cutoff, factor=2.5, width=cutoff / 4)),
+    ):
         t0 = time.perf_counter()
         out = filter_geometry(result, gain)
         record[f"{label}_seconds"] = time.perf_counter() - t0
@@ -127,9 +146,15 @@ def stage_features(name: str, scratch: Path) -> dict:
     t1 = time.perf_counter()
     merged = prominent_features(surface, result.imfs, merge_radius=2 * h)
     t2 = time.perf_counter()
-    return {"seconds": t1 - t0, "merged_seconds": t2 - t1, "features": plain.n_features,
-            "merged_features": merged.n_features, "min_count": plain.min_count,
-            "baseline_rss_mb": baseline, "peak_rss_mb": peak_rss_mb()}
+    return {
+        "seconds": t1 - t0,
+        "merged_seconds": t2 - t1,
+        "features": plain.n_features,
+        "merged_features": merged.n_features,
+        "min_count": plain.min_count,
+        "baseline_rss_mb": baseline,
+        "peak_rss_mb": peak_rss_mb(),
+    }
 
 
 def stage_noise(name: str, scratch: Path) -> dict:
@@ -162,13 +187,24 @@ def stage_noise(name: str, scratch: Path) -> dict:
     def scores(clean, perturbed) -> dict:
         a, b = p[clean.vertices], p[perturbed.vertices]
         chance = float(np.mean(cKDTree(a).query(p)[0] <= 2 * h)) if len(a) else float("nan")
-        return {"clean_features": clean.n_features, "noisy_features": perturbed.n_features,
-                "noisy_to_clean": repeatability(b, a, 2 * h), "clean_to_noisy": repeatability(a, b, 2 * h),
-                "chance": chance}
+        return {
+            "clean_features": clean.n_features,
+            "noisy_features": perturbed.n_features,
+            "noisy_to_clean": repeatability(b, a, 2 * h),
+            "clean_to_noisy": repeatability(a, b, 2 * h),
+            "chance": chance,
+        }
 
-    return {"mean_edge": h, "noisy_imfs": decomposition.n_imfs, "noisy_emd_seconds": noisy_emd_seconds,
-            "hks_seconds": hks_seconds, "hks_baseline_rss_mb": baseline, "hks_peak_rss_mb": hks_peak,
-            "ours": scores(ours_clean, ours_noisy), "hks": scores(hks_clean, hks_noisy)}
+    return {
+        "mean_edge": h,
+        "noisy_imfs": decomposition.n_imfs,
+        "noisy_emd_seconds": noisy_emd_seconds,
+        "hks_seconds": hks_seconds,
+        "hks_baseline_rss_mb": baseline,
+        "hks_peak_rss_mb": hks_peak,
+        "ours": scores(ours_clean, ours_noisy),
+        "hks": scores(hks_clean, hks_noisy),
+    }
 
 
 STAGES = {"hht": stage_hht, "filter": stage_filter, "features": stage_features, "noise": stage_noise}
@@ -191,16 +227,40 @@ def markdown(records: list[dict], meta: dict) -> str:
         "Eq. 27 for the 3 coordinates).  Features s: `prominent_features` from the IMFs (2-ring extrema "
         "per IMF and counting); HKS s: 100 smallest eigenpairs (shift-invert ARPACK) plus the HKS maxima.",
         "",
-        table(["model", "#V", "#IMFs", "HHT s (EMD + spectra)", "low-pass s", "2.5x boost s",
-               "filter MB baseline/peak", "features s", "#features (merged 2h)", "features MB baseline/peak",
-               "HKS s", "HKS MB baseline/peak"],
-              [[r["model"], f"{hh['vertices']:,}", hh["imfs"],
-                f"{hh['seconds']:.1f} ({hh['emd_seconds']:.1f} + {hh['spectra_seconds']:.1f})",
-                f"{fi['low_pass_seconds']:.2f}", f"{fi['high_boost_seconds']:.2f}",
-                f"{fi['baseline_rss_mb']:.0f}/{fi['peak_rss_mb']:.0f}", f"{fe['seconds']:.3f}",
-                f"{fe['features']} ({fe['merged_features']})", f"{fe['baseline_rss_mb']:.0f}/{fe['peak_rss_mb']:.0f}",
-                f"{no['hks_seconds']:.1f}", f"{no['hks_baseline_rss_mb']:.0f}/{no['hks_peak_rss_mb']:.0f}"]
-               for r in records for hh, fi, fe, no in [(r["hht"], r["filter"], r["features"], r["noise"])]]),
+        table(
+            [
+                "model",
+                "#V",
+                "#IMFs",
+                "HHT s (EMD + spectra)",
+                "low-pass s",
+                "2.5x boost s",
+                "filter MB baseline/peak",
+                "features s",
+                "#features (merged 2h)",
+                "features MB baseline/peak",
+                "HKS s",
+                "HKS MB baseline/peak",
+            ],
+            [
+                [
+                    r["model"],
+                    f"{hh['vertices']:,}",
+                    hh["imfs"],
+                    f"{hh['seconds']:.1f} ({hh['emd_seconds']:.1f} + {hh['spectra_seconds']:.1f})",
+                    f"{fi['low_pass_seconds']:.2f}",
+                    f"{fi['high_boost_seconds']:.2f}",
+                    f"{fi['baseline_rss_mb']:.0f}/{fi['peak_rss_mb']:.0f}",
+                    f"{fe['seconds']:.3f}",
+                    f"{fe['features']} ({fe['merged_features']})",
+                    f"{fe['baseline_rss_mb']:.0f}/{fe['peak_rss_mb']:.0f}",
+                    f"{no['hks_seconds']:.1f}",
+                    f"{no['hks_baseline_rss_mb']:.0f}/{no['hks_peak_rss_mb']:.0f}",
+                ]
+                for r in records
+                for hh, fi, fe, no in [(r["hht"], r["filter"], r["features"], r["noise"])]
+            ],
+        ),
         "",
         "## Repeatability under noise (paper Fig. 8)",
         "",
@@ -209,13 +269,33 @@ def markdown(records: list[dict], meta: dict) -> str:
         "the model; clean→noisy: the reverse.  Chance: the noisy→clean score of features placed at random "
         "(fraction of all vertices within 2 mean edge lengths of a clean feature).",
         "",
-        table(["model", "#IMFs clean/noisy", "ours #features clean/noisy", "ours noisy→clean (chance)",
-               "ours clean→noisy", "HKS #features clean/noisy", "HKS noisy→clean (chance)", "HKS clean→noisy"],
-              [[r["model"], f"{r['hht']['imfs']}/{no['noisy_imfs']}", f"{o['clean_features']}/{o['noisy_features']}",
-                f"{fixed(o['noisy_to_clean'])} ({fixed(o['chance'])})", fixed(o["clean_to_noisy"]),
-                f"{k['clean_features']}/{k['noisy_features']}", f"{fixed(k['noisy_to_clean'])} ({fixed(k['chance'])})",
-                fixed(k["clean_to_noisy"])]
-               for r in records for no in [r["noise"]] for o, k in [(no["ours"], no["hks"])]]),
+        table(
+            [
+                "model",
+                "#IMFs clean/noisy",
+                "ours #features clean/noisy",
+                "ours noisy→clean (chance)",
+                "ours clean→noisy",
+                "HKS #features clean/noisy",
+                "HKS noisy→clean (chance)",
+                "HKS clean→noisy",
+            ],
+            [
+                [
+                    r["model"],
+                    f"{r['hht']['imfs']}/{no['noisy_imfs']}",
+                    f"{o['clean_features']}/{o['noisy_features']}",
+                    f"{fixed(o['noisy_to_clean'])} ({fixed(o['chance'])})",
+                    fixed(o["clean_to_noisy"]),
+                    f"{k['clean_features']}/{k['noisy_features']}",
+                    f"{fixed(k['noisy_to_clean'])} ({fixed(k['chance'])})",
+                    fixed(k["clean_to_noisy"]),
+                ]
+                for r in records
+                for no in [r["noise"]]
+                for o, k in [(no["ours"], no["hks"])]
+            ],
+        ),
     ]
     return "\n".join(lines) + "\n"
 
@@ -240,12 +320,15 @@ def main(argv=None) -> int:
             for stage in STAGES:
                 record[stage] = worker_json(__file__, ["--worker", stage, name, scratch], env=env)
             records.append(record)
-            print(f"{name}: HHT {record['hht']['seconds']:.1f} s, filter {record['filter']['low_pass_seconds']:.2f} s, "
-                  f"features {record['features']['seconds']:.3f} s, repeatability ours "
-                  f"{record['noise']['ours']['noisy_to_clean']:.2f} / HKS {record['noise']['hks']['noisy_to_clean']:.2f}",
-                  file=sys.stderr)
-    meta = machine_meta(load_average_1min=[load_before, os.getloadavg()[0]], noise=NOISE, seed=SEED,
-                        hks_eigenpairs=HKS_EIGENPAIRS)
+            print(
+                f"{name}: HHT {record['hht']['seconds']:.1f} s, filter {record['filter']['low_pass_seconds']:.2f} s, "
+                f"features {record['features']['seconds']:.3f} s, repeatability ours "
+                f"{record['noise']['ours']['noisy_to_clean']:.2f} / HKS {record['noise']['hks']['noisy_to_clean']:.2f}",
+                file=sys.stderr,
+            )
+    meta = machine_meta(
+        load_average_1min=[load_before, os.getloadavg()[0]], noise=NOISE, seed=SEED, hks_eigenpairs=HKS_EIGENPAIRS
+    )
     write_results("apps", {"meta": meta, "models": records}, markdown(records, meta), indent=1)
     return 0
 

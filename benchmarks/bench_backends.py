@@ -26,6 +26,7 @@ constants are printed and stored with the results.
 Run: ``python -m benchmarks.bench_backends [--models nefertiti igea] [--skip-factorizations]``.
 Writes ``results/backends.json`` and ``results/backends.md``.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -35,8 +36,18 @@ import subprocess
 import sys
 import time
 
-from benchmarks.common import (log, machine, mkl_environment, model_path, run_worker, status_mb, table, timed,
-                               worker_answer, write_results)
+from benchmarks.common import (
+    log,
+    machine,
+    mkl_environment,
+    model_path,
+    run_worker,
+    status_mb,
+    table,
+    timed,
+    worker_answer,
+    write_results,
+)
 
 MODELS = ("nefertiti", "igea")
 TARGETS = {"nefertiti": (5.0, 2.0), "igea": (6.0, 4.0)}  # (x PARDISO, GB)
@@ -67,8 +78,11 @@ def systems(surface) -> dict:
     mean = (0.6 * MEAN_SCALE * diagonal) ** 4 * e.smoothing
     mean[e.diagonal] += surface.mass_diagonal
     plan = quadrature_plan(surface)
-    return {"envelope": e.matrix(data), "mean filter": e.matrix(mean),
-            "shifted": shifted_matrix(surface, float(plan.sigmas[0]))}
+    return {
+        "envelope": e.matrix(data),
+        "mean filter": e.matrix(mean),
+        "shifted": shifted_matrix(surface, float(plan.sigmas[0])),
+    }
 
 
 def candidates(a) -> dict:
@@ -80,6 +94,7 @@ def candidates(a) -> dict:
 
     out = {}
     for name in linalg.available_backends():
+
         def first(name=name):
             symbolic = linalg.SymbolicFactorization(a, name)
             out[name + ":symbolic"] = symbolic
@@ -87,8 +102,10 @@ def candidates(a) -> dict:
 
         out[name] = (first, lambda name=name: out[name + ":symbolic"].factorize(a).solve)
     if a.shape[0] <= BEFORE_MAX_VERTICES:
+
         def before():
             return spla.splu(a.tocsc(), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True}).solve
+
         out["superlu, before (pivoting)"] = (before, before)
     try:
         import qdldl
@@ -114,13 +131,19 @@ def candidates(a) -> dict:
         csc = a.tocsc()
 
         def cfirst():
-            s = cholespy.CholeskySolverD(a.shape[0], csc.indptr.astype(np.int32), csc.indices.astype(np.int32),
-                                         csc.data.copy(), cholespy.MatrixType.CSC)
+            s = cholespy.CholeskySolverD(
+                a.shape[0],
+                csc.indptr.astype(np.int32),
+                csc.indices.astype(np.int32),
+                csc.data.copy(),
+                cholespy.MatrixType.CSC,
+            )
 
             def solve(b):
                 x = np.zeros_like(b)
                 s.solve(np.ascontiguousarray(b), x)
                 return x
+
             return solve
 
         out["cholespy (no refactorization)"] = (cfirst, cfirst)
@@ -145,8 +168,18 @@ def factorization_part(name: str) -> list[dict]:
             x, t_solve = timed(lambda solve=solve: solve(b))
             reference = x if reference is None else reference
             diff = float(np.max(np.abs(x - reference)) / np.max(np.abs(reference)))
-            rows.append({"model": name, "vertices": surface.n_vertices, "system": kind, "solver": cand,
-                         "first_s": t_first, "refactor_s": t_again, "solve_s": t_solve, "max_rel_diff": diff})
+            rows.append(
+                {
+                    "model": name,
+                    "vertices": surface.n_vertices,
+                    "system": kind,
+                    "solver": cand,
+                    "first_s": t_first,
+                    "refactor_s": t_again,
+                    "solve_s": t_solve,
+                    "max_rel_diff": diff,
+                }
+            )
             log(f"{name} {kind} {cand}: first {t_first:.2f} s, again {t_again:.2f} s, diff {diff:.1e}")
             del solve
     return rows
@@ -164,11 +197,20 @@ def worker(name: str) -> None:
     surface = hht3d.load(model_path(name))
     result = hht3d.hht(surface, mean_curvature(surface))
     total = time.perf_counter() - start
-    print(json.dumps({"vertices": surface.n_vertices, "imfs": result.n_imfs, "total_s": total,
-                      "emd_s": result.info["seconds"]["emd"], "spectra_s": result.info["seconds"]["spectra"],
-                      "factorizations": result.info["emd"]["factorizations"],
-                      "backend": result.info["emd"]["backend"],
-                      "peak_mb": status_mb("VmHWM")}))
+    print(
+        json.dumps(
+            {
+                "vertices": surface.n_vertices,
+                "imfs": result.n_imfs,
+                "total_s": total,
+                "emd_s": result.info["seconds"]["emd"],
+                "spectra_s": result.info["seconds"]["spectra"],
+                "factorizations": result.info["emd"]["factorizations"],
+                "backend": result.info["emd"]["backend"],
+                "peak_mb": status_mb("VmHWM"),
+            }
+        )
+    )
 
 
 def whole_part(name: str, backends: list[str], timeout: float) -> list[dict]:
@@ -201,8 +243,11 @@ def fit_costs(rows: list[dict]) -> dict:
 
     fits = {}
     for backend in sorted({r["backend"] for r in rows if "error" not in r}):
-        pts = sorted((r["vertices"], r["peak_mb"] * 2 ** 20 - BASELINE, r["total_s"])
-                     for r in rows if r.get("backend") == backend and "error" not in r)
+        pts = sorted(
+            (r["vertices"], r["peak_mb"] * 2**20 - BASELINE, r["total_s"])
+            for r in rows
+            if r.get("backend") == backend and "error" not in r
+        )
         if len(pts) < 2:
             continue
         (n1, p1, t1), (n2, p2, t2) = pts[0], pts[-1]
@@ -213,42 +258,109 @@ def fit_costs(rows: list[dict]) -> dict:
         elif a < 0:
             a, b = 0.0, max(p1 / (n1 * math.log2(n1)), p2 / (n2 * math.log2(n2)))
         e = math.log(t2 / t1) / math.log(n2 / n1)
-        fits[backend] = {"a": round(a, 1), "b": round(b, 1), "seconds_50k": round(t1 * (50_000 / n1) ** e, 2),
-                         "exponent": round(e, 3)}
+        fits[backend] = {
+            "a": round(a, 1),
+            "b": round(b, 1),
+            "seconds_50k": round(t1 * (50_000 / n1) ** e, 2),
+            "exponent": round(e, 3),
+        }
     return fits
 
 
 def markdown(record: dict) -> str:
-    lines = ["# Sparse solvers for a plain install", "", __doc__.split("\n\n")[0], "",
-             f"Machine: {record['machine']}", ""]
+    lines = [
+        "# Sparse solvers for a plain install",
+        "",
+        __doc__.split("\n\n")[0],
+        "",
+        f"Machine: {record['machine']}",
+        "",
+    ]
     if record["factorizations"]:
-        lines += ["## Factorizations", "",
-                  table(["model", "#V", "system", "solver", "first s", "refactorization s", "solve s",
-                         "max rel. diff"],
-                        [[r["model"], f"{r['vertices']:,}", r["system"], r["solver"], f"{r['first_s']:.2f}",
-                          f"{r['refactor_s']:.2f}", f"{r['solve_s']:.3f}", f"{r['max_rel_diff']:.1e}"]
-                         for r in record["factorizations"]]), ""]
+        lines += [
+            "## Factorizations",
+            "",
+            table(
+                ["model", "#V", "system", "solver", "first s", "refactorization s", "solve s", "max rel. diff"],
+                [
+                    [
+                        r["model"],
+                        f"{r['vertices']:,}",
+                        r["system"],
+                        r["solver"],
+                        f"{r['first_s']:.2f}",
+                        f"{r['refactor_s']:.2f}",
+                        f"{r['solve_s']:.3f}",
+                        f"{r['max_rel_diff']:.1e}",
+                    ]
+                    for r in record["factorizations"]
+                ],
+            ),
+            "",
+        ]
     rows = []
     for r in record["whole"]:
         if "error" in r:
             rows.append([r["model"], "", r["backend"], "", "", "", "", r["error"], "", "", ""])
             continue
-        base = next((p["total_s"] for p in record["whole"]
-                     if p["model"] == r["model"] and p.get("backend") == "pardiso" and "error" not in p), None)
+        base = next(
+            (
+                p["total_s"]
+                for p in record["whole"]
+                if p["model"] == r["model"] and p.get("backend") == "pardiso" and "error" not in p
+            ),
+            None,
+        )
         ratio = r["total_s"] / base if base else float("nan")
         target = ""
         if r["backend"] == "superlu" and r["model"] in TARGETS:
             x, gb = TARGETS[r["model"]]
             met = ratio <= x and r["peak_mb"] <= gb * 1000
             target = f"<= {x:g}x and <= {gb:g} GB: {'met' if met else '**missed**'}"
-        rows.append([r["model"], f"{r['vertices']:,}", r["backend"], r["imfs"], r["factorizations"],
-                     f"{r['emd_s']:.1f}", f"{r['spectra_s']:.1f}", f"{r['total_s']:.1f}", f"{ratio:.2f}x",
-                     f"{r['peak_mb']:,.0f}", target])
-    lines += ["## Whole HHT from the file", "",
-              table(["model", "#V", "backend", "#IMFs", "factorizations", "EMD s", "spectra s", "total s",
-                     "/ PARDISO", "peak MB", "target"], rows)]
-    lines += ["", "## Fitted costs (hht3d.linalg.estimate.COSTS)", "", "```",
-              json.dumps(record["costs"], indent=2), "```", ""]
+        rows.append(
+            [
+                r["model"],
+                f"{r['vertices']:,}",
+                r["backend"],
+                r["imfs"],
+                r["factorizations"],
+                f"{r['emd_s']:.1f}",
+                f"{r['spectra_s']:.1f}",
+                f"{r['total_s']:.1f}",
+                f"{ratio:.2f}x",
+                f"{r['peak_mb']:,.0f}",
+                target,
+            ]
+        )
+    lines += [
+        "## Whole HHT from the file",
+        "",
+        table(
+            [
+                "model",
+                "#V",
+                "backend",
+                "#IMFs",
+                "factorizations",
+                "EMD s",
+                "spectra s",
+                "total s",
+                "/ PARDISO",
+                "peak MB",
+                "target",
+            ],
+            rows,
+        ),
+    ]
+    lines += [
+        "",
+        "## Fitted costs (hht3d.linalg.estimate.COSTS)",
+        "",
+        "```",
+        json.dumps(record["costs"], indent=2),
+        "```",
+        "",
+    ]
     return "\n".join(lines)
 
 

@@ -23,6 +23,7 @@ Usage::
 
     python -m benchmarks.bench_emd [--models NAME ...] [--with-igea]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -33,9 +34,23 @@ import time
 
 import numpy as np
 
-from benchmarks.common import (MESHES, PAPER_EMD, PAPER_IMFS, PAPER_VERTICES, fixed, machine_meta, mkl_environment,
-                               model_or_skip, model_path, paper_columns, paper_interpolated, peak_rss_mb, table,
-                               worker_json, write_results)
+from benchmarks.common import (
+    MESHES,
+    PAPER_EMD,
+    PAPER_IMFS,
+    PAPER_VERTICES,
+    fixed,
+    machine_meta,
+    mkl_environment,
+    model_or_skip,
+    model_path,
+    paper_columns,
+    paper_interpolated,
+    peak_rss_mb,
+    table,
+    worker_json,
+    write_results,
+)
 
 LARGE = ["igea"]
 #: Paper Table 1, EMD column: (vertices, IMFs, seconds), MATLAB 2014 on a 4-core i7.
@@ -94,10 +109,14 @@ def _replay_first_imf(surface, signal, backend: str) -> dict:
         h = h - mean
         if sd < options.sd_threshold:
             break
-    return {"envelopes": envelopes, "seconds": times, "max_relative_difference": worst,
-            "speedup_with_symbolic": times["baseline"] / (times["ours"] + times["symbolic"]),
-            "speedup_per_envelope": times["baseline"] / times["ours"],
-            "baseline_seconds_per_envelope": times["baseline"] / envelopes}
+    return {
+        "envelopes": envelopes,
+        "seconds": times,
+        "max_relative_difference": worst,
+        "speedup_with_symbolic": times["baseline"] / (times["ours"] + times["symbolic"]),
+        "speedup_per_envelope": times["baseline"] / times["ours"],
+        "baseline_seconds_per_envelope": times["baseline"] / envelopes,
+    }
 
 
 def run_model(name: str) -> dict:
@@ -124,8 +143,7 @@ def run_model(name: str) -> dict:
         "seconds_per_imf": info["seconds"] / max(info["n_imfs"], 1),
         "stop_reason": info["stop_reason"],
         "max_constraint_error": info["max_constraint_error"],
-        "sum_error": float(np.max(np.abs(result.imfs.sum(0) + result.residue - signal))
-                           / np.max(np.abs(signal))),
+        "sum_error": float(np.max(np.abs(result.imfs.sum(0) + result.residue - signal)) / np.max(np.abs(signal))),
         "per_imf": info["imfs"],
         "backend": info["backend"],
         "load_and_operators_seconds": load_seconds,
@@ -136,8 +154,10 @@ def run_model(name: str) -> dict:
     record["first_imf_replay"] = replay
     ours_per_envelope = replay["seconds"]["ours"] / replay["envelopes"]
     record["baseline_projected_seconds"] = (
-        info["seconds"] - replay["seconds"]["symbolic"]
-        + (replay["baseline_seconds_per_envelope"] - ours_per_envelope) * info["factorizations"])
+        info["seconds"]
+        - replay["seconds"]["symbolic"]
+        + (replay["baseline_seconds_per_envelope"] - ours_per_envelope) * info["factorizations"]
+    )
     return record
 
 
@@ -162,31 +182,90 @@ def markdown(records: list[dict], meta: dict) -> str:
     for r in records:
         paper = paper_interpolated(r["vertices"], PAPER_EMD)
         paper_imfs = float(np.interp(np.log(r["vertices"]), np.log(v), k))
-        rows.append([r["model"], f"{r['vertices']:,}", r["imfs"], r["sifts"], r["factorizations"],
-                     f"{r['seconds']:.2f}", f"{r['seconds_per_imf']:.2f}", f"{r['peak_rss_mb']:.0f}", f"{paper:.1f}",
-                     f"{paper / paper_imfs:.2f}"])
-    lines += [table(["model", "#V", "#IMFs", "sifts", "factorizations", "EMD s", "s/IMF", "peak RSS MB",
-                     "paper s at this #V", "paper s/IMF"], rows),
-              "",
-              "First IMF replayed: every envelope of its sifts solved by our fixed-pattern "
-              "solver (symbolic analysis timed apart), by the same formulation on SciPy SuperLU, "
-              "and from scratch with `scipy.sparse.linalg.spsolve` on the eliminated system "
-              "(baseline).",
-              "",
-              table(["model", "envelopes", "symbolic s", "ours s", "SuperLU-pattern s", "baseline s",
-                     "speedup incl. symbolic", "speedup per envelope", "max rel. diff", "whole EMD: ours s",
-                     "whole EMD: baseline s (projected)"],
-                    [[r["model"], p["envelopes"], f"{t['symbolic']:.2f}", f"{t['ours']:.2f}",
-                      f"{t['superlu_pattern']:.2f}", f"{t['baseline']:.2f}", f"{p['speedup_with_symbolic']:.1f}x",
-                      f"{p['speedup_per_envelope']:.1f}x", f"{p['max_relative_difference']:.1e}",
-                      f"{r['seconds']:.1f}", f"{r['baseline_projected_seconds']:.1f}"]
-                     for r in records for p in [r["first_imf_replay"]] for t in [p["seconds"]]])]
-    lines += ["", "Projected baseline: the EMD time with each of its envelopes costing the replay's "
-              "mean baseline envelope instead of ours (and no symbolic analysis)."]
-    lines += ["", "Paper columns: Table 1 EMD time (and IMF count) interpolated log-log in the "
-              "vertex count, clamped outside 4,098–100,003 vertices.",
-              "", "Paper Table 1 (EMD column, MATLAB, 4-core i7): "
-              + "; ".join(f"{a:,} V / {b} IMFs: {c} s" for a, b, c in PAPER) + "."]
+        rows.append(
+            [
+                r["model"],
+                f"{r['vertices']:,}",
+                r["imfs"],
+                r["sifts"],
+                r["factorizations"],
+                f"{r['seconds']:.2f}",
+                f"{r['seconds_per_imf']:.2f}",
+                f"{r['peak_rss_mb']:.0f}",
+                f"{paper:.1f}",
+                f"{paper / paper_imfs:.2f}",
+            ]
+        )
+    lines += [
+        table(
+            [
+                "model",
+                "#V",
+                "#IMFs",
+                "sifts",
+                "factorizations",
+                "EMD s",
+                "s/IMF",
+                "peak RSS MB",
+                "paper s at this #V",
+                "paper s/IMF",
+            ],
+            rows,
+        ),
+        "",
+        "First IMF replayed: every envelope of its sifts solved by our fixed-pattern "
+        "solver (symbolic analysis timed apart), by the same formulation on SciPy SuperLU, "
+        "and from scratch with `scipy.sparse.linalg.spsolve` on the eliminated system "
+        "(baseline).",
+        "",
+        table(
+            [
+                "model",
+                "envelopes",
+                "symbolic s",
+                "ours s",
+                "SuperLU-pattern s",
+                "baseline s",
+                "speedup incl. symbolic",
+                "speedup per envelope",
+                "max rel. diff",
+                "whole EMD: ours s",
+                "whole EMD: baseline s (projected)",
+            ],
+            [
+                [
+                    r["model"],
+                    p["envelopes"],
+                    f"{t['symbolic']:.2f}",
+                    f"{t['ours']:.2f}",
+                    f"{t['superlu_pattern']:.2f}",
+                    f"{t['baseline']:.2f}",
+                    f"{p['speedup_with_symbolic']:.1f}x",
+                    f"{p['speedup_per_envelope']:.1f}x",
+                    f"{p['max_relative_difference']:.1e}",
+                    f"{r['seconds']:.1f}",
+                    f"{r['baseline_projected_seconds']:.1f}",
+                ]
+                for r in records
+                for p in [r["first_imf_replay"]]
+                for t in [p["seconds"]]
+            ],
+        ),
+    ]
+    lines += [
+        "",
+        "Projected baseline: the EMD time with each of its envelopes costing the replay's "
+        "mean baseline envelope instead of ours (and no symbolic analysis).",
+    ]
+    lines += [
+        "",
+        "Paper columns: Table 1 EMD time (and IMF count) interpolated log-log in the "
+        "vertex count, clamped outside 4,098–100,003 vertices.",
+        "",
+        "Paper Table 1 (EMD column, MATLAB, 4-core i7): "
+        + "; ".join(f"{a:,} V / {b} IMFs: {c} s" for a, b, c in PAPER)
+        + ".",
+    ]
     return "\n".join(lines) + "\n"
 
 
@@ -208,11 +287,14 @@ def main(argv=None) -> int:
             continue
         records.append(worker_json(__file__, ["--worker", name], env=env))
         r = records[-1]
-        print(f"{name}: {r['vertices']} V, {r['imfs']} IMFs, {r['factorizations']} factorizations, "
-              f"{r['seconds']:.2f} s, replay speedup {r['first_imf_replay']['speedup_per_envelope']:.1f}x",
-              file=sys.stderr)
-    meta = machine_meta(load_average_1min=[load_before, os.getloadavg()[0]], paper_table1_emd=PAPER,
-                        pypardiso_mkl_lookup_seconds=lookup)
+        print(
+            f"{name}: {r['vertices']} V, {r['imfs']} IMFs, {r['factorizations']} factorizations, "
+            f"{r['seconds']:.2f} s, replay speedup {r['first_imf_replay']['speedup_per_envelope']:.1f}x",
+            file=sys.stderr,
+        )
+    meta = machine_meta(
+        load_average_1min=[load_before, os.getloadavg()[0]], paper_table1_emd=PAPER, pypardiso_mkl_lookup_seconds=lookup
+    )
     write_results("emd", {"meta": meta, "models": records}, markdown(records, meta), indent=1)
     return 0
 

@@ -19,6 +19,7 @@ Usage::
 
     python -m benchmarks.bench_graph [--parts dataset riesz overhead]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -30,8 +31,17 @@ import tempfile
 import time
 from pathlib import Path
 
-from benchmarks.common import (DATASET, SCRATCH, machine, model_path, peak_rss_mb, previous_results, table,
-                               worker_json, write_results)
+from benchmarks.common import (
+    DATASET,
+    SCRATCH,
+    machine,
+    model_path,
+    peak_rss_mb,
+    previous_results,
+    table,
+    worker_json,
+    write_results,
+)
 
 RIESZ_MODEL = "igea"
 #: (workers, riesz_tasks) of the dataset runs; "default" lets the graph choose (one per worker).
@@ -39,12 +49,12 @@ DATASET_RUNS = [(1, "default"), (2, "default"), (2, "1")]
 
 
 def _run(args: list[str], threads: int) -> dict:
-    env = {"OMP_NUM_THREADS": str(threads), "MKL_NUM_THREADS": str(threads),
-           "OPENBLAS_NUM_THREADS": str(threads)}
+    env = {"OMP_NUM_THREADS": str(threads), "MKL_NUM_THREADS": str(threads), "OPENBLAS_NUM_THREADS": str(threads)}
     return worker_json(__file__, ["--worker", *args], env={**os.environ, **env})
 
 
 # -- workers (run in subprocesses) ---------------------------------------------------------------
+
 
 def worker_dataset(workers: int, riesz_tasks: str) -> dict:
     from hht3d.dataset import run_dataset
@@ -55,8 +65,13 @@ def worker_dataset(workers: int, riesz_tasks: str) -> dict:
         start = time.perf_counter()
         rows = run_dataset(inputs, out, scheduler="distributed", workers=workers, progress=False, **options)
         seconds = time.perf_counter() - start
-    return {"workers": workers, "riesz_tasks": riesz_tasks, "seconds": seconds, "items": [r.__dict__ for r in rows],
-            "load_average_1min": os.getloadavg()[0]}
+    return {
+        "workers": workers,
+        "riesz_tasks": riesz_tasks,
+        "seconds": seconds,
+        "items": [r.__dict__ for r in rows],
+        "load_average_1min": os.getloadavg()[0],
+    }
 
 
 def _riesz_imfs():
@@ -70,8 +85,9 @@ def _riesz_imfs():
     cache = SCRATCH / f"{RIESZ_MODEL}_imfs.npy"
     surface = load(model_path(RIESZ_MODEL))
     if not cache.is_file():
-        stacks = [emd(surface, getattr(signals, kind)(surface)).imfs for kind in ("mean_curvature",
-                                                                                   "gaussian_curvature")]
+        stacks = [
+            emd(surface, getattr(signals, kind)(surface)).imfs for kind in ("mean_curvature", "gaussian_curvature")
+        ]
         np.save(cache, np.vstack(stacks))
     return surface, np.load(cache)
 
@@ -80,9 +96,8 @@ def worker_riesz(mode: str, tasks: int) -> dict:
     import numpy as np
 
     from hht3d import graph
-    from hht3d.spectral.monogenic_signal import monogenic
-
     from hht3d.execution import open_client
+    from hht3d.spectral.monogenic_signal import monogenic
 
     surface, imfs = _riesz_imfs()
     _ = surface.stiffness, surface.normals, surface.gradient("lsq")  # operators outside the timing
@@ -98,9 +113,15 @@ def worker_riesz(mode: str, tasks: int) -> dict:
             lazy = graph.monogenic(s, imfs, riesz_tasks=tasks)
             (result,) = graph.compute(lazy, client=client, progress=False)
             seconds = time.perf_counter() - start
-    return {"mode": mode, "tasks": tasks, "seconds": seconds, "imfs": len(imfs),
-            "vertices": surface.n_vertices, "peak_rss_mb": peak_rss_mb(),
-            "checksum": float(np.sum(result.amplitude))}
+    return {
+        "mode": mode,
+        "tasks": tasks,
+        "seconds": seconds,
+        "imfs": len(imfs),
+        "vertices": surface.n_vertices,
+        "peak_rss_mb": peak_rss_mb(),
+        "checksum": float(np.sum(result.amplitude)),
+    }
 
 
 def _noop(x):
@@ -125,25 +146,37 @@ def worker_overhead(scheduler: str, count: int) -> dict:
         start = time.perf_counter()
         compute(tasks, scheduler=scheduler, workers=2, progress=False)
         seconds = time.perf_counter() - start
-    return {"scheduler": scheduler, "tasks": count, "seconds": seconds, "per_task_ms": 1e3 * seconds / count,
-            # dask starts a new process pool on every compute() with scheduler="processes"
-            "includes_start_up": scheduler == "processes"}
+    return {
+        "scheduler": scheduler,
+        "tasks": count,
+        "seconds": seconds,
+        "per_task_ms": 1e3 * seconds / count,
+        # dask starts a new process pool on every compute() with scheduler="processes"
+        "includes_start_up": scheduler == "processes",
+    }
 
 
 # -- driver ----------------------------------------------------------------------------------------
 
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--parts", nargs="+", choices=["dataset", "riesz", "overhead"],
-                        default=["dataset", "riesz", "overhead"],
-                        help="parts to run; the others are kept from the previous graph.json")
+    parser.add_argument(
+        "--parts",
+        nargs="+",
+        choices=["dataset", "riesz", "overhead"],
+        default=["dataset", "riesz", "overhead"],
+        help="parts to run; the others are kept from the previous graph.json",
+    )
     parser.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
         kind, *rest = args.worker
-        result = {"dataset": lambda: worker_dataset(int(rest[0]), rest[1]),
-                  "riesz": lambda: worker_riesz(rest[0], int(rest[1])),
-                  "overhead": lambda: worker_overhead(rest[0], int(rest[1]))}[kind]()
+        result = {
+            "dataset": lambda: worker_dataset(int(rest[0]), rest[1]),
+            "riesz": lambda: worker_riesz(rest[0], int(rest[1])),
+            "overhead": lambda: worker_overhead(rest[0], int(rest[1])),
+        }[kind]()
         print(json.dumps(result, default=str))
         return 0
 
@@ -153,11 +186,18 @@ def main(argv=None) -> int:
         records[part] = []
     for workers, riesz_tasks in DATASET_RUNS if "dataset" in args.parts else []:
         records["dataset"].append(_run(["dataset", str(workers), riesz_tasks], threads=1))
-        print(f"dataset, {workers} worker(s), riesz_tasks {riesz_tasks}: "
-              f"{records['dataset'][-1]['seconds']:.1f} s", file=sys.stderr)
+        print(
+            f"dataset, {workers} worker(s), riesz_tasks {riesz_tasks}: {records['dataset'][-1]['seconds']:.1f} s",
+            file=sys.stderr,
+        )
     if "riesz" in args.parts and model_path(RIESZ_MODEL):
-        for mode, tasks, threads in [("sequential", 1, 1), ("sequential", 1, 2), ("graph", 1, 1), ("graph", 2, 1),
-                                     ("graph", 4, 1)]:
+        for mode, tasks, threads in [
+            ("sequential", 1, 1),
+            ("sequential", 1, 2),
+            ("graph", 1, 1),
+            ("graph", 2, 1),
+            ("graph", 4, 1),
+        ]:
             r = _run(["riesz", mode, str(tasks)], threads=threads) | {"threads": threads}
             records["riesz"].append(r)
             print(f"riesz {mode} tasks={tasks} threads={threads}: {r['seconds']:.1f} s", file=sys.stderr)
@@ -173,42 +213,82 @@ def markdown(records: dict) -> str:
     one, two, *others = records["dataset"]
     ok = [i for i in two["items"] if i["status"] == "ok"]
     lines = [
-        "# Dask layer benchmark", "",
+        "# Dask layer benchmark",
+        "",
         f"Machine: {m['platform']}; {m['cpus']} CPUs; load average at start {m['load_average']}; "
-        f"backend `{m['backend']}`.  Generated by `python -m benchmarks.bench_graph`.", "",
-        "## Dataset fan-out (HHT of the mean-curvature signal, outputs written)", "",
-        table(["model", "status", "#V", "#IMFs", "task seconds"],
-              [[Path(i["source"]).stem, i["status"], i["vertices"], i["imfs"], i["seconds"]] for i in two["items"]]),
+        f"backend `{m['backend']}`.  Generated by `python -m benchmarks.bench_graph`.",
+        "",
+        "## Dataset fan-out (HHT of the mean-curvature signal, outputs written)",
+        "",
+        table(
+            ["model", "status", "#V", "#IMFs", "task seconds"],
+            [[Path(i["source"]).stem, i["status"], i["vertices"], i["imfs"], i["seconds"]] for i in two["items"]],
+        ),
         "",
         f"{len(ok)} of {len(two['items'])} items ok.  Wall time: 1 worker {one['seconds']:.1f} s, "
         f"2 workers {two['seconds']:.1f} s: **speed-up {one['seconds'] / two['seconds']:.2f}x** "
         "(LocalCluster, one thread per worker; Riesz shift groups per file: the graph's default, one per "
-        "worker)." + "".join(f"  With riesz_tasks = {o['riesz_tasks']} on {o['workers']} workers: {o['seconds']:.1f} s, "
-                             f"speed-up {one['seconds'] / o['seconds']:.2f}x." for o in others)
+        "worker)."
+        + "".join(
+            f"  With riesz_tasks = {o['riesz_tasks']} on {o['workers']} workers: {o['seconds']:.1f} s, "
+            f"speed-up {one['seconds'] / o['seconds']:.2f}x."
+            for o in others
+        )
         + "  1-minute load average after each run: "
-        + ", ".join(f"{r.get('load_average_1min', float('nan')):.1f}" for r in records["dataset"]) + ".", "",
+        + ", ".join(f"{r.get('load_average_1min', float('nan')):.1f}" for r in records["dataset"])
+        + ".",
+        "",
     ]
     if records["riesz"]:
         base = {(r["mode"], r["threads"], r["tasks"]): r["seconds"] for r in records["riesz"]}
         seq1 = base[("sequential", 1, 1)]
         r0 = records["riesz"][0]
         lines += [
-            f"## Parallel Riesz + monogenic on {RIESZ_MODEL} ({r0['vertices']:,} vertices, {r0['imfs']} IMFs)", "",
-            table(["mode", "shift-group tasks", "threads per process", "seconds", "speed-up vs sequential 1 thread",
-                   "peak RSS MB (driver)"],
-                  [[r["mode"], r["tasks"], r["threads"], f"{r['seconds']:.2f}", f"{seq1 / r['seconds']:.2f}x",
-                    f"{r['peak_rss_mb']:.0f}"] for r in records["riesz"]]),
-            "", "Operators (L, M, gradient) are built before the timing in the driver; the graph rows "
+            f"## Parallel Riesz + monogenic on {RIESZ_MODEL} ({r0['vertices']:,} vertices, {r0['imfs']} IMFs)",
+            "",
+            table(
+                [
+                    "mode",
+                    "shift-group tasks",
+                    "threads per process",
+                    "seconds",
+                    "speed-up vs sequential 1 thread",
+                    "peak RSS MB (driver)",
+                ],
+                [
+                    [
+                        r["mode"],
+                        r["tasks"],
+                        r["threads"],
+                        f"{r['seconds']:.2f}",
+                        f"{seq1 / r['seconds']:.2f}x",
+                        f"{r['peak_rss_mb']:.0f}",
+                    ]
+                    for r in records["riesz"]
+                ],
+            ),
+            "",
+            "Operators (L, M, gradient) are built before the timing in the driver; the graph rows "
             "include shipping the surface and IMFs to the workers and building the operators there once "
             "per worker (tasks then share them and the shift analysis, `graph.resident`), not the start "
-            "of the 2-worker LocalCluster (started and warmed up first).", "",
+            "of the 2-worker LocalCluster (started and warmed up first).",
+            "",
         ]
-    lines += ["## Scheduler overhead (400 no-op tasks)", "",
-              table(["scheduler", "ms per task", "includes pool start-up"],
-                    [[o["scheduler"], f"{o['per_task_ms']:.3f}", "yes" if o["includes_start_up"] else "no"]
-                     for o in records["overhead"]]),
-              "", "The distributed client is started before the timing; the local process pool is "
-              "started by every `compute()`, so its row is dominated by spawning 2 workers.", ""]
+    lines += [
+        "## Scheduler overhead (400 no-op tasks)",
+        "",
+        table(
+            ["scheduler", "ms per task", "includes pool start-up"],
+            [
+                [o["scheduler"], f"{o['per_task_ms']:.3f}", "yes" if o["includes_start_up"] else "no"]
+                for o in records["overhead"]
+            ],
+        ),
+        "",
+        "The distributed client is started before the timing; the local process pool is "
+        "started by every `compute()`, so its row is dominated by spawning 2 workers.",
+        "",
+    ]
     return "\n".join(lines)
 
 

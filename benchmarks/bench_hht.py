@@ -54,6 +54,7 @@ Usage::
 The stage recorder is in :mod:`benchmarks.hht_recorder`, the generated meshes in
 :mod:`benchmarks.meshes`, the report in :mod:`benchmarks.hht_report`.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -66,20 +67,40 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.common import (PAPER_TABLE1, SCRATCH, log, machine, mkl_environment, model_or_skip, model_path,
-                               previous_results, run_worker, status_mb, write_results)
+from benchmarks.common import (
+    PAPER_TABLE1,
+    SCRATCH,
+    log,
+    machine,
+    mkl_environment,
+    model_or_skip,
+    model_path,
+    previous_results,
+    run_worker,
+    status_mb,
+    write_results,
+)
 from benchmarks.hht_recorder import STAGES, Recorder, nbytes, sparse_mb
 from benchmarks.hht_report import TARGET_FACTOR, markdown
 from benchmarks.meshes import DEFAULT_SIZES, SCALING, SCALING_SOURCE, generate
 from hht3d.linalg import BACKEND_VARIABLE
 
-LADDER = ["spot", "sphere_oct4098", "spacetime_face_neutral", "rocker_arm", "bunny_zipper", "nefertiti",
-          "office_kinect_colored", "igea"]
+LADDER = [
+    "spot",
+    "sphere_oct4098",
+    "spacetime_face_neutral",
+    "rocker_arm",
+    "bunny_zipper",
+    "nefertiti",
+    "office_kinect_colored",
+    "igea",
+]
 #: Models and backends of the backend comparison (superlu only with --with-superlu: minutes per model).
 BACKEND_MODELS = ["nefertiti", "igea"]
 
 
 # -- a case (worker side) ----------------------------------------------------------------------------
+
 
 def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper") -> dict:
     """The whole HHT of one mesh, stage by stage (runs in a fresh subprocess); ``preset`` names
@@ -87,9 +108,9 @@ def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper")
     import hht3d
     from hht3d import linalg
     from hht3d.decomposition import EMD_DEFAULTS, PAPER_OPTIONS, emd
-    from hht3d.spectral.monogenic_signal import monogenic
-    from hht3d.spectral import quadrature_nodes
     from hht3d.geometry.signals import mean_curvature
+    from hht3d.spectral import quadrature_nodes
+    from hht3d.spectral.monogenic_signal import monogenic
 
     rec = Recorder()
     rec.instrument()
@@ -100,10 +121,12 @@ def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper")
         surface = hht3d.load(path)
     with rec.stage("operators"):
         timings = {}
-        for key, build in (("laplacian_mass", lambda: surface.stiffness),
-                           ("normals", lambda: surface.normals),
-                           ("adjacency_components", lambda: surface.component_labels),
-                           ("gradient_lsq", lambda: surface.gradient("lsq"))):
+        for key, build in (
+            ("laplacian_mass", lambda: surface.stiffness),
+            ("normals", lambda: surface.normals),
+            ("adjacency_components", lambda: surface.component_labels),
+            ("gradient_lsq", lambda: surface.gradient("lsq")),
+        ):
             t0 = time.perf_counter()
             build()
             timings[key] = time.perf_counter() - t0
@@ -122,42 +145,63 @@ def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper")
     stages = rec.stages
     total = sum(stages[s]["seconds"] for s in STAGES)
     return {
-        "case": name, "source": str(path), "vertices": surface.n_vertices,
-        "faces": 0 if surface.faces is None else len(surface.faces), "components": surface.n_components,
-        "backend": linalg.default_backend(), "emd_options": preset,
+        "case": name,
+        "source": str(path),
+        "vertices": surface.n_vertices,
+        "faces": 0 if surface.faces is None else len(surface.faces),
+        "components": surface.n_components,
+        "backend": linalg.default_backend(),
+        "emd_options": preset,
         "max_imfs": max_imfs if max_imfs is not None else 10,
-        "imfs": info["n_imfs"], "sifts": info["sifts"], "factorizations": info["factorizations"],
-        "stop_reason": info["stop_reason"], "shifts": shifts, "condition": mbar / m,
-        "stages": stages, "operators_detail": timings, "timers": rec.timers, "solver": rec.solver,
+        "imfs": info["n_imfs"],
+        "sifts": info["sifts"],
+        "factorizations": info["factorizations"],
+        "stop_reason": info["stop_reason"],
+        "shifts": shifts,
+        "condition": mbar / m,
+        "stages": stages,
+        "operators_detail": timings,
+        "timers": rec.timers,
+        "solver": rec.solver,
         "substep_peak_mb": rec.peaks,
-        "signal_mean": float(np.mean(signal)), "signal_relative_std": float(np.std(signal) / np.mean(np.abs(signal))),
+        "signal_mean": float(np.mean(signal)),
+        "signal_relative_std": float(np.std(signal) / np.mean(np.abs(signal))),
         "cpu_seconds": {s: stages[s]["cpu_seconds"] for s in STAGES}
         | {"total": sum(stages[s]["cpu_seconds"] for s in STAGES)},
-        "seconds": {s: stages[s]["seconds"] for s in STAGES} | {"total": total,
-                                                                "emd_rt": stages["emd"]["seconds"]
-                                                                + stages["rt"]["seconds"]},
+        "seconds": {s: stages[s]["seconds"] for s in STAGES}
+        | {"total": total, "emd_rt": stages["emd"]["seconds"] + stages["rt"]["seconds"]},
         "peak_rss_mb": max(st["peak_mb"] for st in stages.values()),
-        "baseline_rss_mb": baseline_mb, "peak_resets": rec.peak_resets,
-        "memory_mb": {"L": sparse_mb(surface.stiffness), "G_lsq": sparse_mb(surface.gradient("lsq")),
-                      "Q": rec.energies_mb, "imfs": nbytes(decomposition.imfs),
-                      "monogenic_outputs": nbytes(mono.imfs, mono.riesz, mono.amplitude, mono.phase,
-                                                   mono.frequency),
-                      "jacobian_transient": 72 * info["n_imfs"] * surface.n_vertices / 2 ** 20},
-        "sum_error": float(np.max(np.abs(decomposition.imfs.sum(0) + decomposition.residue - signal))
-                           / np.max(np.abs(signal))),
-        "reconstruct_error": float(np.max(np.abs(mono.reconstruct() - decomposition.imfs.sum(0)))
-                                   / np.max(np.abs(signal))) if info["n_imfs"] else 0.0,
-        "started": started, "load_average_1min": [round(load_before, 2), round(os.getloadavg()[0], 2)],
+        "baseline_rss_mb": baseline_mb,
+        "peak_resets": rec.peak_resets,
+        "memory_mb": {
+            "L": sparse_mb(surface.stiffness),
+            "G_lsq": sparse_mb(surface.gradient("lsq")),
+            "Q": rec.energies_mb,
+            "imfs": nbytes(decomposition.imfs),
+            "monogenic_outputs": nbytes(mono.imfs, mono.riesz, mono.amplitude, mono.phase, mono.frequency),
+            "jacobian_transient": 72 * info["n_imfs"] * surface.n_vertices / 2**20,
+        },
+        "sum_error": float(
+            np.max(np.abs(decomposition.imfs.sum(0) + decomposition.residue - signal)) / np.max(np.abs(signal))
+        ),
+        "reconstruct_error": float(
+            np.max(np.abs(mono.reconstruct() - decomposition.imfs.sum(0))) / np.max(np.abs(signal))
+        )
+        if info["n_imfs"]
+        else 0.0,
+        "started": started,
+        "load_average_1min": [round(load_before, 2), round(os.getloadavg()[0], 2)],
     }
-
 
 
 # -- driver ----------------------------------------------------------------------------------------
 
+
 def _worker(args: list[str], env: dict, out: Path) -> dict:
     out.unlink(missing_ok=True)
-    done = run_worker(__file__, ["--worker", *args, "--out", str(out)], env=env, stdout=subprocess.DEVNULL,
-                      stderr=subprocess.PIPE)
+    done = run_worker(
+        __file__, ["--worker", *args, "--out", str(out)], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+    )
     if done.returncode != 0 or not out.is_file():
         raise RuntimeError(f"worker {args} failed (exit {done.returncode}):\n{done.stderr[-3000:]}")
     record = json.loads(out.read_text())
@@ -167,8 +211,9 @@ def _worker(args: list[str], env: dict, out: Path) -> dict:
 
 def _store(results: dict, part: str, record: dict) -> None:
     """Put ``record`` in ``results[part]`` in place of the record of the same case and backend."""
-    results[part] = [r for r in results[part] if (r["case"], r.get("backend")) != (record["case"],
-                                                                                record.get("backend"))]
+    results[part] = [
+        r for r in results[part] if (r["case"], r.get("backend")) != (record["case"], record.get("backend"))
+    ]
     results[part].append(record)
 
 
@@ -185,27 +230,40 @@ def _case(results: dict, part: str, key: dict, args: list[str], env: dict, out: 
 
 
 def _summary(r: dict) -> str:
-    return (f"  {r['vertices']:,} V, {r['imfs']} IMFs, EMD {r['seconds']['emd']:.1f} s, RT "
-            f"{r['seconds']['rt']:.1f} s, total {r['seconds']['total']:.1f} s, peak {r['peak_rss_mb']:.0f} MB")
+    return (
+        f"  {r['vertices']:,} V, {r['imfs']} IMFs, EMD {r['seconds']['emd']:.1f} s, RT "
+        f"{r['seconds']['rt']:.1f} s, total {r['seconds']['total']:.1f} s, peak {r['peak_rss_mb']:.0f} MB"
+    )
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--parts", nargs="+", choices=["ladder", "scaling", "backends"],
-                        default=["ladder", "scaling", "backends"])
-    parser.add_argument("--models", nargs="+", default=None,
-                        help=f"models of the ladder (default: {' '.join(LADDER)}) and of the backends part "
-                             f"(default: {' '.join(BACKEND_MODELS)})")
+    parser.add_argument(
+        "--parts", nargs="+", choices=["ladder", "scaling", "backends"], default=["ladder", "scaling", "backends"]
+    )
+    parser.add_argument(
+        "--models",
+        nargs="+",
+        default=None,
+        help=f"models of the ladder (default: {' '.join(LADDER)}) and of the backends part "
+        f"(default: {' '.join(BACKEND_MODELS)})",
+    )
     parser.add_argument("--sizes", nargs="+", choices=list(SCALING), default=DEFAULT_SIZES)
-    parser.add_argument("--backend", default=None,
-                        help="sparse solver of the ladder and scaling cases (default: the fastest installed)")
+    parser.add_argument(
+        "--backend", default=None, help="sparse solver of the ladder and scaling cases (default: the fastest installed)"
+    )
     parser.add_argument("--with-superlu", action="store_true", help="add SciPy SuperLU to the backends part")
-    parser.add_argument("--emd", choices=["paper", "defaults"], default="paper",
-                        help="EMD settings: the paper's (PAPER_OPTIONS, as Table 1) or hht3d's defaults; "
-                             "cases run with the defaults are named '<case> (defaults)'")
+    parser.add_argument(
+        "--emd",
+        choices=["paper", "defaults"],
+        default="paper",
+        help="EMD settings: the paper's (PAPER_OPTIONS, as Table 1) or hht3d's defaults; "
+        "cases run with the defaults are named '<case> (defaults)'",
+    )
     parser.add_argument("--max-imfs", type=int, default=None, help="cap on IMFs for the ladder (default: emd's 10)")
-    parser.add_argument("--scaling-max-imfs", type=int, default=None,
-                        help="cap on IMFs for the scaling cases (default: emd's 10)")
+    parser.add_argument(
+        "--scaling-max-imfs", type=int, default=None, help="cap on IMFs for the scaling cases (default: emd's 10)"
+    )
     parser.add_argument("--keep-meshes", action="store_true", help="keep the generated meshes in results/scratch")
     parser.add_argument("--blas-threads", type=int, default=1, help="OpenBLAS threads of the workers (ARPACK)")
     parser.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
@@ -241,8 +299,14 @@ def main(argv=None) -> int:
             if path is None:
                 continue
             log(f"ladder {name}{suffix} ...")
-            r = _case(results, "ladder", {"case": name + suffix},
-                      [name + suffix, str(path), str(args.max_imfs or "none"), args.emd], env, out)
+            r = _case(
+                results,
+                "ladder",
+                {"case": name + suffix},
+                [name + suffix, str(path), str(args.max_imfs or "none"), args.emd],
+                env,
+                out,
+            )
             if r is not None:
                 log(_summary(r))
     if "scaling" in args.parts:
@@ -256,8 +320,14 @@ def main(argv=None) -> int:
                 results["generated"][size] = _worker(["generate", size, str(mesh)], env, out)
             log(f"scaling {name}{suffix} ...")
             try:
-                r = _case(results, "scaling", {"case": name + suffix},
-                          [name + suffix, str(mesh), str(args.scaling_max_imfs or "none"), args.emd], env, out)
+                r = _case(
+                    results,
+                    "scaling",
+                    {"case": name + suffix},
+                    [name + suffix, str(mesh), str(args.scaling_max_imfs or "none"), args.emd],
+                    env,
+                    out,
+                )
             finally:
                 if not args.keep_meshes:
                     mesh.unlink(missing_ok=True)
@@ -270,18 +340,30 @@ def main(argv=None) -> int:
         for name in [m for m in args.models or BACKEND_MODELS if model_path(m) is not None]:
             for backend in backends:  # interleaved per model: every ratio comes from one run
                 log(f"backends {name} {backend} ...")
-                r = _case(results, "backends", {"case": name, "backend": backend},
-                          [name, str(model_path(name)), "none", "paper"], env | {BACKEND_VARIABLE: backend}, out)
+                r = _case(
+                    results,
+                    "backends",
+                    {"case": name, "backend": backend},
+                    [name, str(model_path(name)), "none", "paper"],
+                    env | {BACKEND_VARIABLE: backend},
+                    out,
+                )
                 if r is not None:
-                    log(f"  EMD {r['seconds']['emd']:.1f} s, RT {r['seconds']['rt']:.1f} s, total "
-                        f"{r['seconds']['total']:.1f} s, peak {r['peak_rss_mb']:.0f} MB")
+                    log(
+                        f"  EMD {r['seconds']['emd']:.1f} s, RT {r['seconds']['rt']:.1f} s, total "
+                        f"{r['seconds']['total']:.1f} s, peak {r['peak_rss_mb']:.0f} MB"
+                    )
     order = {n: i for i, n in enumerate(LADDER)}
     results["ladder"].sort(key=lambda r: order.get(r["case"], len(order)))
     results["scaling"].sort(key=lambda r: r.get("vertices", 0))
-    results["meta"] = {"machine": machine(), "openblas_threads": args.blas_threads,
-                       "pypardiso_mkl_lookup_seconds": lookup, "paper_table1": PAPER_TABLE1,
-                       "target": f"total <= paper total / {TARGET_FACTOR}",
-                       "written": time.strftime("%Y-%m-%d %H:%M:%S")}
+    results["meta"] = {
+        "machine": machine(),
+        "openblas_threads": args.blas_threads,
+        "pypardiso_mkl_lookup_seconds": lookup,
+        "paper_table1": PAPER_TABLE1,
+        "target": f"total <= paper total / {TARGET_FACTOR}",
+        "written": time.strftime("%Y-%m-%d %H:%M:%S"),
+    }
     for path in write_results("hht", results, markdown(results)):
         log(f"wrote {path}")
     return 0

@@ -30,6 +30,7 @@ Usage::
 
     python -m benchmarks.bench_render [--models NAME ...] [--repeat N]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -38,8 +39,19 @@ import subprocess
 
 import numpy as np
 
-from benchmarks.common import (ROOT, SCRATCH, best_of, load_average, machine, model_path, require_models,
-                               run_worker, table, worker_answer, write_results)
+from benchmarks.common import (
+    ROOT,
+    SCRATCH,
+    best_of,
+    load_average,
+    machine,
+    model_path,
+    require_models,
+    run_worker,
+    table,
+    worker_answer,
+    write_results,
+)
 from hht3d.geometry.surface import Surface
 from hht3d.io.read import load
 from hht3d.spectral.monogenic_signal import MonogenicSignal
@@ -63,8 +75,11 @@ def time_backend(surface: Surface, backend: str, repeat: int, **options) -> dict
 
     first_seconds = best_of(repeat, first)
     next_seconds = best_of(repeat, lambda: holder["drawer"].render(y, scale_y))
-    return {"first_field_s": first_seconds, "next_field_s": next_seconds,
-            "coverage": float(holder["image"].mask.mean())}
+    return {
+        "first_field_s": first_seconds,
+        "next_field_s": next_seconds,
+        "coverage": float(holder["image"].mask.mean()),
+    }
 
 
 def synthetic_result(surface: Surface) -> HHTResult:
@@ -75,11 +90,15 @@ def synthetic_result(surface: Surface) -> HHTResult:
     residue = v[:, 1]
     amplitude = np.abs(imfs) + 0.1 / scales[:, None]
     frequency = scales[:, None] * (1.2 + np.cos(7 * v[:, 0]))[None, :] / surface.bounding_box_diagonal
-    mono = MonogenicSignal(imfs=imfs, riesz=np.zeros(imfs.shape + (3,)), amplitude=amplitude,
-                           phase=np.arccos(np.clip(imfs / amplitude, -1, 1)), frequency=frequency,
-                           area=surface.mass_diagonal)
-    return HHTResult(surface=surface, signal=imfs.sum(axis=0) + residue, imfs=imfs, residue=residue,
-                     monogenic=mono)
+    mono = MonogenicSignal(
+        imfs=imfs,
+        riesz=np.zeros(imfs.shape + (3,)),
+        amplitude=amplitude,
+        phase=np.arccos(np.clip(imfs / amplitude, -1, 1)),
+        frequency=frequency,
+        area=surface.mass_diagonal,
+    )
+    return HHTResult(surface=surface, signal=imfs.sum(axis=0) + residue, imfs=imfs, residue=residue, monogenic=mono)
 
 
 def time_figures(surface: Surface, repeat: int) -> dict:
@@ -90,22 +109,32 @@ def time_figures(surface: Surface, repeat: int) -> dict:
     spectrum_path = SCRATCH / f"render_{surface.name}_spectrum.png"
     composite = best_of(repeat, lambda: panels.save_figure(figures.hht_figure(result), hht_path))
     spectrum = best_of(repeat, lambda: panels.save_figure(figures.spectrum_figure(result), spectrum_path))
-    return {"composite_s": composite, "spectrum_s": spectrum, "composite_png": str(hht_path.relative_to(ROOT)),
-            "spectrum_png": str(spectrum_path.relative_to(ROOT))}
+    return {
+        "composite_s": composite,
+        "spectrum_s": spectrum,
+        "composite_png": str(hht_path.relative_to(ROOT)),
+        "spectrum_png": str(spectrum_path.relative_to(ROOT)),
+    }
 
 
 def geometries(name: str) -> dict[str, Surface]:
     """The model as a mesh and its vertices as a point cloud (normals built, not timed)."""
     surface = load(model_path(name))
     surface.normals
-    return {"mesh": surface, "points": Surface(surface.vertices, normals=surface.normals,
-                                               name=f"{name} (points)")}
+    return {"mesh": surface, "points": Surface(surface.vertices, normals=surface.normals, name=f"{name} (points)")}
 
 
 def software_rows(shapes: dict[str, Surface], repeat: int) -> list[dict]:
-    return [{"geometry": kind, "backend": "software", "supersample": ss,
-             **time_backend(geometry, "software", repeat, supersample=ss)}
-            for kind, geometry in shapes.items() for ss in (1, 2)]
+    return [
+        {
+            "geometry": kind,
+            "backend": "software",
+            "supersample": ss,
+            **time_backend(geometry, "software", repeat, supersample=ss),
+        }
+        for kind, geometry in shapes.items()
+        for ss in (1, 2)
+    ]
 
 
 def open3d_rows(name: str, repeat: int) -> list[dict]:
@@ -113,25 +142,43 @@ def open3d_rows(name: str, repeat: int) -> list[dict]:
     try:
         done = run_worker(__file__, ["--open3d-worker", name, "--repeat", str(repeat)], timeout=OPEN3D_TIMEOUT)
     except subprocess.TimeoutExpired:
-        return [{"geometry": "mesh+points", "backend": "open3d", "supersample": None,
-                 "error": f"no answer within {OPEN3D_TIMEOUT} s (hung)"}]
+        return [
+            {
+                "geometry": "mesh+points",
+                "backend": "open3d",
+                "supersample": None,
+                "error": f"no answer within {OPEN3D_TIMEOUT} s (hung)",
+            }
+        ]
     if done.returncode != 0:
-        return [{"geometry": "mesh+points", "backend": "open3d", "supersample": None,
-                 "error": f"exit code {done.returncode}: {done.stderr.strip().splitlines()[-1:]}"}]
+        return [
+            {
+                "geometry": "mesh+points",
+                "backend": "open3d",
+                "supersample": None,
+                "error": f"exit code {done.returncode}: {done.stderr.strip().splitlines()[-1:]}",
+            }
+        ]
     return worker_answer(done)
 
 
 def open3d_worker(name: str, repeat: int) -> None:
-    rows = [{"geometry": kind, "backend": "open3d", "supersample": None,
-             **time_backend(geometry, "open3d", repeat)} for kind, geometry in geometries(name).items()]
+    rows = [
+        {"geometry": kind, "backend": "open3d", "supersample": None, **time_backend(geometry, "open3d", repeat)}
+        for kind, geometry in geometries(name).items()
+    ]
     print(json.dumps(rows))
 
 
 def run_model(name: str, backends: list[str], repeat: int) -> dict:
     shapes = geometries(name)
     surface = shapes["mesh"]
-    row = {"model": name, "vertices": surface.n_vertices, "faces": len(surface.faces),
-           "renders": software_rows(shapes, repeat) + (open3d_rows(name, repeat) if "open3d" in backends else [])}
+    row = {
+        "model": name,
+        "vertices": surface.n_vertices,
+        "faces": len(surface.faces),
+        "renders": software_rows(shapes, repeat) + (open3d_rows(name, repeat) if "open3d" in backends else []),
+    }
     for r in row["renders"]:
         timing = r.get("error") or f"first {r['first_field_s']:.2f} s, next {r['next_field_s']:.2f} s"
         print(f"{name} {r['geometry']} {r['backend']} ss={r['supersample']}: {timing}", flush=True)
@@ -141,27 +188,57 @@ def run_model(name: str, backends: list[str], repeat: int) -> dict:
 
 
 def markdown(report: dict) -> str:
-    lines = ["# Rendering benchmark", "",
-             f"Machine: {report['machine']}.  Generated by `python -m benchmarks.bench_render`; the method is "
-             f"in its docstring.  Image {SIZE[0]}×{SIZE[1]} pixels; best of {report['repeat']} runs.  "
-             f"Backends available: {', '.join(report['backends'])}.", "",
-             "## One field on the model", "",
-             "`first field`: renderer set-up (software: rasterisation) + one field; `next field`: another "
-             "field from the same renderer.", "",
-             table(["model", "#V", "geometry", "backend", "supersample", "first field s", "next field s",
-                    "coverage"],
-                   [[row["model"], f"{row['vertices']:,}", r["geometry"], r["backend"], r["supersample"] or "–"]
-                    + ([r["error"], "", ""] if "error" in r else
-                       [f"{r['first_field_s']:.2f}", f"{r['next_field_s']:.2f}", f"{r['coverage']:.2f}"])
-                    for row in report["models"] for r in row["renders"]])]
+    lines = [
+        "# Rendering benchmark",
+        "",
+        f"Machine: {report['machine']}.  Generated by `python -m benchmarks.bench_render`; the method is "
+        f"in its docstring.  Image {SIZE[0]}×{SIZE[1]} pixels; best of {report['repeat']} runs.  "
+        f"Backends available: {', '.join(report['backends'])}.",
+        "",
+        "## One field on the model",
+        "",
+        "`first field`: renderer set-up (software: rasterisation) + one field; `next field`: another "
+        "field from the same renderer.",
+        "",
+        table(
+            ["model", "#V", "geometry", "backend", "supersample", "first field s", "next field s", "coverage"],
+            [
+                [row["model"], f"{row['vertices']:,}", r["geometry"], r["backend"], r["supersample"] or "–"]
+                + (
+                    [r["error"], "", ""]
+                    if "error" in r
+                    else [f"{r['first_field_s']:.2f}", f"{r['next_field_s']:.2f}", f"{r['coverage']:.2f}"]
+                )
+                for row in report["models"]
+                for r in row["renders"]
+            ],
+        ),
+    ]
     if "open3d" in report["backends"]:
-        lines += ["", "Open3D here is Filament on Mesa's CPU Vulkan driver (lavapipe): single renders "
-                  "sometimes busy-wait for minutes (both cores spinning) — the best-of numbers above hide "
-                  "those repeats; it is for machines with a GPU driver."]
-    lines += ["", f"## Figures (auto backend, {N_IMFS} IMFs: 18 panels)", "",
-              table(["model", "#V", "composite (Fig. 4) s", "spectrum s", "composite PNG"],
-                    [[row["model"], f"{row['vertices']:,}", f"{row['composite_s']:.2f}", f"{row['spectrum_s']:.2f}",
-                      f"`{row['composite_png']}`"] for row in report["models"]])]
+        lines += [
+            "",
+            "Open3D here is Filament on Mesa's CPU Vulkan driver (lavapipe): single renders "
+            "sometimes busy-wait for minutes (both cores spinning) — the best-of numbers above hide "
+            "those repeats; it is for machines with a GPU driver.",
+        ]
+    lines += [
+        "",
+        f"## Figures (auto backend, {N_IMFS} IMFs: 18 panels)",
+        "",
+        table(
+            ["model", "#V", "composite (Fig. 4) s", "spectrum s", "composite PNG"],
+            [
+                [
+                    row["model"],
+                    f"{row['vertices']:,}",
+                    f"{row['composite_s']:.2f}",
+                    f"{row['spectrum_s']:.2f}",
+                    f"`{row['composite_png']}`",
+                ]
+                for row in report["models"]
+            ],
+        ),
+    ]
     return "\n".join(lines) + "\n"
 
 
@@ -176,10 +253,14 @@ def main(argv=None) -> None:
     require_models(args.models)
     backends = render.available_backends()
     facts = machine()
-    report = {"machine": f"{facts['platform']}; {facts['cpus']} CPUs (shared; load average {load_average(1)}); "
-                         f"Python {facts['python']}",
-              "repeat": args.repeat, "size": SIZE, "backends": backends,
-              "models": [run_model(m, backends, args.repeat) for m in args.models]}
+    report = {
+        "machine": f"{facts['platform']}; {facts['cpus']} CPUs (shared; load average {load_average(1)}); "
+        f"Python {facts['python']}",
+        "repeat": args.repeat,
+        "size": SIZE,
+        "backends": backends,
+        "models": [run_model(m, backends, args.repeat) for m in args.models],
+    }
     write_results("render", report, markdown(report))
     print(markdown(report))
 

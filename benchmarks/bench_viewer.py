@@ -28,6 +28,7 @@ Usage::
 
     python -m benchmarks.bench_viewer [--cases 3k 100k 134k 1m] [--loads 3]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -45,8 +46,15 @@ from benchmarks.meshes import generate
 from hht3d.viz.viewer import PAGE_BUDGETS, VERTEX_BUDGET, shown_copy
 
 CASES = ("3k", "100k", "134k", "1m")
-CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+CHROMIUM_FLAGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 
 
 def surface_of(case: str) -> hht3d.Surface | None:
@@ -87,8 +95,13 @@ def measure_page(browser, path: Path, loads: int, shot: Path) -> dict:
             switch = time.perf_counter() - start
             page.screenshot(path=str(shot))
         page.close()
-    return {"load_s_best": min(seconds), "load_s_median": statistics.median(seconds), "load_s_all": seconds,
-            "switch_s": switch, "js_errors": errors}
+    return {
+        "load_s_best": min(seconds),
+        "load_s_median": statistics.median(seconds),
+        "load_s_all": seconds,
+        "switch_s": switch,
+        "js_errors": errors,
+    }
 
 
 def run_case(case: str, browser, loads: int) -> dict | None:
@@ -106,10 +119,18 @@ def run_case(case: str, browser, loads: int) -> dict | None:
     write = time.perf_counter() - start
     from plotly.offline import get_plotlyjs
 
-    record = {"case": case, "vertices": surface.n_vertices, "triangles": len(surface.faces),
-              "shown_vertices": len(shown.source), "fields": len(result.vertex_attributes()),
-              "write_s": write, "decimate_s": decimate, "page_mb": path.stat().st_size / 1e6,
-              "plotly_js_mb": len(get_plotlyjs().encode()) / 1e6, "load_average": os.getloadavg()[0]}
+    record = {
+        "case": case,
+        "vertices": surface.n_vertices,
+        "triangles": len(surface.faces),
+        "shown_vertices": len(shown.source),
+        "fields": len(result.vertex_attributes()),
+        "write_s": write,
+        "decimate_s": decimate,
+        "page_mb": path.stat().st_size / 1e6,
+        "plotly_js_mb": len(get_plotlyjs().encode()) / 1e6,
+        "load_average": os.getloadavg()[0],
+    }
     record.update(measure_page(browser, path, loads, SCRATCH / f"viewer_{case}.png"))
     print(f"{case}: {record['page_mb']:.1f} MB, write {write:.1f} s, load {record['load_s_best']:.1f} s", flush=True)
     return record
@@ -121,23 +142,56 @@ def budget_rows(records: list[dict]) -> list[list]:
         near = [r for r in records if 0.75 * vertices <= r["vertices"] <= 1.25 * vertices]
         for r in near:
             met = r["page_mb"] <= mb and r["load_s_median"] <= seconds
-            rows.append([f"{vertices:,}", f"≤ {mb:g} MB, ≤ {seconds:g} s",
-                         f"{r['case']}: {r['page_mb']:.1f} MB, {r['load_s_median']:.1f} s", "met" if met else "MISSED"])
+            rows.append(
+                [
+                    f"{vertices:,}",
+                    f"≤ {mb:g} MB, ≤ {seconds:g} s",
+                    f"{r['case']}: {r['page_mb']:.1f} MB, {r['load_s_median']:.1f} s",
+                    "met" if met else "MISSED",
+                ]
+            )
     return rows
 
 
 def markdown(records: list[dict], info: dict) -> str:
-    out = ["# Viewer: page size and load time", "",
-           f"Machine: {info['platform']}, {info['cpus']} CPUs, load average at start {info['load_average']}. "
-           f"Headless Debian chromium, software WebGL. Vertex budget {VERTEX_BUDGET:,}: larger meshes are shown "
-           "decimated. Fields: a synthetic 5-IMF result (22 fields).", "",
-           table(["case", "vertices", "shown", "MB (plotly.js)", "write s", "decimate s", "load s best / median",
-                  "switch s"],
-                 [[r["case"], f"{r['vertices']:,}", f"{r['shown_vertices']:,}",
-                   f"{r['page_mb']:.1f} ({r['plotly_js_mb']:.1f})", f"{r['write_s']:.1f}", f"{r['decimate_s']:.1f}",
-                   f"{r['load_s_best']:.1f} / {r['load_s_median']:.1f}", f"{r['switch_s']:.2f}"] for r in records]),
-           "", "## Budgets (hht3d.viz.viewer.PAGE_BUDGETS)", "",
-           table(["vertices", "budget", "measured", ""], budget_rows(records)), ""]
+    out = [
+        "# Viewer: page size and load time",
+        "",
+        f"Machine: {info['platform']}, {info['cpus']} CPUs, load average at start {info['load_average']}. "
+        f"Headless Debian chromium, software WebGL. Vertex budget {VERTEX_BUDGET:,}: larger meshes are shown "
+        "decimated. Fields: a synthetic 5-IMF result (22 fields).",
+        "",
+        table(
+            [
+                "case",
+                "vertices",
+                "shown",
+                "MB (plotly.js)",
+                "write s",
+                "decimate s",
+                "load s best / median",
+                "switch s",
+            ],
+            [
+                [
+                    r["case"],
+                    f"{r['vertices']:,}",
+                    f"{r['shown_vertices']:,}",
+                    f"{r['page_mb']:.1f} ({r['plotly_js_mb']:.1f})",
+                    f"{r['write_s']:.1f}",
+                    f"{r['decimate_s']:.1f}",
+                    f"{r['load_s_best']:.1f} / {r['load_s_median']:.1f}",
+                    f"{r['switch_s']:.2f}",
+                ]
+                for r in records
+            ],
+        ),
+        "",
+        "## Budgets (hht3d.viz.viewer.PAGE_BUDGETS)",
+        "",
+        table(["vertices", "budget", "measured", ""], budget_rows(records)),
+        "",
+    ]
     errors = [f"{r['case']}: {e}" for r in records for e in r["js_errors"]]
     out.append("JavaScript errors: " + ("; ".join(errors) if errors else "none") + ".")
     return "\n".join(out) + "\n"

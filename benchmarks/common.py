@@ -5,6 +5,7 @@ Every ``bench_*.py`` takes these from here (``from benchmarks.common import ...`
 repository root as ``python -m benchmarks.bench_NAME``; its workers run the same way
 (:func:`run_worker`), so they import ``hht3d`` and ``benchmarks`` from this checkout.
 """
+
 from __future__ import annotations
 
 import json
@@ -60,6 +61,7 @@ def paper_interpolated(vertices: int, column: int) -> float:
 
 # -- models ------------------------------------------------------------------------------------------
 
+
 def model_path(name: str) -> Path | None:
     """``../shared/data/NAME.ply`` if present."""
     path = DATA / f"{name}.ply"
@@ -90,6 +92,7 @@ def mean_adjacent_distance(surface) -> float:
 
 # -- peak memory -------------------------------------------------------------------------------------
 
+
 def peak_rss_mb() -> float:
     """Peak resident memory of this process (MB; ``ru_maxrss``, MKL allocations included).
 
@@ -119,6 +122,7 @@ def reset_peak() -> bool:
 
 # -- timing and messages -----------------------------------------------------------------------------
 
+
 def timed(fn):
     """``(fn(), wall seconds)``."""
     start = time.perf_counter()
@@ -143,6 +147,7 @@ def log(msg: str) -> None:
 
 # -- machine -----------------------------------------------------------------------------------------
 
+
 def load_average(digits: int = 2) -> list[float]:
     """The 1-, 5- and 15-minute load averages, rounded."""
     return [round(x, digits) for x in os.getloadavg()]
@@ -152,8 +157,13 @@ def machine() -> dict:
     """What the numbers were measured on."""
     from hht3d import linalg
 
-    return {"platform": platform.platform(), "cpus": os.cpu_count(), "python": platform.python_version(),
-            "backend": linalg.default_backend(), "load_average": load_average()}
+    return {
+        "platform": platform.platform(),
+        "cpus": os.cpu_count(),
+        "python": platform.python_version(),
+        "backend": linalg.default_backend(),
+        "load_average": load_average(),
+    }
 
 
 def machine_meta(**facts) -> dict:
@@ -182,20 +192,21 @@ def mkl_environment() -> tuple[dict, float | None]:
 
 # -- worker subprocesses -----------------------------------------------------------------------------
 
+
 def worker_command(script: str, *args: str) -> list[str]:
     """``python -m benchmarks.SCRIPT ARGS``: a benchmark's own module in a fresh interpreter
     (``script`` is its ``__file__``), so that the worker's peak memory and threads are its own."""
     return [sys.executable, "-m", f"benchmarks.{Path(script).stem}", *args]
 
 
-def run_worker(script: str, args, *, env: dict | None = None, timeout: float | None = None,
-               **options) -> subprocess.CompletedProcess:
+def run_worker(
+    script: str, args, *, env: dict | None = None, timeout: float | None = None, **options
+) -> subprocess.CompletedProcess:
     """Run :func:`worker_command` from the repository root; output captured as text unless
     ``options`` redirect ``stdout`` or ``stderr``."""
     if "stdout" not in options and "stderr" not in options:
         options["capture_output"] = True
-    return subprocess.run(worker_command(script, *args), cwd=ROOT, env=env, timeout=timeout, text=True,
-                          **options)
+    return subprocess.run(worker_command(script, *args), cwd=ROOT, env=env, timeout=timeout, text=True, **options)
 
 
 def worker_answer(done: subprocess.CompletedProcess):
@@ -212,6 +223,7 @@ def worker_json(script: str, args, **options):
 
 
 # -- result files and Markdown -----------------------------------------------------------------------
+
 
 def previous_results(name: str) -> dict:
     """``results/NAME.json`` of the last run ({} if none): benchmarks that re-run some parts keep the
@@ -248,5 +260,4 @@ def short(x, digits: int = 2) -> str:
     not finite."""
     if x is None or not np.isfinite(x):
         return "n/a"
-    return f"{x:.{digits}f}" if abs(x) >= 10 ** -digits else f"{x:.1e}"
-
+    return f"{x:.{digits}f}" if abs(x) >= 10**-digits else f"{x:.1e}"

@@ -7,6 +7,7 @@ numeric factorization 22, solve 33, with PARDISO's own memory report from ``ipar
 construction, factorizations and solves of the other backends, and ``spectral_bounds``,
 ``monogenic_from_potential`` and ``envelope_energies``.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -49,8 +50,13 @@ class Recorder:
         yield
         seconds, cpu = time.perf_counter() - start, time.process_time() - cpu_start
         self.peaks[f"{name}:tail"] = peak_rss_mb()  # since the last checkpoint of the stage
-        self.stages[name] = {"seconds": seconds, "cpu_seconds": cpu, "rss_start_mb": rss_start,
-                             "rss_end_mb": status_mb("VmRSS"), "peak_mb": max(self._stage_peak, peak_rss_mb())}
+        self.stages[name] = {
+            "seconds": seconds,
+            "cpu_seconds": cpu,
+            "rss_start_mb": rss_start,
+            "rss_end_mb": status_mb("VmRSS"),
+            "peak_mb": max(self._stage_peak, peak_rss_mb()),
+        }
         self.label = "between"
 
     @contextlib.contextmanager
@@ -76,12 +82,25 @@ class Recorder:
                 self.timers[key] = self.timers.get(key, 0.0) + time.perf_counter() - start
                 self.peaks[key] = max(self.peaks.get(key, 0.0), self.checkpoint())
                 self.peaks[f"before {key}"] = max(self.peaks.get(f"before {key}", 0.0), before)
+
         return wrapper
 
     def _entry(self) -> dict:
-        return self.solver.setdefault(self.label, {
-            "analysis_s": 0.0, "analysis": 0, "factorization_s": 0.0, "factorization": 0,
-            "solve_s": 0.0, "solve": 0, "solve_columns": 0, "peak_kb": 0, "factor_nnz": 0, "n": 0})
+        return self.solver.setdefault(
+            self.label,
+            {
+                "analysis_s": 0.0,
+                "analysis": 0,
+                "factorization_s": 0.0,
+                "factorization": 0,
+                "solve_s": 0.0,
+                "solve": 0,
+                "solve_columns": 0,
+                "peak_kb": 0,
+                "factor_nnz": 0,
+                "n": 0,
+            },
+        )
 
     def _count(self, kind: str, start: float, cpu_start: float) -> None:
         entry = self._entry()
@@ -163,11 +182,9 @@ class Recorder:
 
 def nbytes(*arrays) -> float:
     """MB held by ``arrays``."""
-    return sum(a.nbytes for a in arrays) / 2 ** 20
+    return sum(a.nbytes for a in arrays) / 2**20
 
 
 def sparse_mb(a) -> float:
     """MB held by a CSR/CSC matrix."""
-    return (a.data.nbytes + a.indices.nbytes + a.indptr.nbytes) / 2 ** 20
-
-
+    return (a.data.nbytes + a.indices.nbytes + a.indptr.nbytes) / 2**20

@@ -7,6 +7,7 @@
   :data:`SCALING`, written as a float32 PLY like the public models (``bench_hht --parts scaling``,
   ``bench_viewer``).
 """
+
 from __future__ import annotations
 
 import time
@@ -26,17 +27,54 @@ DEFAULT_SIZES = ["250k", "500k", "1m"]
 
 # -- analytic surfaces (as tests/helpers/meshes.py) ----------------------------------------------------
 
+
 def icosphere(subdivisions: int = 5, radius: float = 1.0):
     """Icosahedron subdivided ``subdivisions`` times, projected on the sphere.
 
     Returns ``(vertices, faces)``; 5 subdivisions give 10,242 vertices.
     """
-    t = (1 + 5 ** 0.5) / 2
-    v = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
-                  [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
-    f = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
-                  [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
-                  [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]])
+    t = (1 + 5**0.5) / 2
+    v = np.array(
+        [
+            [-1, t, 0],
+            [1, t, 0],
+            [-1, -t, 0],
+            [1, -t, 0],
+            [0, -1, t],
+            [0, 1, t],
+            [0, -1, -t],
+            [0, 1, -t],
+            [t, 0, -1],
+            [t, 0, 1],
+            [-t, 0, -1],
+            [-t, 0, 1],
+        ],
+        float,
+    )
+    f = np.array(
+        [
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ]
+    )
     v /= np.linalg.norm(v, axis=1, keepdims=True)
     for _ in range(subdivisions):
         edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
@@ -104,7 +142,7 @@ def random_bump_sphere(subdivisions: int = 5, count: int = 60, seed: int = 7):
     sigma = np.where(is_narrow, 0.08, 0.25) * rng.uniform(0.8, 1.25, count)
     peak = 0.01 * rng.uniform(0.5, 1.0, count) * np.where(is_narrow, 1.0, 2.0) * rng.choice([-1, 1], count)
     angle = np.arccos(np.clip(clean @ centres.T, -1, 1))
-    bumps = np.exp(-angle ** 2 / (2 * sigma ** 2)) * peak
+    bumps = np.exp(-(angle**2) / (2 * sigma**2)) * peak
     narrow, wide = bumps[:, is_narrow].sum(axis=1), bumps[:, ~is_narrow].sum(axis=1)
     return clean * (1 + narrow + wide)[:, None], faces, narrow, wide
 
@@ -146,6 +184,7 @@ def sliver_sphere(subdivisions: int = 4, count: int = 200, eps: float = 1e-3, ki
 
 # -- igea at 250k-4M vertices ---------------------------------------------------------------
 
+
 def generate(size: str, out: Path) -> dict:
     """Decimate igea and Loop-subdivide it (Open3D); write a float32 PLY like the public models."""
     import open3d as o3d
@@ -157,8 +196,9 @@ def generate(size: str, out: Path) -> dict:
     o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
     start = time.perf_counter()
     source = hht3d.load(model_path(SCALING_SOURCE))
-    mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(source.vertices),
-                                     o3d.utility.Vector3iVector(source.faces))
+    mesh = o3d.geometry.TriangleMesh(
+        o3d.utility.Vector3dVector(source.vertices), o3d.utility.Vector3iVector(source.faces)
+    )
     if base < source.n_vertices:
         mesh = mesh.simplify_quadric_decimation(target_number_of_triangles=2 * base - 4)
     base_vertices = len(mesh.vertices)
@@ -173,6 +213,14 @@ def generate(size: str, out: Path) -> dict:
     tmp = out.with_suffix(".ply.part")
     PlyData([PlyElement.describe(vertex, "vertex"), PlyElement.describe(face, "face")]).write(str(tmp))
     tmp.replace(out)
-    return {"size": size, "source": SCALING_SOURCE, "base_vertices": base_vertices, "levels": levels,
-            "vertices": len(v), "faces": len(f), "seconds": time.perf_counter() - start,
-            "edge_manifold": bool(mesh.is_edge_manifold()), "vertex_manifold": bool(mesh.is_vertex_manifold())}
+    return {
+        "size": size,
+        "source": SCALING_SOURCE,
+        "base_vertices": base_vertices,
+        "levels": levels,
+        "vertices": len(v),
+        "faces": len(f),
+        "seconds": time.perf_counter() - start,
+        "edge_manifold": bool(mesh.is_edge_manifold()),
+        "vertex_manifold": bool(mesh.is_vertex_manifold()),
+    }

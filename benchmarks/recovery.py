@@ -11,6 +11,7 @@ that knows nothing of surfaces.
 
 Used by ``python -m benchmarks.bench_quality --parts recovery``.
 """
+
 from __future__ import annotations
 
 import warnings
@@ -47,8 +48,9 @@ class Case:
 def _strip(name: str, components, trend=None) -> Case:
     vertices, faces = grid(STRIP, 3, 1.0, 2 / (STRIP - 1))
     x = vertices[:, 0]
-    return Case(name, Surface(vertices, faces, name=name), [c(x) for c in components],
-                None if trend is None else trend(x), x)
+    return Case(
+        name, Surface(vertices, faces, name=name), [c(x) for c in components], None if trend is None else trend(x), x
+    )
 
 
 def _hann(x, a, b):
@@ -59,12 +61,31 @@ def _hann(x, a, b):
 def strip_cases() -> list[Case]:
     tau = 2 * np.pi
     return [
-        _strip("strip: three tones + ramp", [lambda x: np.sin(tau * 40 * x), lambda x: 0.8 * np.sin(tau * 9 * x + 0.3),
-                                             lambda x: 0.5 * np.sin(tau * 2 * x)], lambda x: x),
-        _strip("strip: AM tone + FM chirp", [lambda x: (1 + 0.5 * np.cos(tau * 1.5 * x)) * np.sin(tau * 50 * x),
-                                             lambda x: 0.7 * np.sin(tau * (6 * x + 5 * x ** 2))], lambda x: 0.3 * x),
-        _strip("strip: bursts + two tones", [lambda x: (_hann(x, 0.15, 0.35) + _hann(x, 0.55, 0.8)) * np.sin(tau * 60 * x),
-                                             lambda x: np.sin(tau * 6 * x), lambda x: 0.5 * np.sin(tau * 1.5 * x)]),
+        _strip(
+            "strip: three tones + ramp",
+            [
+                lambda x: np.sin(tau * 40 * x),
+                lambda x: 0.8 * np.sin(tau * 9 * x + 0.3),
+                lambda x: 0.5 * np.sin(tau * 2 * x),
+            ],
+            lambda x: x,
+        ),
+        _strip(
+            "strip: AM tone + FM chirp",
+            [
+                lambda x: (1 + 0.5 * np.cos(tau * 1.5 * x)) * np.sin(tau * 50 * x),
+                lambda x: 0.7 * np.sin(tau * (6 * x + 5 * x**2)),
+            ],
+            lambda x: 0.3 * x,
+        ),
+        _strip(
+            "strip: bursts + two tones",
+            [
+                lambda x: (_hann(x, 0.15, 0.35) + _hann(x, 0.55, 0.8)) * np.sin(tau * 60 * x),
+                lambda x: np.sin(tau * 6 * x),
+                lambda x: 0.5 * np.sin(tau * 1.5 * x),
+            ],
+        ),
     ]
 
 
@@ -76,7 +97,7 @@ def _bumps(points: np.ndarray, widths, counts, seed: int) -> list[np.ndarray]:
         centres = points[rng.choice(len(points), count, replace=False)]
         signs = rng.choice([-1.0, 1.0], count)
         d2 = ((points[:, None, :] - centres[None]) ** 2).sum(-1)
-        out.append((signs * np.exp(-d2 / (2 * width ** 2))).sum(1))
+        out.append((signs * np.exp(-d2 / (2 * width**2))).sum(1))
     return out
 
 
@@ -123,15 +144,23 @@ def scores(imfs: np.ndarray, residue: np.ndarray, components, weights: np.ndarra
     """Best correlation of each component with an IMF, an adjacent pair or a tail (module notes);
     with ``single``, with one IMF or the residue only."""
     parts = list(imfs) + [residue]
-    candidates = parts if single else parts + [parts[k] + parts[k + 1] for k in range(len(parts) - 1)] \
+    candidates = (
+        parts
+        if single
+        else parts
+        + [parts[k] + parts[k + 1] for k in range(len(parts) - 1)]
         + [np.sum(parts[k:], axis=0) for k in range(1, len(parts) - 1)]
+    )
     return [max(abs(_weighted_corr(c, comp, weights)) for c in candidates) for comp in components]
 
 
 def _surface_methods() -> dict:
     members = {"ensemble_size": ENSEMBLE}
-    return {"paper": lambda s, f: emd(s, f, PAPER_OPTIONS), "defaults": lambda s, f: emd(s, f, EMD_DEFAULTS),
-            f"eemd×{ENSEMBLE}": lambda s, f: eemd(s, f, EMD_DEFAULTS, ensemble=members)}
+    return {
+        "paper": lambda s, f: emd(s, f, PAPER_OPTIONS),
+        "defaults": lambda s, f: emd(s, f, EMD_DEFAULTS),
+        f"eemd×{ENSEMBLE}": lambda s, f: eemd(s, f, EMD_DEFAULTS, ensemble=members),
+    }
 
 
 def _pyemd_methods() -> dict:
@@ -141,9 +170,14 @@ def _pyemd_methods() -> dict:
         def go(t, f):
             imfs = method(f, t)
             return imfs[:-1], imfs[-1]  # PyEMD returns the residue as the last row
+
         return go
-    return {"PyEMD EMD": run(EMD()), f"PyEMD EEMD×{ENSEMBLE}": run(EEMD(trials=ENSEMBLE, noise_width=0.2, parallel=False)),
-            f"PyEMD CEEMDAN×{ENSEMBLE}": run(CEEMDAN(trials=ENSEMBLE, parallel=False))}
+
+    return {
+        "PyEMD EMD": run(EMD()),
+        f"PyEMD EEMD×{ENSEMBLE}": run(EEMD(trials=ENSEMBLE, noise_width=0.2, parallel=False)),
+        f"PyEMD CEEMDAN×{ENSEMBLE}": run(CEEMDAN(trials=ENSEMBLE, parallel=False)),
+    }
 
 
 def _strip_1d(case: Case):
@@ -163,17 +197,30 @@ def part_recovery(spot_path, face_path) -> list[dict]:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 result = run(case.surface, case.signal)
-            rows.append({"case": case.name, "method": name, "imfs": result.n_imfs,
-                         "scores": scores(result.imfs, result.residue, case.components, case.surface.mass_diagonal),
-                         "single": scores(result.imfs, result.residue, case.components, case.surface.mass_diagonal, True),
-                         "io": result.quality.orthogonality_index, "energy_ratio": result.quality.energy_ratio})
+            rows.append(
+                {
+                    "case": case.name,
+                    "method": name,
+                    "imfs": result.n_imfs,
+                    "scores": scores(result.imfs, result.residue, case.components, case.surface.mass_diagonal),
+                    "single": scores(result.imfs, result.residue, case.components, case.surface.mass_diagonal, True),
+                    "io": result.quality.orthogonality_index,
+                    "energy_ratio": result.quality.energy_ratio,
+                }
+            )
             print(rows[-1], flush=True)
         if case.x is not None:
             order, weights = _strip_1d(case)
             for name, run in _pyemd_methods().items():
                 imfs, residue = run(case.x[order], case.signal[order])
-                rows.append({"case": case.name, "method": name, "imfs": len(imfs),
-                             "scores": scores(imfs, residue, [c[order] for c in case.components], weights),
-                             "single": scores(imfs, residue, [c[order] for c in case.components], weights, True)})
+                rows.append(
+                    {
+                        "case": case.name,
+                        "method": name,
+                        "imfs": len(imfs),
+                        "scores": scores(imfs, residue, [c[order] for c in case.components], weights),
+                        "single": scores(imfs, residue, [c[order] for c in case.components], weights, True),
+                    }
+                )
                 print(rows[-1], flush=True)
     return rows

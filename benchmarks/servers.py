@@ -9,6 +9,7 @@
 Both are torn down on exit, and every wait is bounded.  The same as ``tests/helpers/servers.py``
 (the tests keep their own copy; benchmarks import nothing from tests/).
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -24,8 +25,11 @@ from pathlib import Path
 from benchmarks.common import ROOT
 
 #: Fake credentials: moto accepts any.
-FAKE_CREDENTIALS = {"AWS_ACCESS_KEY_ID": "testing-key-id", "AWS_SECRET_ACCESS_KEY": "testing-secret-value",
-                    "AWS_DEFAULT_REGION": "us-east-1"}
+FAKE_CREDENTIALS = {
+    "AWS_ACCESS_KEY_ID": "testing-key-id",
+    "AWS_SECRET_ACCESS_KEY": "testing-secret-value",
+    "AWS_DEFAULT_REGION": "us-east-1",
+}
 START_TIMEOUT = 60.0
 
 
@@ -78,20 +82,62 @@ def dask_cluster(workers: int = 2, *, env: dict | None = None, memory_limit: str
     for folder in folders:
         folder.mkdir()
     scheduler_file = folders[-1] / "scheduler.json"
-    common = {**os.environ, **FAKE_CREDENTIALS, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1",
-              "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", **(env or {})}
+    common = {
+        **os.environ,
+        **FAKE_CREDENTIALS,
+        "PYTHONPATH": str(ROOT),
+        "OMP_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
+        "OPENBLAS_NUM_THREADS": "1",
+        **(env or {}),
+    }
     processes = []
     try:
-        processes.append(_start([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
-                                 "--port", "0", "--no-dashboard", "--scheduler-file", str(scheduler_file)],
-                                folders[-1], {**common, "HOME": str(folders[-1]), "TMPDIR": str(folders[-1])},
-                                "scheduler.log"))
+        processes.append(
+            _start(
+                [
+                    sys.executable,
+                    "-m",
+                    "distributed.cli.dask_scheduler",
+                    "--host",
+                    "127.0.0.1",
+                    "--port",
+                    "0",
+                    "--no-dashboard",
+                    "--scheduler-file",
+                    str(scheduler_file),
+                ],
+                folders[-1],
+                {**common, "HOME": str(folders[-1]), "TMPDIR": str(folders[-1])},
+                "scheduler.log",
+            )
+        )
         address = _wait_for(lambda: json.loads(scheduler_file.read_text())["address"], processes)
         for folder in folders[:-1]:
-            processes.append(_start([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
-                                     "--nworkers", "1", "--no-nanny", "--memory-limit", memory_limit,
-                                     "--local-directory", str(folder / "dask"), "--death-timeout", "60"],
-                                    folder, {**common, "HOME": str(folder), "TMPDIR": str(folder)}, "worker.log"))
+            processes.append(
+                _start(
+                    [
+                        sys.executable,
+                        "-m",
+                        "distributed.cli.dask_worker",
+                        address,
+                        "--nthreads",
+                        "1",
+                        "--nworkers",
+                        "1",
+                        "--no-nanny",
+                        "--memory-limit",
+                        memory_limit,
+                        "--local-directory",
+                        str(folder / "dask"),
+                        "--death-timeout",
+                        "60",
+                    ],
+                    folder,
+                    {**common, "HOME": str(folder), "TMPDIR": str(folder)},
+                    "worker.log",
+                )
+            )
         _wait_for(lambda: _workers_connected(address, workers), processes)
         yield address, folders
     finally:

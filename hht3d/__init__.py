@@ -19,6 +19,7 @@ Examples
 >>> envelope_operator(surface, envelope="biharmonic").shape
 (2930, 2930)
 """
+
 from .decomposition import EMDResult, eemd, emd
 from .errors import HHT3DError, InputError, NumericalError, PipelineError
 from .geometry import Surface
@@ -29,8 +30,24 @@ from .transform import HHTOptions, HHTResult, hht
 from .version import __version__
 
 __all__ = [
-    "EMDResult", "HHTOptions", "HHTResult", "HilbertSpectrum", "MonogenicSignal", "Surface",
-    "HHT3DError", "InputError", "NumericalError", "PipelineError",
-    "__version__", "data_path", "eemd", "emd", "fractional_laplacian", "hht", "load", "load_result", "monogenic",
+    "EMDResult",
+    "HHTOptions",
+    "HHTResult",
+    "HilbertSpectrum",
+    "MonogenicSignal",
+    "Surface",
+    "HHT3DError",
+    "InputError",
+    "NumericalError",
+    "PipelineError",
+    "__version__",
+    "data_path",
+    "eemd",
+    "emd",
+    "fractional_laplacian",
+    "hht",
+    "load",
+    "load_result",
+    "monogenic",
     "riesz",
 ]

@@ -1,4 +1,5 @@
 """``python -m hht3d`` is the ``hht3d`` command."""
+
 import sys
 
 from .cli import main

@@ -19,20 +19,20 @@ an invalid pipeline, bad input or a failed step; 2 for bad command-line usage;
 130 on SIGINT (Ctrl-C) and 143 on SIGTERM, after a clean stop
 (:mod:`hht3d.stopping`).
 """
+
 from __future__ import annotations
 
 import argparse
 import json
-import logging
 import os
 import sys
 from pathlib import Path
 
 from .errors import HHT3DError, PipelineError, one_line, shown
-from .redaction import redact
-from .io.read import data_path
 from .execution import SCHEDULERS
-from .logs import LEVELS, get_logger, showing
+from .io.read import data_path
+from .logs import get_logger, log_level, logging_options, showing
+from .redaction import redact
 from .version import __version__
 from .viz.render import UP_AXES, VIEWS
 from .viz.viewer import VERTEX_BUDGET
@@ -63,18 +63,27 @@ def _plan(path, overrides):
 
     plan = load_pipeline(path, overrides)
     if str(plan.folder).lower().startswith("memory://"):
-        raise PipelineError(f"{path}: outputs.folder {shown(str(plan.folder))} is in this process's memory and "
-                            "would vanish when the command ends; give a local folder or a bucket")
+        raise PipelineError(
+            f"{path}: outputs.folder {shown(str(plan.folder))} is in this process's memory and "
+            "would vanish when the command ends; give a local folder or a bucket"
+        )
     return plan
 
 
 def _row_lines(row) -> list[str]:
     """How the CLI reports one input: a status line, then its warnings and the files written."""
-    size = "".join([f", {row.vertices} vertices" if row.vertices is not None else "",
-                    f", {row.imfs} IMFs" if row.imfs is not None else ""])
+    size = "".join(
+        [
+            f", {row.vertices} vertices" if row.vertices is not None else "",
+            f", {row.imfs} IMFs" if row.imfs is not None else "",
+        ]
+    )
     if row.status == "ok":
-        quality = (f", energy ratio {row.energy_ratio:.3g}, IO {row.orthogonality_index:+.2f}"
-                   if row.energy_ratio is not None else "")
+        quality = (
+            f", energy ratio {row.energy_ratio:.3g}, IO {row.orthogonality_index:+.2f}"
+            if row.energy_ratio is not None
+            else ""
+        )
         lines = [f"{row.source}: ok{size}, {row.seconds:.1f} s{quality}"]
     elif row.status == "skipped":
         lines = [f"{row.source}: skipped (outputs complete){size}; not re-run"]
@@ -104,9 +113,17 @@ def _execute(plan, args) -> int:
     for line in resource_lines(plan):
         _LOG.info(line)
     try:
-        rows = run_pipeline(plan, scheduler=args.scheduler, workers=args.workers, address=args.address,
-                            progress=False if args.quiet else None, resume=args.resume,
-                            overwrite=args.overwrite, summary=False, run=folder.run)
+        rows = run_pipeline(
+            plan,
+            scheduler=args.scheduler,
+            workers=args.workers,
+            address=args.address,
+            progress=False if args.quiet else None,
+            resume=args.resume,
+            overwrite=args.overwrite,
+            summary=False,
+            run=folder.run,
+        )
         for row in rows:
             print(redact("\n".join(_row_lines(row))), flush=True)
         slow = [row for row in rows if row.solver_advice]
@@ -117,8 +134,12 @@ def _execute(plan, args) -> int:
             print(redact(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}"))
     except Stopped as stop:
         clean_stop(folder.part_folders(plan.written_paths()))
-        print(f"hht3d: stopped by {stop}: {_not_done(plan, folder)}; temporary files removed; run again with "
-              "--resume to finish", file=sys.stderr, flush=True)
+        print(
+            f"hht3d: stopped by {stop}: {_not_done(plan, folder)}; temporary files removed; run again with "
+            "--resume to finish",
+            file=sys.stderr,
+            flush=True,
+        )
         sys.stdout.flush()
         os._exit(stop.exit_code)  # worker threads of the stopped run are not waited for
     except ClusterLost as exc:
@@ -192,8 +213,8 @@ def _backends(vertices: int) -> None:
 
 
 def _info(args) -> int:
-    from .io import load
     from .geometry.topology import describe
+    from .io import load
 
     surface = None if args.file is None else load(args.file, clean=not args.no_clean)
     if args.backends:
@@ -217,8 +238,9 @@ def _view(args) -> int:
 
     out = args.out or (f"{stem(args.file)}.html" if is_url(args.file) else None)
     with local_copy(args.file) as local:  # a URL is read through a temporary copy, a page URL uploaded
-        page = write_via(file_html, local, out, field=args.field, max_vertices=args.max_vertices, view=args.view,
-                         up=args.up)
+        page = write_via(
+            file_html, local, out, field=args.field, max_vertices=args.max_vertices, view=args.view, up=args.up
+        )
     print(redact(str(page)))
     return 0
 
@@ -237,45 +259,41 @@ def _schema(args) -> int:
 
 
 def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -> None:
-    parser.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
-                        help="override a pipeline value, e.g. steps.hht.params.max_imfs=4 or inputs=scans/ "
-                             "(repeatable; values are YAML)")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY.PATH=VALUE",
+        help="override a pipeline value, e.g. steps.hht.params.max_imfs=4 or inputs=scans/ "
+        "(repeatable; values are YAML)",
+    )
     if not running:
         return
-    parser.add_argument("--scheduler", choices=SCHEDULERS, default=None,
-                        help="Dask scheduler (default: the pipeline's execution.scheduler)")
+    parser.add_argument(
+        "--scheduler",
+        choices=SCHEDULERS,
+        default=None,
+        help="Dask scheduler (default: the pipeline's execution.scheduler)",
+    )
     parser.add_argument("--workers", type=int, default=None, help="threads, processes or cluster workers")
     parser.add_argument("--address", default=None, help="address of a running dask.distributed scheduler")
-    parser.add_argument("--resume", action="store_true",
-                        help="skip inputs whose outputs are done: recorded complete (same size and "
-                        "checksum) in the output folder's manifest")
-    parser.add_argument("--overwrite", action="store_true",
-                        help="replace existing local output files that hht3d did not write (kept otherwise)")
-
-
-def _logging_options() -> argparse.ArgumentParser:
-    """``-v``, ``-q`` and ``--log-level``, which every command takes."""
-    common = argparse.ArgumentParser(add_help=False)
-    loudness = common.add_mutually_exclusive_group()
-    loudness.add_argument("-v", "--verbose", action="store_true", help="also debugging messages")
-    loudness.add_argument("-q", "--quiet", action="store_true",
-                          help="warnings and errors only: no progress, estimates or dashboard address")
-    loudness.add_argument("--log-level", choices=LEVELS, default=None, help="the least important messages shown "
-                          "on stderr (default: info)")
-    return common
-
-
-def log_level(args) -> int:
-    """The level of hht3d's messages on stderr that ``-v``, ``-q`` or ``--log-level`` ask for."""
-    if args.log_level:
-        return getattr(logging, args.log_level.upper())
-    return logging.DEBUG if args.verbose else logging.WARNING if args.quiet else logging.INFO
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="skip inputs whose outputs are done: recorded complete (same size and "
+        "checksum) in the output folder's manifest",
+    )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace existing local output files that hht3d did not write (kept otherwise)",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="hht3d", description="Hilbert–Huang transform on 3D surfaces")
     parser.add_argument("--version", action="version", version=f"hht3d {__version__}")
-    sub = _Subcommands(parser.add_subparsers(dest="command", required=True), _logging_options())
+    sub = _Subcommands(parser.add_subparsers(dest="command", required=True), logging_options())
 
     run = sub.add_parser("run", help="validate and run a YAML pipeline")
     run.add_argument("pipeline", help="a pipeline YAML file (see pipelines/)")
@@ -291,30 +309,49 @@ def build_parser() -> argparse.ArgumentParser:
     ops.add_argument("op", nargs="*", help="only these operations")
     ops.set_defaults(run=_ops)
 
-    schema = sub.add_parser("schema", help="print the JSON Schema of pipeline files (for editors; "
-                                           "shipped as hht3d/data/pipeline.schema.json)")
+    schema = sub.add_parser(
+        "schema",
+        help="print the JSON Schema of pipeline files (for editors; shipped as hht3d/data/pipeline.schema.json)",
+    )
     schema.add_argument("--output", default=None, help="write it to this file instead")
     schema.set_defaults(run=_schema)
 
-    info = sub.add_parser("info", help="vertices, faces, components, boundary, manifoldness, bounding box; "
-                                       "--backends: the sparse solver that will run and why")
+    info = sub.add_parser(
+        "info",
+        help="vertices, faces, components, boundary, manifoldness, bounding box; "
+        "--backends: the sparse solver that will run and why",
+    )
     info.add_argument("file", nargs="?")
-    info.add_argument("--backends", action="store_true",
-                      help="list the sparse solver backends with their estimated time and memory")
-    info.add_argument("--vertices", type=int, default=50_000,
-                      help="mesh size of the --backends estimates without FILE (default: 50,000)")
+    info.add_argument(
+        "--backends", action="store_true", help="list the sparse solver backends with their estimated time and memory"
+    )
+    info.add_argument(
+        "--vertices",
+        type=int,
+        default=50_000,
+        help="mesh size of the --backends estimates without FILE (default: 50,000)",
+    )
     info.add_argument("--json", action="store_true", help="print JSON")
     info.add_argument("--no-clean", action="store_true", help="describe the file as stored, before cleaning")
     info.set_defaults(run=_info)
 
-    view = sub.add_parser("view", help="write the interactive HTML page of a saved result (.npz or .ply) "
-                                       "or surface file, and print its path")
+    view = sub.add_parser(
+        "view",
+        help="write the interactive HTML page of a saved result (.npz or .ply) or surface file, and print its path",
+    )
     view.add_argument("file", help="a result saved by HHTResult.save or a pipeline, or any mesh or point cloud")
-    view.add_argument("--out", default=None, help="the page to write, a path or URL (default: FILE with the suffix "
-                      ".html; for a URL FILE, STEM.html here)")
+    view.add_argument(
+        "--out",
+        default=None,
+        help="the page to write, a path or URL (default: FILE with the suffix .html; for a URL FILE, STEM.html here)",
+    )
     view.add_argument("--field", default=None, help="the field shown first (default: signal)")
-    view.add_argument("--max-vertices", type=int, default=VERTEX_BUDGET,
-                      help=f"show a decimated copy of larger surfaces (default: {VERTEX_BUDGET:,})")
+    view.add_argument(
+        "--max-vertices",
+        type=int,
+        default=VERTEX_BUDGET,
+        help=f"show a decimated copy of larger surfaces (default: {VERTEX_BUDGET:,})",
+    )
     view.add_argument("--view", default="front", choices=tuple(VIEWS), help="initial camera (default: front)")
     view.add_argument("--up", default="y", choices=UP_AXES, help="the model's up axis (default: y)")
     view.set_defaults(run=_view)

@@ -8,13 +8,23 @@ Messages echo user values through :func:`shown` and exception texts through
 never floods the terminal, every message stays on one line and no credential
 is shown.
 """
+
 import difflib
 import reprlib
 
 from .redaction import redact
 
-__all__ = ["HHT3DError", "InputError", "NumericalError", "PipelineError", "OutputError", "shown", "one_line",
-           "MAX_SHOWN", "did_you_mean"]
+__all__ = [
+    "HHT3DError",
+    "InputError",
+    "NumericalError",
+    "PipelineError",
+    "OutputError",
+    "shown",
+    "one_line",
+    "MAX_SHOWN",
+    "did_you_mean",
+]
 
 #: Characters of a user value a message echoes before cutting it short.
 MAX_SHOWN = 80

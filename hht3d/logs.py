@@ -23,15 +23,27 @@ Examples
 >>> stream.getvalue()
 'reading https://b.example/x.ply?X-Amz-Signature=***\\n'
 """
+
 from __future__ import annotations
 
+import argparse
 import contextlib
 import logging
 import sys
 
 from .redaction import redact
 
-__all__ = ["LOGGER", "PROGRESS", "LEVELS", "Redacting", "get_logger", "showing", "quieted"]
+__all__ = [
+    "LOGGER",
+    "PROGRESS",
+    "LEVELS",
+    "Redacting",
+    "get_logger",
+    "showing",
+    "quieted",
+    "logging_options",
+    "log_level",
+]
 
 #: The top of hht3d's logger hierarchy.
 LOGGER = "hht3d"
@@ -75,8 +87,11 @@ def _configured(logger: logging.Logger) -> bool:
     """Whether the application attached a handler of its own to ``hht3d`` (or one of its loggers):
     then it decides where hht3d's records go.  A handler on the root logger alone does not count."""
     names = {name for name in logging.root.manager.loggerDict if name == LOGGER or name.startswith(LOGGER + ".")}
-    return any(not isinstance(h, logging.NullHandler) and not getattr(h, "_hht3d", False)
-               for name in names | {logger.name} for h in logging.getLogger(name).handlers)
+    return any(
+        not isinstance(h, logging.NullHandler) and not getattr(h, "_hht3d", False)
+        for name in names | {logger.name}
+        for h in logging.getLogger(name).handlers
+    )
 
 
 @contextlib.contextmanager
@@ -123,3 +138,27 @@ def quieted(name: str, level: int = logging.CRITICAL):
         yield
     finally:
         logger.setLevel(previous)
+
+
+def logging_options() -> argparse.ArgumentParser:
+    """The CLI's ``-v``, ``-q`` and ``--log-level``, which every command takes (an argparse parent)."""
+    common = argparse.ArgumentParser(add_help=False)
+    loudness = common.add_mutually_exclusive_group()
+    loudness.add_argument("-v", "--verbose", action="store_true", help="also debugging messages")
+    loudness.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="warnings and errors only: no progress, estimates or dashboard address",
+    )
+    loudness.add_argument(
+        "--log-level", choices=LEVELS, default=None, help="the least important messages shown (default: info)"
+    )
+    return common
+
+
+def log_level(args) -> int:
+    """The level of hht3d's messages on stderr that ``-v``, ``-q`` or ``--log-level`` ask for."""
+    if args.log_level:
+        return getattr(logging, args.log_level.upper())
+    return logging.DEBUG if args.verbose else logging.WARNING if args.quiet else logging.INFO

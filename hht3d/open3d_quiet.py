@@ -3,6 +3,7 @@
 At the bottom of the package (standard library only), so that geometry and
 io can both use it without importing each other.
 """
+
 from __future__ import annotations
 
 import contextlib

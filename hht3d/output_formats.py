@@ -37,6 +37,7 @@ Examples
 >>> list(FORMATS["hht"]["png"].options.specs())
 ['figure', 'field', 'signal_name', 'view', 'up']
 """
+
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -78,8 +79,9 @@ class FormatOptions(Record):
             import matplotlib
 
             if cmap not in matplotlib.colormaps:
-                raise InputError(f"unknown colour map {shown(cmap)}"
-                                 f"{did_you_mean(cmap, matplotlib.colormaps, listing=False)}")
+                raise InputError(
+                    f"unknown colour map {shown(cmap)}{did_you_mean(cmap, matplotlib.colormaps, listing=False)}"
+                )
 
 
 @dataclass(frozen=True)
@@ -166,8 +168,9 @@ class _SurfacePage(_View):
 def _hht_field(result, name: str) -> np.ndarray:
     fields = result.vertex_attributes()
     if name not in fields:
-        raise InputError(f"{result.surface.name} has no field {shown(name)} ({result.n_imfs} IMFs); "
-                         f"available: {', '.join(fields)}")
+        raise InputError(
+            f"{result.surface.name} has no field {shown(name)} ({result.n_imfs} IMFs); available: {', '.join(fields)}"
+        )
     return fields[name]
 
 
@@ -192,8 +195,9 @@ def _hht_png(result, surface, path, *, figure, field, signal_name, view, up):
     elif figure == "spectrum":
         fig = spectrum_figure(result)
     else:
-        fig = field_figure(result.surface, _hht_field(result, field), title=f"{result.surface.name}: {field}",
-                           view=view, up=up)
+        fig = field_figure(
+            result.surface, _hht_field(result, field), title=f"{result.surface.name}: {field}", view=view, up=up
+        )
     return save_figure(fig, path)
 
 
@@ -238,8 +242,16 @@ def _surface_html(surface, origin, path, *, view, up, max_vertices):
     from .viz.viewer import SHAPE, surfaces_html, write_page
 
     if origin is surface:
-        return write_page(path, [surface], surface.attributes, title=surface.name, field=SHAPE, view=view, up=up,
-                          max_vertices=max_vertices)
+        return write_page(
+            path,
+            [surface],
+            surface.attributes,
+            title=surface.name,
+            field=SHAPE,
+            view=view,
+            up=up,
+            max_vertices=max_vertices,
+        )
     return surfaces_html(path, origin, surface, view=view, up=up, max_vertices=max_vertices)
 
 
@@ -247,47 +259,87 @@ def _features_ply(features, surface, path):
     is_feature = np.zeros(surface.n_vertices)
     is_feature[features.vertices] = 1.0
     colors = np.where(is_feature[:, None] > 0, _FEATURE_RED, _FEATURE_GREY)
-    return write_ply(path, surface, {"feature_count": features.vertex_counts.astype(np.float64),
-                                     "feature": is_feature}, colors=colors)
+    return write_ply(
+        path,
+        surface,
+        {"feature_count": features.vertex_counts.astype(np.float64), "feature": is_feature},
+        colors=colors,
+    )
 
 
 def _features_npz(features, surface, path):
-    return write_npz(path, {"vertices": features.vertices, "counts": features.counts, "points": features.points,
-                            "vertex_counts": features.vertex_counts, "min_count": features.min_count})
+    return write_npz(
+        path,
+        {
+            "vertices": features.vertices,
+            "counts": features.counts,
+            "points": features.points,
+            "vertex_counts": features.vertex_counts,
+            "min_count": features.min_count,
+        },
+    )
 
 
 #: Formats by result kind, then by name.
 FORMATS: dict[str, dict[str, Format]] = {
-    "hht": {f.name: f for f in (
-        Format("ply", ".ply", "the surface with every field as a vertex property", _hht_ply),
-        Format("npz", ".npz", "every array (imfs, residue, riesz, amplitude, phase, frequency, ...)", _hht_npz),
-        Format("colored_ply", ".ply", "one field as vertex colours (and as a property)", _hht_colored,
-               _FieldColours),
-        Format("png", ".png", "a figure: Fig. 4 layout (hht), the Hilbert spectrum, or one field", _hht_png,
-               _HHTFigure),
-        Format("html", ".html", "an interactive page: every field, the spectrum and the quality figures",
-               _hht_html, _HHTPage),
-    )},
-    "emd": {f.name: f for f in (
-        Format("npz", ".npz", "imfs and residue", _emd_npz),
-        Format("ply", ".ply", "the surface with imf_K and residue as vertex properties", _emd_ply),
-    )},
-    "signal": {f.name: f for f in (
-        Format("npz", ".npz", "the values", _signal_npz),
-        Format("colored_ply", ".ply", "the values as vertex colours", _signal_colored, _Colours),
-        Format("png", ".png", "a rendering with a colour bar", _signal_png, _SignalFigure),
-    )},
-    "surface": {f.name: f for f in (
-        Format("ply", ".ply", "the surface", _surface_ply),
-        Format("png", ".png", "a shaded rendering", _surface_png, _SurfaceFigure),
-        Format("html", ".html", "an interactive page; a filtered or reconstructed surface beside its original",
-               _surface_html, _SurfacePage),
-    )},
-    "features": {f.name: f for f in (
-        Format("ply", ".ply", "the surface with feature_count and feature properties, features in red",
-               _features_ply),
-        Format("npz", ".npz", "feature vertices, counts, points and per-vertex counts", _features_npz),
-    )},
+    "hht": {
+        f.name: f
+        for f in (
+            Format("ply", ".ply", "the surface with every field as a vertex property", _hht_ply),
+            Format("npz", ".npz", "every array (imfs, residue, riesz, amplitude, phase, frequency, ...)", _hht_npz),
+            Format(
+                "colored_ply", ".ply", "one field as vertex colours (and as a property)", _hht_colored, _FieldColours
+            ),
+            Format(
+                "png", ".png", "a figure: Fig. 4 layout (hht), the Hilbert spectrum, or one field", _hht_png, _HHTFigure
+            ),
+            Format(
+                "html",
+                ".html",
+                "an interactive page: every field, the spectrum and the quality figures",
+                _hht_html,
+                _HHTPage,
+            ),
+        )
+    },
+    "emd": {
+        f.name: f
+        for f in (
+            Format("npz", ".npz", "imfs and residue", _emd_npz),
+            Format("ply", ".ply", "the surface with imf_K and residue as vertex properties", _emd_ply),
+        )
+    },
+    "signal": {
+        f.name: f
+        for f in (
+            Format("npz", ".npz", "the values", _signal_npz),
+            Format("colored_ply", ".ply", "the values as vertex colours", _signal_colored, _Colours),
+            Format("png", ".png", "a rendering with a colour bar", _signal_png, _SignalFigure),
+        )
+    },
+    "surface": {
+        f.name: f
+        for f in (
+            Format("ply", ".ply", "the surface", _surface_ply),
+            Format("png", ".png", "a shaded rendering", _surface_png, _SurfaceFigure),
+            Format(
+                "html",
+                ".html",
+                "an interactive page; a filtered or reconstructed surface beside its original",
+                _surface_html,
+                _SurfacePage,
+            ),
+        )
+    },
+    "features": {
+        f.name: f
+        for f in (
+            Format(
+                "ply", ".ply", "the surface with feature_count and feature properties, features in red", _features_ply
+            ),
+            Format("npz", ".npz", "feature vertices, counts, points and per-vertex counts", _features_npz),
+        )
+    },
 }
 
 

@@ -26,6 +26,7 @@ Traceback (most recent call last):
 ...
 hht3d.errors.InputError: smoothing option steps must be an integer in [1, 100]; got 0 (diffusion steps)
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -63,8 +64,9 @@ class Spec:
 
     def range_text(self) -> str:
         """The range, e.g. ``" in (0.5, 1]"``, ``" >= 0"`` or ``""``."""
-        lo, hi = (None if x is None else f"{x:d}" if isinstance(x, int) else f"{x:g}"
-                  for x in (self.minimum, self.maximum))
+        lo, hi = (
+            None if x is None else f"{x:d}" if isinstance(x, int) else f"{x:g}" for x in (self.minimum, self.maximum)
+        )
         if lo is not None and hi is not None:
             return f" in {'(' if self.open_minimum else '['}{lo}, {hi}{')' if self.open_maximum else ']'}"
         if lo is not None:
@@ -79,8 +81,9 @@ class Spec:
         if self.kind == "choice":
             text = "one of " + ", ".join(map(str, self.choices))
         else:
-            text = {"int": "an integer", "float": "a number", "bool": "true or false",
-                    "str": "a string"}[self.kind] + self.range_text()
+            text = {"int": "an integer", "float": "a number", "bool": "true or false", "str": "a string"}[
+                self.kind
+            ] + self.range_text()
         return text + (f" or {null}" if self.nullable and null else "")
 
     def accepts(self, value) -> bool:
@@ -101,13 +104,24 @@ class Spec:
 
     def in_range(self, x) -> bool:
         lo, hi = self.minimum, self.maximum
-        return ((lo is None or (x > lo if self.open_minimum else x >= lo))
-                and (hi is None or (x < hi if self.open_maximum else x <= hi)))
+        return (lo is None or (x > lo if self.open_minimum else x >= lo)) and (
+            hi is None or (x < hi if self.open_maximum else x <= hi)
+        )
 
 
-def option(default, doc: str, *, choices: tuple = (), kind: str | None = None, minimum: float | None = None,
-           maximum: float | None = None, open_minimum: bool = False, open_maximum: bool = False,
-           nullable: bool = False, like: Spec | None = None):
+def option(
+    default,
+    doc: str,
+    *,
+    choices: tuple = (),
+    kind: str | None = None,
+    minimum: float | None = None,
+    maximum: float | None = None,
+    open_minimum: bool = False,
+    open_maximum: bool = False,
+    nullable: bool = False,
+    like: Spec | None = None,
+):
     """A dataclass field of a :class:`Record` with its :class:`Spec`.
 
     The kind follows from ``choices`` or the default's type unless given;
@@ -120,10 +134,20 @@ def option(default, doc: str, *, choices: tuple = (), kind: str | None = None, m
         spec = dataclasses.replace(like, doc=doc, nullable=nullable or default is None)
     else:
         if kind is None:
-            kind = ("choice" if choices else "bool" if isinstance(default, bool)
-                    else "int" if isinstance(default, int) else "float" if isinstance(default, float) else "str")
-        spec = Spec(doc, kind, tuple(choices), minimum, maximum, open_minimum, open_maximum,
-                    nullable or default is None)
+            kind = (
+                "choice"
+                if choices
+                else "bool"
+                if isinstance(default, bool)
+                else "int"
+                if isinstance(default, int)
+                else "float"
+                if isinstance(default, float)
+                else "str"
+            )
+        spec = Spec(
+            doc, kind, tuple(choices), minimum, maximum, open_minimum, open_maximum, nullable or default is None
+        )
     return dataclasses.field(default=default, metadata={"spec": spec})
 
 
@@ -139,8 +163,11 @@ def route(settings: dict, *records: type[Record]) -> list[dict]:
     renamed = {old: new for record in records for old, new in record.renamed.items()}
     for key in settings:
         if key not in known:
-            hint = (f"; did you mean {renamed[key]} (its new name)?" if key in renamed
-                    else did_you_mean(str(key), known, listing=False))
+            hint = (
+                f"; did you mean {renamed[key]} (its new name)?"
+                if key in renamed
+                else did_you_mean(str(key), known, listing=False)
+            )
             raise InputError(f"unknown option {shown(key)}{hint}; the options are {', '.join(known)}")
     return [{k: v for k, v in settings.items() if k in record.specs()} for record in records]
 
@@ -160,8 +187,11 @@ def renamed_keywords(overrides: dict, renamed: dict[str, str], function: str) ->
         new = renamed[old]
         if new in overrides:
             raise InputError(f"{function}: give {new} only ({old} is its former name)")
-        warnings.warn(f"{function}({old}=...) is deprecated; write {new}={shown(overrides[old])}",
-                      DeprecationWarning, stacklevel=3)
+        warnings.warn(
+            f"{function}({old}=...) is deprecated; write {new}={shown(overrides[old])}",
+            DeprecationWarning,
+            stacklevel=3,
+        )
         overrides[new] = overrides.pop(old)
     return overrides
 
@@ -178,8 +208,9 @@ class Record:
         for name, spec in self.specs().items():
             value = getattr(self, name)
             if not spec.accepts(value):
-                raise InputError(f"{self.label} option {name} must be {spec.expected()}; got {shown(value)} "
-                                 f"({spec.doc})")
+                raise InputError(
+                    f"{self.label} option {name} must be {spec.expected()}; got {shown(value)} ({spec.doc})"
+                )
             object.__setattr__(self, name, _converted(spec, value))
 
     @classmethod
@@ -213,8 +244,11 @@ class Record:
         given = sorted(set(settings) & set(cls.renamed))
         for old in given:
             new = cls.renamed[old]
-            warnings.warn(f"{cls.label} option {old} is now called {new}; write {new}={shown(settings[old])}",
-                          DeprecationWarning, stacklevel=3)
+            warnings.warn(
+                f"{cls.label} option {old} is now called {new}; write {new}={shown(settings[old])}",
+                DeprecationWarning,
+                stacklevel=3,
+            )
             settings[new] = settings.pop(old)
         cls.check_names(settings)
         try:
@@ -244,9 +278,11 @@ class Record:
         known = tuple(cls.specs())
         for key in settings:
             if key not in known:
-                raise InputError(f"unknown {cls.label} option {shown(key)}"
-                                 f"{did_you_mean(str(key), known, listing=False)}; "
-                                 f"{cls.label} options are {', '.join(known)}")
+                raise InputError(
+                    f"unknown {cls.label} option {shown(key)}"
+                    f"{did_you_mean(str(key), known, listing=False)}; "
+                    f"{cls.label} options are {', '.join(known)}"
+                )
 
     def as_dict(self) -> dict:
         """The settings by name."""

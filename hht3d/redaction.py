@@ -22,6 +22,7 @@ Examples
 >>> redact("denied for AKIDEXAMPLE at https://b.example/x.ply?X-Amz-Signature=abc&X-Amz-Expires=60")
 'denied for *** at https://b.example/x.ply?X-Amz-Signature=***&X-Amz-Expires=***'
 """
+
 from __future__ import annotations
 
 import base64
@@ -32,8 +33,11 @@ from urllib.parse import quote, unquote
 __all__ = ["SECRET_NAME", "NOT_SECRET", "is_secret_name", "remember_secrets", "secret_forms", "redact"]
 
 #: Names (of options and environment variables) whose values are secrets.
-SECRET_NAME = re.compile(r"secret|token|passw|credential|signature|sas|connection_string|account_key|"
-                         r"key", re.IGNORECASE)
+SECRET_NAME = re.compile(
+    r"secret|token|passw|credential|signature|sas|connection_string|account_key|"
+    r"key",
+    re.IGNORECASE,
+)
 #: Names that match :data:`SECRET_NAME` but hold settings, not secrets (``signature_version: s3v4``).
 NOT_SECRET = re.compile(r"_version$|_file$|_path$", re.IGNORECASE)
 #: Shorter values are not blanked (they would blank ordinary words).
@@ -68,8 +72,14 @@ def _environment_secrets() -> set[str]:
 def secret_forms(secret: str) -> set[str]:
     """The texts that carry ``secret``: as given, URL-encoded and decoded, base64 (standard and URL-safe)."""
     raw = secret.encode()
-    return {secret, quote(secret, safe=""), unquote(secret), base64.b64encode(raw).decode(),
-            base64.urlsafe_b64encode(raw).decode(), base64.b64encode(raw).decode().rstrip("=")}
+    return {
+        secret,
+        quote(secret, safe=""),
+        unquote(secret),
+        base64.b64encode(raw).decode(),
+        base64.urlsafe_b64encode(raw).decode(),
+        base64.b64encode(raw).decode().rstrip("="),
+    }
 
 
 def redact(text: str) -> str:

@@ -5,6 +5,7 @@ surface (vertices, faces, normals and Laplacian choice as saved), the IMFs,
 the residue and the monogenic signal, so that its spectrum, quality figures,
 figures and pages equal those of the result that was saved.
 """
+
 from __future__ import annotations
 
 from pathlib import PurePosixPath
@@ -43,7 +44,8 @@ def load_result(path, *, storage_options: dict | None = None) -> HHTResult:
     >>> spot = load(data_path("spot.ply"))
     >>> result = hht(spot, mean_curvature(spot), max_imfs=2)
     >>> again = load_result(result.save(Path(tempfile.mkdtemp()) / "spot_hht.npz"))
-    >>> np.array_equal(again.imfs, result.imfs), np.allclose(again.spectrum.mean_frequency(), result.spectrum.mean_frequency(), rtol=1e-12)
+    >>> frequencies = again.spectrum.mean_frequency(), result.spectrum.mean_frequency()
+    >>> np.array_equal(again.imfs, result.imfs), np.allclose(*frequencies, rtol=1e-12)
     (True, True)
     """
     shown = redact(str(path))
@@ -57,10 +59,27 @@ def load_result(path, *, storage_options: dict | None = None) -> HHTResult:
     missing = [name for name in RESULT_ARRAYS if name not in arrays]
     if missing:
         raise InputError(f"{shown}: no {', '.join(missing)}; expected a file written by HHTResult.save")
-    surface = Surface(arrays["vertices"], arrays.get("faces"), normals=arrays["normals"],
-                      laplacian=str(arrays["laplacian"]), n_neighbors=int(arrays["n_neighbors"]),
-                      name=storage.stem(path))
-    mono = MonogenicSignal(imfs=arrays["imfs"], riesz=arrays["riesz"], amplitude=arrays["amplitude"],
-                           phase=arrays["phase"], frequency=arrays["frequency"], area=arrays["area"])
-    return HHTResult(surface=surface, signal=arrays["signal"], imfs=arrays["imfs"], residue=arrays["residue"],
-                     monogenic=mono, info={"source": str(path)})
+    surface = Surface(
+        arrays["vertices"],
+        arrays.get("faces"),
+        normals=arrays["normals"],
+        laplacian=str(arrays["laplacian"]),
+        n_neighbors=int(arrays["n_neighbors"]),
+        name=storage.stem(path),
+    )
+    mono = MonogenicSignal(
+        imfs=arrays["imfs"],
+        riesz=arrays["riesz"],
+        amplitude=arrays["amplitude"],
+        phase=arrays["phase"],
+        frequency=arrays["frequency"],
+        area=arrays["area"],
+    )
+    return HHTResult(
+        surface=surface,
+        signal=arrays["signal"],
+        imfs=arrays["imfs"],
+        residue=arrays["residue"],
+        monogenic=mono,
+        info={"source": str(path)},
+    )

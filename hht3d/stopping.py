@@ -10,6 +10,7 @@ written atomically and recorded in the folder's manifest before their
 rename, so the run is resumable with ``--resume``.  The CLI exits with
 128 + the signal number (143 for SIGTERM, 130 for SIGINT).
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -26,7 +27,8 @@ from .io.storage import remove_temporary_folders
 
 __all__ = ["SIGNALS", "Stopped", "stop_on_signals", "clean_stop"]
 
-#: The signals that stop a run: SIGTERM where the platform has it (POSIX, and Windows' ``signal.raise_signal``), and SIGINT.
+#: The signals that stop a run: SIGTERM where the platform has it (POSIX, and Windows'
+#: ``signal.raise_signal``), and SIGINT.
 SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGINT") if hasattr(signal, name))
 #: Seconds a worker process is given to end after SIGTERM before it is killed.
 WORKER_GRACE = 3.0

@@ -8,6 +8,7 @@ Open3D as a tensor mesh or point cloud.  :func:`hht_stages` lists the
 stages once, for :func:`hht`, the lazy graph (:mod:`hht3d.graph`) and the
 pipeline's ``hht`` step.
 """
+
 from __future__ import annotations
 
 import time
@@ -34,20 +35,45 @@ from .spectral.options import RIESZ_DEFAULTS, RieszOptions
 from .spectral.riesz_transform import fractional_laplacian
 from .spectral.spectrum import HilbertSpectrum
 
-__all__ = ["HHTResult", "HHTOptions", "hht", "hht_stages", "hht_settings", "decomposition_stage", "Stages",
-           "RESULT_ARRAYS", "FIELDS", "IMF_FIELDS", "field_imf"]
+__all__ = [
+    "HHTResult",
+    "HHTOptions",
+    "hht",
+    "hht_stages",
+    "hht_settings",
+    "decomposition_stage",
+    "Stages",
+    "RESULT_ARRAYS",
+    "FIELDS",
+    "IMF_FIELDS",
+    "field_imf",
+]
 
 #: The arrays of a saved result (:meth:`HHTResult.arrays`), each by the attribute of the result it holds;
 #: a mesh adds ``faces``.
-RESULT_ARRAYS = {"vertices": "surface.vertices", "normals": "surface.normals", "laplacian": "surface.laplacian",
-                 "n_neighbors": "surface.n_neighbors", "signal": "signal", "imfs": "imfs", "residue": "residue",
-                 "riesz": "monogenic.riesz", "amplitude": "monogenic.amplitude", "phase": "monogenic.phase",
-                 "frequency": "monogenic.frequency", "area": "surface.mass_diagonal"}
+RESULT_ARRAYS = {
+    "vertices": "surface.vertices",
+    "normals": "surface.normals",
+    "laplacian": "surface.laplacian",
+    "n_neighbors": "surface.n_neighbors",
+    "signal": "signal",
+    "imfs": "imfs",
+    "residue": "residue",
+    "riesz": "monogenic.riesz",
+    "amplitude": "monogenic.amplitude",
+    "phase": "monogenic.phase",
+    "frequency": "monogenic.frequency",
+    "area": "surface.mass_diagonal",
+}
 #: The fields of :meth:`HHTResult.vertex_attributes` that a result has once (attributes of the same name).
 FIELDS = ("signal", "residue")
 #: The fields it has per IMF: ``{kind}_{K}`` is row K - 1 (IMF K, from 1) of the attribute of its kind.
-IMF_FIELDS = {"imf": "imfs", "amplitude": "monogenic.amplitude", "phase": "monogenic.phase",
-              "frequency": "monogenic.frequency"}
+IMF_FIELDS = {
+    "imf": "imfs",
+    "amplitude": "monogenic.amplitude",
+    "phase": "monogenic.phase",
+    "frequency": "monogenic.frequency",
+}
 
 
 def field_imf(name) -> int | None:
@@ -93,14 +119,18 @@ class HHTOptions:
         if value is None or isinstance(value, cls):
             base, flat = value or cls(), {}
         elif isinstance(value, dict):
-            base = cls(**{k: None if k == "ensemble" and v is None else PARTS[k].of(v)
-                          for k, v in value.items() if k in PARTS})
+            base = cls(
+                **{k: None if k == "ensemble" and v is None else PARTS[k].of(v) for k, v in value.items() if k in PARTS}
+            )
             flat = {k: v for k, v in value.items() if k not in PARTS}
         else:
             raise InputError(f"HHT options must be an HHTOptions or a dict; got {shown(value)}")
         emd, riesz, ensemble = route({**flat, **overrides}, *PARTS.values())
-        return cls(EMDOptions.of(base.emd, **emd), RieszOptions.of(base.riesz, **riesz),
-                   None if base.ensemble is None and not ensemble else EnsembleOptions.of(base.ensemble, **ensemble))
+        return cls(
+            EMDOptions.of(base.emd, **emd),
+            RieszOptions.of(base.riesz, **riesz),
+            None if base.ensemble is None and not ensemble else EnsembleOptions.of(base.ensemble, **ensemble),
+        )
 
 
 def hht_settings(options, overrides: dict, function: str) -> HHTOptions:
@@ -108,8 +138,12 @@ def hht_settings(options, overrides: dict, function: str) -> HHTOptions:
     ``ensemble=`` of ``function`` with a DeprecationWarning."""
     former = {k: overrides.pop(k) for k in PARTS if k in overrides}
     if former:
-        warnings.warn(f"{function}({'=, '.join(former)}=) is deprecated: pass the settings by name "
-                      "(max_imfs=3, tol=1e-6) or as options", DeprecationWarning, stacklevel=3)
+        warnings.warn(
+            f"{function}({'=, '.join(former)}=) is deprecated: pass the settings by name "
+            "(max_imfs=3, tol=1e-6) or as options",
+            DeprecationWarning,
+            stacklevel=3,
+        )
         base = HHTOptions.of(options)
         options = {**{k: getattr(base, k) for k in PARTS}, **former}
     return HHTOptions.of(options, **overrides)
@@ -142,13 +176,20 @@ class HHTResult:
     info: dict = field(default_factory=dict)
 
     @classmethod
-    def from_parts(cls, surface: Surface, signal, decomposition, mono: MonogenicSignal,
-                   riesz_options: dict) -> "HHTResult":
+    def from_parts(
+        cls, surface: Surface, signal, decomposition, mono: MonogenicSignal, riesz_options: dict
+    ) -> "HHTResult":
         """Assemble a result from an :class:`~hht3d.decomposition.EMDResult` and the monogenic
         signal of its IMFs (the last of :func:`hht_stages`)."""
         info = {"emd": decomposition.info, "riesz": dict(riesz_options)}
-        return cls(surface=surface, signal=check_signal(surface, signal), imfs=decomposition.imfs,
-                   residue=decomposition.residue, monogenic=mono, info=info)
+        return cls(
+            surface=surface,
+            signal=check_signal(surface, signal),
+            imfs=decomposition.imfs,
+            residue=decomposition.residue,
+            monogenic=mono,
+            info=info,
+        )
 
     @property
     def n_imfs(self) -> int:
@@ -251,8 +292,9 @@ def _imfs(decomposition) -> np.ndarray:
     return decomposition.imfs
 
 
-def decomposition_stage(stages: Stages, surface, signal, options: EMDOptions, ensemble: EnsembleOptions | None,
-                        backend: str | None):
+def decomposition_stage(
+    stages: Stages, surface, signal, options: EMDOptions, ensemble: EnsembleOptions | None, backend: str | None
+):
     """EMD (one stage ``emd``), or EEMD: one ``eemd_member`` stage per member, then ``eemd_combine``."""
     if ensemble is None:
         return stages.task("emd", emd)(surface, signal, options, backend=backend)
@@ -261,8 +303,15 @@ def decomposition_stage(stages: Stages, surface, signal, options: EMDOptions, en
     return stages.task("eemd_combine", combine_eemd)(surface, signal, members)
 
 
-def hht_stages(stages: Stages, surface, signal, options: HHTOptions | dict | None = None, *,
-               backend: str | None = None, **overrides) -> dict:
+def hht_stages(
+    stages: Stages,
+    surface,
+    signal,
+    options: HHTOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    **overrides,
+) -> dict:
     """The HHT's stages in order (Alg. 2), by name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
 
     The one list of the stages: :func:`hht` runs it at once, :func:`hht3d.graph.transform`
@@ -279,8 +328,9 @@ def hht_stages(stages: Stages, surface, signal, options: HHTOptions | dict | Non
     return {"emd": decomposition, "imfs": imfs, "riesz": potential, "monogenic": mono, "hht": result}
 
 
-def hht(surface: Surface, signal, options: HHTOptions | dict | None = None, *, backend: str | None = None,
-        **overrides) -> HHTResult:
+def hht(
+    surface: Surface, signal, options: HHTOptions | dict | None = None, *, backend: str | None = None, **overrides
+) -> HHTResult:
     """Hilbert–Huang transform of a surface signal: EMD, then Algorithm 2 on all IMFs.
 
     Parameters
@@ -321,6 +371,8 @@ def hht(surface: Surface, signal, options: HHTOptions | dict | None = None, *, b
     stages = _Eager()
     result = hht_stages(stages, surface, signal, hht_settings(options, overrides, "hht"), backend=backend)["hht"]
     spent = stages.seconds
-    result.info["seconds"] = {"emd": sum(spent.get(k, 0.0) for k in ("emd", "eemd_member", "eemd_combine")),
-                              "spectra": spent.get("riesz", 0.0) + spent.get("monogenic", 0.0)}
+    result.info["seconds"] = {
+        "emd": sum(spent.get(k, 0.0) for k in ("emd", "eemd_member", "eemd_combine")),
+        "spectra": spent.get("riesz", 0.0) + spent.get("monogenic", 0.0),
+    }
     return result

@@ -1,4 +1,5 @@
 """Fixtures and markers shared by the tests; helper functions live in tests/helpers/."""
+
 from __future__ import annotations
 
 import os

@@ -4,6 +4,7 @@ The layers, bottom first (README "Layers"); a module may import from its own
 package or from a lower layer.  The few upward imports are lazy delegates,
 listed by name below, each a method that hands its work to a higher layer.
 """
+
 import ast
 import inspect
 from pathlib import Path
@@ -13,13 +14,32 @@ import pytest
 import hht3d
 
 PACKAGE = Path(hht3d.__file__).parent
-LAYERS = [("hht3d.redaction", "hht3d.open3d_quiet"), ("hht3d.logs",), ("hht3d.errors", "hht3d.version"), ("hht3d.records",), ("hht3d.linalg",), ("hht3d.geometry",),
-          ("hht3d.io",), ("hht3d.decomposition",), ("hht3d.spectral",), ("hht3d.transform",),
-          ("hht3d.results", "hht3d.apps", "hht3d.viz"), ("hht3d.output_formats",), ("hht3d.execution",), ("hht3d.graph",), ("hht3d.dataset",),
-          ("hht3d.pipeline",), ("hht3d.stopping",), ("hht3d.cli",), ("hht3d.__main__",)]
+LAYERS = [
+    ("hht3d.redaction", "hht3d.open3d_quiet"),
+    ("hht3d.logs",),
+    ("hht3d.errors", "hht3d.version"),
+    ("hht3d.records",),
+    ("hht3d.linalg",),
+    ("hht3d.geometry",),
+    ("hht3d.io",),
+    ("hht3d.decomposition",),
+    ("hht3d.spectral",),
+    ("hht3d.transform",),
+    ("hht3d.results", "hht3d.apps", "hht3d.viz"),
+    ("hht3d.output_formats",),
+    ("hht3d.execution",),
+    ("hht3d.graph",),
+    ("hht3d.dataset",),
+    ("hht3d.pipeline",),
+    ("hht3d.stopping",),
+    ("hht3d.cli",),
+    ("hht3d.__main__",),
+]
 #: Upward imports inside a function: (importing module, imported module).
-DELEGATES = {("hht3d.transform", "hht3d.viz.viewer"),  # HHTResult.to_html
-             ("hht3d.transform", "hht3d.output_formats")}  # HHTResult.save
+DELEGATES = {
+    ("hht3d.transform", "hht3d.viz.viewer"),  # HHTResult.to_html
+    ("hht3d.transform", "hht3d.output_formats"),
+}  # HHTResult.save
 MAX_LINES = 400
 
 
@@ -59,8 +79,12 @@ GRAPH = {name: _imports(name, path, _modules()) for name, path in _modules().ite
 
 
 def test_imports_point_down():
-    upward = sorted((name, target) for name, targets in GRAPH.items() for target in targets
-                    if _rank(target) > _rank(name) or (_rank(target) == _rank(name) and _group(target) != _group(name)))
+    upward = sorted(
+        (name, target)
+        for name, targets in GRAPH.items()
+        for target in targets
+        if _rank(target) > _rank(name) or (_rank(target) == _rank(name) and _group(target) != _group(name))
+    )
     assert set(upward) <= DELEGATES, f"upward imports: {sorted(set(upward) - DELEGATES)}"
 
 
@@ -71,7 +95,7 @@ def test_no_import_cycle():
 
     def visit(name, trail):
         if state.get(name) == 1:
-            pytest.fail("import cycle: " + " -> ".join(trail[trail.index(name):] + [name]))
+            pytest.fail("import cycle: " + " -> ".join(trail[trail.index(name) :] + [name]))
         if state.get(name) != 2:
             state[name] = 1
             for target in GRAPH.get(name, ()):

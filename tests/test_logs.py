@@ -3,6 +3,7 @@
 Oracles: the standard library's own logging machinery (a handler the test attaches, as an
 application would) and the version string of ``hht3d/version.py``.
 """
+
 from __future__ import annotations
 
 import io
@@ -36,8 +37,9 @@ def captured():
 
 def test_no_handler_sees_a_signed_url_or_a_password(captured):
     for name in ("hht3d", "hht3d.progress", "hht3d.execution", "hht3d.cli"):
-        get_logger(name).warning("reading %s and %s", f"https://b.example/x.ply?X-Amz-Signature={SECRET}",
-                                 f"s3://user:{SECRET}@bucket/x.ply")
+        get_logger(name).warning(
+            "reading %s and %s", f"https://b.example/x.ply?X-Amz-Signature={SECRET}", f"s3://user:{SECRET}@bucket/x.ply"
+        )
     text = captured.getvalue()
     assert text.count("***") == 8 and SECRET.lower() not in text.lower()
 
@@ -57,13 +59,27 @@ def test_version_is_the_packages(capsys):
     assert stop.value.code == 0 and capsys.readouterr().out.strip() == f"hht3d {version.__version__}"
 
 
-@pytest.mark.parametrize("flags, shown", [((), True), (("-q",), False), (("--log-level", "warning"), False),
-                                          (("-v",), True)])
+@pytest.mark.parametrize(
+    "flags, shown", [((), True), (("-q",), False), (("--log-level", "warning"), False), (("-v",), True)]
+)
 def test_levels_of_the_cli(flags, shown, tmp_path, capfd):
     """The memory and time estimates are info messages on stdout, beside the results: shown by
     default and with -v, not with -q or --log-level warning; stderr stays empty."""
-    assert main(["demo", "--out", str(tmp_path / "out"), "--scheduler", "synchronous", "--set",
-                 "steps.hht.params.max_imfs=1", *flags]) == 0
+    assert (
+        main(
+            [
+                "demo",
+                "--out",
+                str(tmp_path / "out"),
+                "--scheduler",
+                "synchronous",
+                "--set",
+                "steps.hht.params.max_imfs=1",
+                *flags,
+            ]
+        )
+        == 0
+    )
     out, err = capfd.readouterr()
     assert ("hht3d: estimate:" in out) == shown
     assert "spot.ply: ok" in out and err == ""

@@ -1,31 +1,40 @@
 """The output formats (hht3d.output_formats): every format of every kind of result written by a pipeline,
 each file against the same steps run eagerly through the Python API; a new format is one entry and one writer."""
+
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
+
 from helpers.meshes import icosphere
 from helpers.pipelines import GOOD, assert_output_fits, bumpy_file
-
-from hht3d.apps import (LowPass, PiecewiseLinear, filter_signal, hks_features, imf_enhancement,
-                        manifold_harmonics_filter, prominent_features, reconstruct)
+from hht3d.apps import (
+    LowPass,
+    PiecewiseLinear,
+    filter_signal,
+    hks_features,
+    imf_enhancement,
+    manifold_harmonics_filter,
+    prominent_features,
+    reconstruct,
+)
 from hht3d.cli import main
 from hht3d.dataset import dataset_graph
 from hht3d.decomposition import eemd, emd
 from hht3d.errors import InputError, PipelineError
+from hht3d.geometry.signals import mean_curvature
 from hht3d.geometry.surface import Surface
+from hht3d.io import load
 from hht3d.io.atomic import atomic_path
 from hht3d.io.write import write_npz
 from hht3d.output_formats import FORMATS, Format, FormatOptions, by_suffix, plain_formats
-from hht3d.records import option
-from hht3d.transform import HHTResult, hht
-from hht3d.io import load
-from hht3d.spectral.monogenic_signal import monogenic
-from hht3d.geometry.signals import mean_curvature
 from hht3d.pipeline import OPERATIONS, parse_pipeline, run_pipeline
 from hht3d.pipeline.json_schema import pipeline_schema
+from hht3d.records import option
+from hht3d.spectral.monogenic_signal import monogenic
+from hht3d.transform import HHTResult, hht
 
 
 @pytest.fixture
@@ -84,13 +93,19 @@ def test_every_operation_and_output_format_runs(tmp_path, mesh_file):
     signal = mean_curvature(surface)
     ensemble = eemd(surface, signal, ensemble_size=2, max_imfs=2, seed=0)
     decompose = emd(surface, signal, max_imfs=2)
-    result = HHTResult.from_parts(surface, signal, ensemble, monogenic(surface, ensemble.imfs),
-                                  {"gradient": "lsq", "method": "quadrature", "tol": 1e-8, "eigenpairs": 300})
+    result = HHTResult.from_parts(
+        surface,
+        signal,
+        ensemble,
+        monogenic(surface, ensemble.imfs),
+        {"gradient": "lsq", "method": "quadrature", "tol": 1e-8, "eigenpairs": 300},
+    )
     flat = filter_signal(result, PiecewiseLinear([(0, 1), (9, 0.5)]))
     np.testing.assert_array_equal(np.load(out / "eemd.npz")["imfs"], ensemble.imfs)
     np.testing.assert_allclose(np.load(out / "flat.npz")["signal"], flat, rtol=0, atol=1e-9 * np.abs(flat).max())
-    np.testing.assert_allclose(load(out / "flat.ply", clean=False).attributes["signal"], flat, rtol=0,
-                               atol=1e-9 * np.abs(flat).max())
+    np.testing.assert_allclose(
+        load(out / "flat.ply", clean=False).attributes["signal"], flat, rtol=0, atol=1e-9 * np.abs(flat).max()
+    )
     emd_fields = load(out / "emd.ply", clean=False).attributes
     for k in range(decompose.n_imfs):
         np.testing.assert_array_equal(emd_fields[f"imf_{k + 1}"], decompose.imfs[k])
@@ -111,8 +126,12 @@ def test_every_operation_and_output_format_runs(tmp_path, mesh_file):
         np.testing.assert_allclose(written.vertices, expected.vertices, rtol=0, atol=1e-9, err_msg=name)
         assert np.abs(written.vertices - surface.vertices).max() > 1e-4, name  # the step did something
     amplitude = result.monogenic.amplitude[0]
-    np.testing.assert_allclose(load(out / "amplitude_1.ply", clean=False).attributes["amplitude_1"], amplitude,
-                               rtol=0, atol=1e-12 * amplitude.max())
+    np.testing.assert_allclose(
+        load(out / "amplitude_1.ply", clean=False).attributes["amplitude_1"],
+        amplitude,
+        rtol=0,
+        atol=1e-12 * amplitude.max(),
+    )
 
 
 @dataclass(frozen=True)
@@ -127,7 +146,7 @@ def _signal_txt(values, surface, path, *, digits):
 
 
 def _hht_energy(result, surface, path):
-    return write_npz(path, {"energy": (result.imfs ** 2 * result.surface.mass_diagonal).sum(1)})
+    return write_npz(path, {"energy": (result.imfs**2 * result.surface.mass_diagonal).sum(1)})
 
 
 def test_a_new_format_is_one_entry_and_one_writer(monkeypatch, tmp_path, mesh_file, capsys):
@@ -155,7 +174,7 @@ def test_a_new_format_is_one_entry_and_one_writer(monkeypatch, tmp_path, mesh_fi
     surface = Surface(*icosphere(2))
     result = hht(surface, surface.vertices[:, 0], emd={"max_imfs": 1})
     with np.load(result.save(tmp_path / "x.energy"), allow_pickle=False) as saved:
-        np.testing.assert_allclose(saved["energy"], (result.imfs ** 2 * surface.mass_diagonal).sum(1))
+        np.testing.assert_allclose(saved["energy"], (result.imfs**2 * surface.mass_diagonal).sum(1))
     dataset_graph([mesh_file], tmp_path / "dataset", formats=(".energy",), emd={"max_imfs": 1})  # accepted
 
 
@@ -165,8 +184,11 @@ def test_format_options_refuse_what_the_types_cannot_say():
     options = FORMATS["hht"]["colored_ply"].options
     assert options.of(field="frequency_12").field == "frequency_12"
     for field in ("imf_0", "frequncy_1", "amplitude_01", "imf_", "residue_1"):
-        with pytest.raises(InputError, match=r"unknown field .*; use signal, residue, imf_K, amplitude_K, "
-                                             r"phase_K or frequency_K"):
+        with pytest.raises(
+            InputError,
+            match=r"unknown field .*; use signal, residue, imf_K, amplitude_K, "
+            r"phase_K or frequency_K",
+        ):
             options.of(field=field)
     with pytest.raises(InputError, match="unknown colour map 'viridi'; did you mean 'viridis'"):
         options.of(cmap="viridi")

@@ -8,6 +8,7 @@ more than the estimate of its own increment (measured 42 MB against 58 MB).  Kee
 SuperLU factor of the run alive, as a reference cycle through ``Factor.solve`` once did in a
 benchmark, grew it by 1,019 MB.
 """
+
 from __future__ import annotations
 
 import json
@@ -60,8 +61,9 @@ print(json.dumps({{"vertices": surface.n_vertices, "before": before, "seconds": 
 
 def _child(*args) -> dict:
     env = {**os.environ, linalg.BACKEND_VARIABLE: "superlu", "PYTHONWARNINGS": "ignore"}
-    done = subprocess.run([sys.executable, "-c", CHILD, *map(str, args)], env=env, capture_output=True,
-                          text=True, timeout=300, check=True)
+    done = subprocess.run(
+        [sys.executable, "-c", CHILD, *map(str, args)], env=env, capture_output=True, text=True, timeout=300, check=True
+    )
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
@@ -84,10 +86,10 @@ def test_memory_estimate_above_the_limit_stops_in_seconds_with_the_fix():
 
 def test_check_memory_refuses_with_one_line_before_computing():
     with pytest.raises(InputError) as info:
-        linalg.check_memory(1_000_000, "superlu", available=2 ** 30)
+        linalg.check_memory(1_000_000, "superlu", available=2**30)
     message = str(info.value)
     assert "\n" not in message and "1,000,000 vertices" in message and "only 1.0 GiB is available" in message
-    assert linalg.check_memory(1_000_000, "superlu", available=2 ** 50).peak_bytes > 2 ** 30
+    assert linalg.check_memory(1_000_000, "superlu", available=2**50).peak_bytes > 2**30
 
 
 def test_estimates_grow_with_the_mesh_and_superlu_costs_most():
@@ -117,7 +119,7 @@ def test_slow_fallback_warns_once_and_only_on_large_meshes(monkeypatch):
     slow = [w for w in caught if issubclass(w.category, linalg.SlowSolverWarning)]
     assert len(slow) == 1 and "pip install 'hht3d[fast]'" in str(slow[0].message)
     for name in linalg.available_backends():
-        assert (linalg.slow_fallback(10 ** 6, name) is None) == (name != "superlu")
+        assert (linalg.slow_fallback(10**6, name) is None) == (name != "superlu")
 
 
 @pytest.mark.filterwarnings("ignore::hht3d.linalg.estimate.SlowSolverWarning")
@@ -125,8 +127,23 @@ def test_pipeline_summary_and_cli_carry_the_advice_once(tmp_path, monkeypatch, c
     monkeypatch.setenv(linalg.BACKEND_VARIABLE, "superlu")
     monkeypatch.setattr(estimates, "SLOW_FALLBACK_VERTICES", 1_000)  # the shipped model has 2,930
     out = tmp_path / "demo"
-    assert main(["demo", "--out", str(out), "--scheduler", "synchronous", "--quiet",
-                 "--set", "steps.hht.params.max_imfs=1", "--set", "outputs.summary=true"]) == 0
+    assert (
+        main(
+            [
+                "demo",
+                "--out",
+                str(out),
+                "--scheduler",
+                "synchronous",
+                "--quiet",
+                "--set",
+                "steps.hht.params.max_imfs=1",
+                "--set",
+                "outputs.summary=true",
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     assert err.count("warning: superlu is a slow sparse solver for 2,930 vertices") == 1
     rows = json.loads((out / "summary.json").read_text())

@@ -2,11 +2,12 @@
 ``resource`` or ``signal.SIGTERM``.
 
 A fresh interpreter blocks those before importing hht3d, the way Windows lacks them.  The
-output folder's lock (:func:`hht3d.io.manifest.folder_lock`) then takes its Windows branch,
+output folder's lock (:func:`hht3d.io.lock.folder_lock`) then takes its Windows branch,
 given a ``msvcrt`` whose ``locking`` is a process-local lock (a real one would make the standard
 library believe it runs on Windows).  A two-file local dataset runs, taking that lock to record
 its outputs.
 """
+
 from __future__ import annotations
 
 import json
@@ -54,12 +55,12 @@ RUN = textwrap.dedent("""
         if module.name != "hht3d.__main__":  # the CLI's entry point: it would run
             importlib.import_module(module.name)
     from hht3d.dataset import run_dataset
-    from hht3d.io import manifest
+    from hht3d.io import lock as folder_locks
 
-    manifest.msvcrt = types.SimpleNamespace(locking=locking, LK_NBLCK=LK_NBLCK, LK_UNLCK=LK_UNLCK)
+    folder_locks.msvcrt = types.SimpleNamespace(locking=locking, LK_NBLCK=LK_NBLCK, LK_UNLCK=LK_UNLCK)
     rows = run_dataset(sys.argv[1:3], sys.argv[3], scheduler="synchronous", progress=False,
                        emd={"max_imfs": 2})
-    print(json.dumps({"status": [r.status for r in rows], "fcntl": manifest.fcntl is None,
+    print(json.dumps({"status": [r.status for r in rows], "fcntl": folder_locks.fcntl is None,
                       "locks": calls.count(LK_NBLCK), "unlocks": calls.count(LK_UNLCK),
                       "posix": [m for m in ("fcntl", "resource") if sys.modules.get(m) is not None]}))
 """)
@@ -68,24 +69,32 @@ RUN = textwrap.dedent("""
 @pytest.mark.slow
 def test_imports_and_runs_a_dataset_without_posix_only_modules(tmp_path):
     inputs = [str(shipped_model_path(name)) for name in ("spot.ply", "sphere_oct4098.ply")]
-    done = subprocess.run([sys.executable, "-c", PRELUDE + RUN, *inputs, str(tmp_path / "out")],
-                          capture_output=True, text=True, timeout=600)
+    done = subprocess.run(
+        [sys.executable, "-c", PRELUDE + RUN, *inputs, str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert done.returncode == 0, done.stderr[-3000:]
     report = json.loads(done.stdout.strip().splitlines()[-1])
     assert report["status"] == ["ok", "ok"]
     assert report["fcntl"] and report["posix"] == []
     assert report["locks"] >= 2 and report["locks"] == report["unlocks"]
     assert sorted(p.name for p in (tmp_path / "out").glob("*_hht.*")) == [
-        "sphere_oct4098_hht.npz", "sphere_oct4098_hht.ply", "spot_hht.npz", "spot_hht.ply"]
+        "sphere_oct4098_hht.npz",
+        "sphere_oct4098_hht.ply",
+        "spot_hht.npz",
+        "spot_hht.ply",
+    ]
 
 
 def test_the_lock_fails_clearly_where_no_lock_exists(tmp_path, monkeypatch):
     """A platform with neither ``fcntl`` nor ``msvcrt`` gets one line, not an AttributeError."""
     from hht3d.errors import OutputError
-    from hht3d.io import manifest
+    from hht3d.io import lock as folder_locks
 
-    monkeypatch.setattr(manifest, "fcntl", None)
-    monkeypatch.setattr(manifest, "msvcrt", None)
+    monkeypatch.setattr(folder_locks, "fcntl", None)
+    monkeypatch.setattr(folder_locks, "msvcrt", None)
     with pytest.raises(OutputError, match="neither fcntl nor msvcrt"):
-        with manifest.folder_lock(tmp_path / "out"):
+        with folder_locks.folder_lock(tmp_path / "out"):
             pass

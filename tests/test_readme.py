@@ -7,6 +7,7 @@ are *mirrored*: the entry names the test that makes the same call against local 
 this file checks that the test exists.  A new block without an entry fails
 ``test_every_block_is_run_or_mirrored``.
 """
+
 from __future__ import annotations
 
 import json
@@ -50,21 +51,37 @@ class Mirror:
 
 RUN = "run here"
 MIRRORED = {
-    ("Two commands", 0): Mirror(".ci/wheel::bin/hht3d\" demo", "command 1 runs in CI from the built wheel; "
-                                "command 2 is .ci/run"),
-    ("Running on a cluster", 0): Mirror("tests/io/test_storage.py::remote_run",
-                                        "SLURM and the lab bucket: run_dataset with address=, s3:// and "
-                                        "storage_options on a two-worker scheduler and moto"),
-    ("Running on a cluster", 2): Mirror("tests/io/test_storage.py::test_a_yaml_pipeline_from_s3_to_s3_equals_the_local_run",
-                                        "kubectl: hht3d run --address with s3:// inputs and outputs"),
-    ("Running on a cluster", 3): Mirror("tests/io/test_storage.py::PIPELINE",
-                                        "a lab's scheduler and S3 endpoint: the same pipeline shape on moto"),
-    ("Development", 0): Mirror(".ci/run::python3 -m pytest -q", "the tests are CI's command; the benchmark "
-                               "commands are listed in benchmarks/README.md and not run by the tests"),
+    ("Two commands", 0): Mirror(
+        '.ci/wheel::bin/hht3d" demo', "command 1 runs in CI from the built wheel; command 2 is .ci/run"
+    ),
+    ("Running on a cluster", 0): Mirror(
+        "tests/io/test_storage.py::remote_run",
+        "SLURM and the lab bucket: run_dataset with address=, s3:// and "
+        "storage_options on a two-worker scheduler and moto",
+    ),
+    ("Running on a cluster", 2): Mirror(
+        "tests/io/test_storage.py::test_a_yaml_pipeline_from_s3_to_s3_equals_the_local_run",
+        "kubectl: hht3d run --address with s3:// inputs and outputs",
+    ),
+    ("Running on a cluster", 3): Mirror(
+        "tests/io/test_storage.py::PIPELINE", "a lab's scheduler and S3 endpoint: the same pipeline shape on moto"
+    ),
+    ("Development", 0): Mirror(
+        ".ci/run::python3 -m pytest -q",
+        "the tests are CI's command; the benchmark "
+        "commands are listed in benchmarks/README.md and not run by the tests",
+    ),
 }
-RUN_HERE = {("Python API", 0), ("Looking at a result interactively", 0), ("Task graphs with Dask", 0),
-            ("YAML pipelines", 0), ("YAML pipelines", 1), ("YAML pipelines", 2), ("Command line", 0),
-            ("Running on a cluster", 1)}
+RUN_HERE = {
+    ("Python API", 0),
+    ("Looking at a result interactively", 0),
+    ("Task graphs with Dask", 0),
+    ("YAML pipelines", 0),
+    ("YAML pipelines", 1),
+    ("YAML pipelines", 2),
+    ("Command line", 0),
+    ("Running on a cluster", 1),
+}
 
 
 def test_every_block_is_run_or_mirrored():
@@ -92,8 +109,9 @@ def _python(code: str, folder: Path) -> subprocess.CompletedProcess:
     script = folder / "snippet.py"
     script.write_text(code)
     env = {"PYTHONPATH": str(ROOT), "PATH": str(Path(sys.executable).parent) + ":/usr/bin:/bin"}
-    done = subprocess.run([sys.executable, str(script)], cwd=folder, capture_output=True, text=True,
-                          timeout=TIMEOUT, env=env)
+    done = subprocess.run(
+        [sys.executable, str(script)], cwd=folder, capture_output=True, text=True, timeout=TIMEOUT, env=env
+    )
     assert done.returncode == 0, done.stderr[-3000:]
     return done
 
@@ -112,13 +130,21 @@ def test_the_task_graph_block_runs(scratch):
     _python(blocks()[("Task graphs with Dask", 0)][1], scratch)
     assert (scratch / "out" / "model_hht.ply").stat().st_size > 0
     rows = json.loads((scratch / "out" / "summary.json").read_text())
-    assert sorted((Path(r["source"]).name, r["status"]) for r in rows) == [("sphere_oct4098.ply", "ok"),
-                                                                          ("spot.ply", "ok")]
+    assert sorted((Path(r["source"]).name, r["status"]) for r in rows) == [
+        ("sphere_oct4098.ply", "ok"),
+        ("spot.ply", "ok"),
+    ]
 
 
 def _hht3d(*args, folder: Path) -> subprocess.CompletedProcess:
-    done = subprocess.run([sys.executable, "-m", "hht3d", *args], cwd=folder, capture_output=True, text=True,
-                          timeout=TIMEOUT, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    done = subprocess.run(
+        [sys.executable, "-m", "hht3d", *args],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+    )
     assert done.returncode == 0, f"hht3d {' '.join(args)}:\n{done.stderr[-3000:]}"
     return done
 
@@ -129,8 +155,13 @@ def test_the_yaml_pipeline_block_runs(scratch):
     _hht3d("run", "p.yaml", folder=scratch)
     written = sorted(p.name for p in (scratch / "out" / "run1").iterdir() if not p.name.startswith("."))
     for stem in ("spot", "sphere_oct4098"):
-        assert {f"{stem}_hht.ply", f"{stem}_hht.png", f"{stem}_smooth.ply", f"{stem}_hht.html",
-                f"{stem}_smooth.html"} <= set(written)
+        assert {
+            f"{stem}_hht.ply",
+            f"{stem}_hht.png",
+            f"{stem}_smooth.ply",
+            f"{stem}_hht.html",
+            f"{stem}_smooth.html",
+        } <= set(written)
 
 
 def test_the_editor_lines_name_the_shipped_schema():
@@ -146,11 +177,14 @@ def test_the_command_lines_run(scratch):
     """Each line of the Command line block, in the scratch folder; lines that need another
     scheduler or a pipeline in use elsewhere are the shipped examples' and the storage tests'."""
     (scratch / "p.yaml").write_text(blocks()[("YAML pipelines", 0)][1])
-    elsewhere = {"hht3d run pipelines/filtering.yaml": "tests/test_shipped_examples.py",
-                 "hht3d demo --out out/demo": "tests/cli/test_cli.py",
-                 "hht3d run p.yaml --set inputs=scans/ --set steps.hht.params.max_imfs=8 --resume":
-                     "tests/pipeline/test_runner.py",
-                 "hht3d run p.yaml --scheduler distributed --address tcp://host:8786": "tests/io/test_storage.py"}
+    elsewhere = {
+        "hht3d run pipelines/filtering.yaml": "tests/test_shipped_examples.py",
+        "hht3d demo --out out/demo": "tests/cli/test_cli.py",
+        "hht3d run p.yaml --set inputs=scans/ --set steps.hht.params.max_imfs=8 --resume": (
+            "tests/pipeline/test_runner.py"
+        ),
+        "hht3d run p.yaml --scheduler distributed --address tcp://host:8786": "tests/io/test_storage.py",
+    }
     lines = [line.split("#")[0].strip() for line in blocks()[("Command line", 0)][1].splitlines()]
     import hht3d
     from hht3d.geometry.signals import mean_curvature

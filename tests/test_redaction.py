@@ -4,6 +4,7 @@ The oracle of "found" is tests/helpers/secrets.py, which computes the forms (let
 encoding, base64) independently; every case is checked twice: the secret is found in the raw
 text (the search works), and in no form once redacted.
 """
+
 from __future__ import annotations
 
 import base64
@@ -63,9 +64,17 @@ def test_a_long_url_is_redacted_before_it_is_cut():
     assert forms_found(url, password) and not forms_found(shown(url), password)
 
 
-@pytest.mark.parametrize("name, secret", [("secret", True), ("aws_secret_access_key", True), ("token", True),
-                                          ("signature_version", False), ("key_file", False),
-                                          ("endpoint_url", False)])
+@pytest.mark.parametrize(
+    "name, secret",
+    [
+        ("secret", True),
+        ("aws_secret_access_key", True),
+        ("token", True),
+        ("signature_version", False),
+        ("key_file", False),
+        ("endpoint_url", False),
+    ],
+)
 def test_which_option_names_hold_secrets(name, secret):
     """``config_kwargs.signature_version: UNSIGNED`` (anonymous access) is a setting, not a credential."""
     assert is_secret_name(name) == secret

@@ -1,4 +1,5 @@
 """Saved results read back (hht3d.results.load_result)."""
+
 import numpy as np
 import pytest
 

@@ -8,6 +8,7 @@ gets from the files as written (``pipelines/point_cloud.yaml`` under the
 threads scheduler crashed or hung inside MKL PARDISO before the solver
 backends were locked, :class:`hht3d.linalg.backends.Backend`).
 """
+
 from __future__ import annotations
 
 import json
@@ -35,11 +36,11 @@ def test_shipped_example_runs_as_written(example, tmp_path, shared_model, monkey
     shared_model("bunny_scan_bun000.ply")  # the examples read ../shared/data: skip (fail in CI) without it
     monkeypatch.chdir(ROOT)  # where the examples say to run them: their inputs are relative to it
     out = tmp_path / "out"
-    command = [sys.executable, "-m", "hht3d", "run", str(example.relative_to(ROOT)),
-               "--set", f"outputs.folder={out}"]
+    command = [sys.executable, "-m", "hht3d", "run", str(example.relative_to(ROOT)), "--set", f"outputs.folder={out}"]
     try:
-        done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True,
-                              timeout=LIMITS.get(example.stem, DEFAULT_LIMIT))
+        done = subprocess.run(
+            command, cwd=ROOT, capture_output=True, text=True, timeout=LIMITS.get(example.stem, DEFAULT_LIMIT)
+        )
     except subprocess.TimeoutExpired as exc:
         pytest.fail(f"{example.name} did not finish in {exc.timeout} s (hung?):\n{exc.stderr}")
     assert done.returncode == 0, f"{example.name} exited {done.returncode}:\n{done.stderr[-3000:]}"

@@ -4,6 +4,7 @@ Every case asserts the exit code, the one line on stderr (no traceback from any 
 (no temporary ``.part`` file; complete outputs recorded, so ``--resume`` finishes the run) and that no
 process of the run is left.  Each wait is bounded.
 """
+
 from __future__ import annotations
 
 import os
@@ -40,14 +41,17 @@ def _stopped_cleanly(proc: subprocess.Popen, code: int, out: Path) -> tuple[str,
     return stdout, stops[0]
 
 
-@pytest.mark.parametrize("scheduler, signum, to_group", [
-    ("synchronous", signal.SIGTERM, False),
-    ("threads", signal.SIGTERM, False),
-    ("threads", signal.SIGINT, True),
-    ("processes", signal.SIGINT, True),
-    ("processes", signal.SIGTERM, False),
-    ("distributed", signal.SIGTERM, False),
-])
+@pytest.mark.parametrize(
+    "scheduler, signum, to_group",
+    [
+        ("synchronous", signal.SIGTERM, False),
+        ("threads", signal.SIGTERM, False),
+        ("threads", signal.SIGINT, True),
+        ("processes", signal.SIGINT, True),
+        ("processes", signal.SIGTERM, False),
+        ("distributed", signal.SIGTERM, False),
+    ],
+)
 def test_signal_stops_the_run_cleanly_and_it_resumes(job, scheduler, signum, to_group):
     out = job / "out"
     proc = _start(job, "--scheduler", scheduler, "--workers", "2")
@@ -59,18 +63,37 @@ def test_signal_stops_the_run_cleanly_and_it_resumes(job, scheduler, signum, to_
     # before its rename, so a worker stopped in between leaves an entry without its file (seen once
     # in ~20 runs under load); that input is not done and the message must say so.
     recorded = _recorded(out)
-    on_disk = {name for name, entry in recorded.items()
-               if (out / name).is_file() and (out / name).stat().st_size == entry["size"]}
+    on_disk = {
+        name
+        for name, entry in recorded.items()
+        if (out / name).is_file() and (out / name).stat().st_size == entry["size"]
+    }
     complete = [k for k in range(4) if {f"s{k}_hht.npz", f"s{k}_hht.png"} <= on_disk]
     assert f"{4 - len(complete)} of 4 inputs not done" in line, line
     if scheduler == "threads" and signum == signal.SIGTERM:  # one resume is enough to show it
-        resumed = subprocess.run([sys.executable, "-m", "hht3d", "run", str(job / "p.yaml"), "--quiet",
-                                  "--resume", "--scheduler", "threads"], capture_output=True, text=True,
-                                 cwd=job, env=_env(), timeout=120)
+        resumed = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "hht3d",
+                "run",
+                str(job / "p.yaml"),
+                "--quiet",
+                "--resume",
+                "--scheduler",
+                "threads",
+            ],
+            capture_output=True,
+            text=True,
+            cwd=job,
+            env=_env(),
+            timeout=120,
+        )
         assert resumed.returncode == 0, resumed.stderr
         assert resumed.stdout.count("skipped (outputs complete)") == len(complete), resumed.stdout
         assert sorted(p.name for p in out.glob("*_hht.*")) == sorted(
-            f"s{k}_hht.{suffix}" for k in range(4) for suffix in ("npz", "png"))
+            f"s{k}_hht.{suffix}" for k in range(4) for suffix in ("npz", "png")
+        )
 
 
 def test_a_stop_removes_the_temporary_folders_of_downloads(tmp_path, monkeypatch):

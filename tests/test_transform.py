@@ -1,19 +1,20 @@
 """hht(): EMD + Hilbert spectra in one call, saving and Open3D export."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 import hht3d
-from hht3d.errors import InputError
-from hht3d.transform import FIELDS, IMF_FIELDS, RESULT_ARRAYS, HHTResult, field_imf, hht
-from hht3d.geometry.surface import Surface
 from helpers.meshes import fibonacci_sphere, icosphere
+from hht3d.errors import InputError
+from hht3d.geometry.surface import Surface
+from hht3d.transform import FIELDS, IMF_FIELDS, RESULT_ARRAYS, HHTResult, field_imf, hht
 
 
 def two_scale_signal(vertices):
     x, y, z = vertices.T
-    return np.cos(12 * np.arctan2(y, x)) * (1 - z ** 2) + 0.5 * z + 0.2 * x * y
+    return np.cos(12 * np.arctan2(y, x)) * (1 - z**2) + 0.5 * z + 0.2 * x * y
 
 
 @pytest.fixture(scope="module")

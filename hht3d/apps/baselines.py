@@ -16,6 +16,7 @@ surface).  An eigenfunction with eigenvalue ``λ`` oscillates like
 instantaneous frequency of :mod:`hht3d.spectral.monogenic_signal`, so the gains of
 :mod:`hht3d.apps.filters` apply to both filters unchanged.
 """
+
 from __future__ import annotations
 
 import math
@@ -29,11 +30,11 @@ from ..decomposition.extrema import local_extrema
 from ..decomposition.options import MAX_IMFS
 from ..errors import InputError
 from ..geometry.signals import fluctuation
+from ..geometry.surface import Surface
+from ..geometry.validation import as_imfs, check_surface
 from ..records import Record, option
 from ..spectral.eigenpairs import smallest_eigenpairs
 from ..spectral.options import RieszOptions
-from ..geometry.surface import Surface
-from ..geometry.validation import as_imfs, check_surface
 from .features import FeatureOptions, FeatureResult, features_from_counts
 from .filters import evaluate_gain
 from .reconstruction import ReconstructionOptions, reconstruct_from_change
@@ -83,16 +84,26 @@ class HKSOptions(Record):
 
     label = "HKS"
 
-    time: float | None = option(None, "diffusion time (default: a fraction of 4 ln 10 / λ1)", kind="float",
-                                minimum=0, open_minimum=True)
+    time: float | None = option(
+        None, "diffusion time (default: a fraction of 4 ln 10 / λ1)", kind="float", minimum=0, open_minimum=True
+    )
     eigenpairs: int = option(100, "eigenpairs in the heat-kernel sum", like=_EIGENPAIRS)
     ring: int = option(2, "neighbourhood in edges", like=FeatureOptions.specs()["ring"])
-    merge_radius: float | None = option(None, "merge maxima closer than this (model units)",
-                                        like=FeatureOptions.specs()["merge_radius"])
+    merge_radius: float | None = option(
+        None, "merge maxima closer than this (model units)", like=FeatureOptions.specs()["merge_radius"]
+    )
 
 
-def imf_enhancement(surface: Surface, imfs, options: EnhancementOptions | dict | None = None, *, weights=None,
-                    backend: str | None = None, name: str | None = None, **overrides) -> Surface:
+def imf_enhancement(
+    surface: Surface,
+    imfs,
+    options: EnhancementOptions | dict | None = None,
+    *,
+    weights=None,
+    backend: str | None = None,
+    name: str | None = None,
+    **overrides,
+) -> Surface:
     """Hu et al. (2014): multiply one IMF of the mean curvature by ``factor`` and reconstruct.
 
     The signal becomes ``s' = s + (factor − 1) f_index`` everywhere, whatever
@@ -120,8 +131,11 @@ def imf_enhancement(surface: Surface, imfs, options: EnhancementOptions | dict |
     Surface
     """
     if isinstance(options, numbers.Real):
-        warnings.warn(f"imf_enhancement(surface, imfs, {options!r}) is deprecated; write factor={options!r}",
-                      DeprecationWarning, stacklevel=2)
+        warnings.warn(
+            f"imf_enhancement(surface, imfs, {options!r}) is deprecated; write factor={options!r}",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         options = {"factor": options}
     options = EnhancementOptions.of(options, **overrides)
     surface = check_surface(surface)
@@ -129,12 +143,20 @@ def imf_enhancement(surface: Surface, imfs, options: EnhancementOptions | dict |
     if not options.index < len(f):
         raise InputError(f"IMF index must be an integer in [0, {len(f)}), got {options.index!r}")
     reconstruction = ReconstructionOptions.of({k: getattr(options, k) for k in ReconstructionOptions.specs()})
-    return reconstruct_from_change(surface, (options.factor - 1.0) * f[options.index], reconstruction,
-                                   weights=weights, backend=backend, name=name)
+    return reconstruct_from_change(
+        surface, (options.factor - 1.0) * f[options.index], reconstruction, weights=weights, backend=backend, name=name
+    )
 
 
-def manifold_harmonics_filter(surface: Surface, gain, options: HarmonicFilterOptions | dict | None = None, *,
-                              backend: str | None = None, name: str | None = None, **overrides) -> Surface:
+def manifold_harmonics_filter(
+    surface: Surface,
+    gain,
+    options: HarmonicFilterOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    name: str | None = None,
+    **overrides,
+) -> Surface:
     """Vallet & Lévy (2008): filter the coordinates in the manifold-harmonic basis.
 
     With M-orthonormal eigenvectors ``φ_j`` (``L φ_j = λ_j M φ_j``) and
@@ -179,13 +201,18 @@ def manifold_harmonics_filter(surface: Surface, gain, options: HarmonicFilterOpt
     else:
         centroid = v - fluctuation(surface, v.T).T
         new = centroid + vectors @ (mu[:, None] * coefficients)
-    return Surface(new, surface.faces, colors=surface.colors, attributes=dict(surface.attributes),
-                   laplacian=surface.laplacian, n_neighbors=surface.n_neighbors,
-                   name=name or f"{surface.name}_mhb")
+    return Surface(
+        new,
+        surface.faces,
+        colors=surface.colors,
+        attributes=dict(surface.attributes),
+        laplacian=surface.laplacian,
+        n_neighbors=surface.n_neighbors,
+        name=name or f"{surface.name}_mhb",
+    )
 
 
-def heat_kernel_signature(surface: Surface, times, *, eigenpairs: int = 100,
-                          backend: str | None = None) -> np.ndarray:
+def heat_kernel_signature(surface: Surface, times, *, eigenpairs: int = 100, backend: str | None = None) -> np.ndarray:
     """Heat kernel signature ``k_t(x, x) = Σ_i e^{−λ_i t} φ_i(x)²`` (Sun et al. 2009).
 
     The sum runs over the kernel (``φ_0² = 1/area`` of the component) and
@@ -212,12 +239,13 @@ def heat_kernel_signature(surface: Surface, times, *, eigenpairs: int = 100,
     values, vectors = smallest_eigenpairs(surface, HKSOptions.check("eigenpairs", eigenpairs), backend=backend)
     labels = surface.component_labels
     component_area = np.bincount(labels, weights=surface.mass_diagonal)
-    hks = np.exp(-np.outer(np.atleast_1d(t), values)) @ (vectors ** 2).T + 1.0 / component_area[labels]
+    hks = np.exp(-np.outer(np.atleast_1d(t), values)) @ (vectors**2).T + 1.0 / component_area[labels]
     return hks[0] if t.ndim == 0 else hks
 
 
-def hks_features(surface: Surface, options: HKSOptions | dict | None = None, *, backend: str | None = None,
-                 **overrides) -> FeatureResult:
+def hks_features(
+    surface: Surface, options: HKSOptions | dict | None = None, *, backend: str | None = None, **overrides
+) -> FeatureResult:
     """Sun et al. (2009): feature points as the local maxima of the HKS at one time.
 
     A vertex is a feature when its ``k_t(x, x)`` is at least that of every
@@ -252,5 +280,4 @@ def hks_features(surface: Surface, options: HKSOptions | dict | None = None, *, 
         time = HKS_TIME_FRACTION * 4.0 * math.log(10.0) / float(values[0])
     hks = heat_kernel_signature(surface, time, eigenpairs=options.eigenpairs, backend=backend)
     maxima, _ = local_extrema(surface, hks, extrema="relaxed", ring=options.ring, ratio=1.0)
-    return features_from_counts(surface, [maxima], [np.empty(0, dtype=np.int64)], 1, options.merge_radius,
-                                scores=hks)
+    return features_from_counts(surface, [maxima], [np.empty(0, dtype=np.int64)], 1, options.merge_radius, scores=hks)

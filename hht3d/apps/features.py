@@ -30,6 +30,7 @@ Everything depends only on the IMF values and the mesh connectivity, so the
 features of a rigidly moved and uniformly scaled copy are the same vertices
 (the mean curvature scales by ``1/c`` and EMD's thresholds are relative).
 """
+
 from __future__ import annotations
 
 import math
@@ -46,8 +47,16 @@ from ..geometry.surface import Surface
 from ..geometry.validation import as_imfs, check_surface
 from ..records import Record, option
 
-__all__ = ["FEATURE_EMD_OPTIONS", "FeatureOptions", "FeatureResult", "prominent_features", "features_from_counts",
-           "merge_hits", "repeatability", "merge_distance"]
+__all__ = [
+    "FEATURE_EMD_OPTIONS",
+    "FeatureOptions",
+    "FeatureResult",
+    "prominent_features",
+    "features_from_counts",
+    "merge_hits",
+    "repeatability",
+    "merge_distance",
+]
 
 
 #: EMD options for feature detection: one fixed tension, no cancellation guard (module notes).
@@ -63,10 +72,10 @@ class FeatureOptions(Record):
 
     ratio: float = option(0.8, "a maximum is >= this fraction of its ring", like=_EMD["ratio"])
     ring: int = option(2, "neighbourhood in edges", like=_EMD["ring"])
-    fraction: float = option(0.5, "hit: extremum of at least this fraction of the IMFs", minimum=0, maximum=1,
-                             open_minimum=True)
-    merge_radius: float | None = option(None, "merge hits closer than this (model units)", kind="float",
-                                        minimum=0)
+    fraction: float = option(
+        0.5, "hit: extremum of at least this fraction of the IMFs", minimum=0, maximum=1, open_minimum=True
+    )
+    merge_radius: float | None = option(None, "merge hits closer than this (model units)", kind="float", minimum=0)
 
 
 def merge_distance(radius) -> float:
@@ -152,8 +161,9 @@ def merge_hits(points: np.ndarray, scores: np.ndarray, radius: float) -> tuple[n
     return representatives, rank[labels]
 
 
-def features_from_counts(surface: Surface, maxima, minima, min_count: int,
-                         merge_radius: float | None = None, scores=None) -> FeatureResult:
+def features_from_counts(
+    surface: Surface, maxima, minima, min_count: int, merge_radius: float | None = None, scores=None
+) -> FeatureResult:
     """Count extrema over scales, keep vertices with ``count >= min_count``, merge.
 
     Parameters
@@ -179,14 +189,22 @@ def features_from_counts(surface: Surface, maxima, minima, min_count: int,
     score = counts if scores is None else np.asarray(scores, dtype=np.float64)
     representatives, groups = merge_hits(surface.vertices[hits], score[hits], r)
     vertices = hits[representatives]
-    return FeatureResult(vertices=vertices, counts=counts[vertices], points=surface.vertices[vertices],
-                         vertex_counts=counts, maxima=tuple(np.asarray(m) for m in maxima),
-                         minima=tuple(np.asarray(m) for m in minima), min_count=int(min_count),
-                         hits=hits, groups=groups)
+    return FeatureResult(
+        vertices=vertices,
+        counts=counts[vertices],
+        points=surface.vertices[vertices],
+        vertex_counts=counts,
+        maxima=tuple(np.asarray(m) for m in maxima),
+        minima=tuple(np.asarray(m) for m in minima),
+        min_count=int(min_count),
+        hits=hits,
+        groups=groups,
+    )
 
 
-def prominent_features(surface: Surface, imfs, options: FeatureOptions | dict | None = None,
-                       **overrides) -> FeatureResult:
+def prominent_features(
+    surface: Surface, imfs, options: FeatureOptions | dict | None = None, **overrides
+) -> FeatureResult:
     """Prominent features: vertices that are IMF extrema at many scales (Sec. 5.2).
 
     Parameters
@@ -214,8 +232,9 @@ def prominent_features(surface: Surface, imfs, options: FeatureOptions | dict | 
     f = as_imfs(surface, imfs)
     extrema = [local_extrema(surface, fk, extrema="relaxed", ring=options.ring, ratio=options.ratio) for fk in f]
     min_count = max(1, math.ceil(options.fraction * len(f) - 1e-9))
-    return features_from_counts(surface, [e[0] for e in extrema], [e[1] for e in extrema], min_count,
-                                options.merge_radius)
+    return features_from_counts(
+        surface, [e[0] for e in extrema], [e[1] for e in extrema], min_count, options.merge_radius
+    )
 
 
 def repeatability(points, reference, radius: float) -> float:

@@ -39,6 +39,7 @@ vertices whose frequency estimate sits near an edge are not switched on and
 off by its noise.  :func:`make_gain` builds a gain from a name and
 parameters (as a pipeline description would give them).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -231,13 +232,15 @@ class PiecewiseLinear(Gain):
         except (TypeError, ValueError):
             raise InputError(f"PiecewiseLinear points must be (frequency, gain) pairs, got {self.points!r}") from None
         if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) == 0:
-            raise InputError(f"PiecewiseLinear points must be a non-empty list of (frequency, gain) "
-                             f"pairs, got shape {pts.shape}")
+            raise InputError(
+                f"PiecewiseLinear points must be a non-empty list of (frequency, gain) pairs, got shape {pts.shape}"
+            )
         if not np.all(np.isfinite(pts)):
             raise InputError("PiecewiseLinear points must be finite")
         if pts[0, 0] < 0 or np.any(np.diff(pts[:, 0]) <= 0):
-            raise InputError("PiecewiseLinear frequencies must be >= 0 and strictly increasing, "
-                             f"got {pts[:, 0].tolist()}")
+            raise InputError(
+                f"PiecewiseLinear frequencies must be >= 0 and strictly increasing, got {pts[:, 0].tolist()}"
+            )
         object.__setattr__(self, "points", tuple(map(tuple, pts.tolist())))
 
     def _evaluate(self, omega):
@@ -267,15 +270,15 @@ def make_gain(kind: str, **parameters) -> Gain:
     fields = dataclasses.fields(GAINS[kind])
     unknown = sorted(set(parameters) - {f.name for f in fields})
     if unknown:
-        raise InputError(f"gain {kind} has no parameter {unknown[0]!r}; it takes "
-                         f"{', '.join(f.name for f in fields)}")
-    required = [f.name for f in fields
-                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+        raise InputError(f"gain {kind} has no parameter {unknown[0]!r}; it takes {', '.join(f.name for f in fields)}")
+    required = [f.name for f in fields if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
     missing = [name for name in required if name not in parameters]
     if missing:
         example = ", ".join(f"{name}: ..." for name in required)
-        raise InputError(f"gain {kind} needs {' and '.join(missing)}: {{kind: {kind}, {example}}} "
-                         f"(see help(hht3d.apps.{GAINS[kind].__name__}))")
+        raise InputError(
+            f"gain {kind} needs {' and '.join(missing)}: {{kind: {kind}, {example}}} "
+            f"(see help(hht3d.apps.{GAINS[kind].__name__}))"
+        )
     return GAINS[kind](**parameters)
 
 
@@ -289,8 +292,9 @@ def decomposition_parts(decomposition) -> tuple[np.ndarray, np.ndarray, np.ndarr
         try:
             imfs, residue, mono = decomposition.imfs, decomposition.residue, decomposition.monogenic
         except AttributeError:
-            raise InputError(f"expected an HHTResult or a tuple (imfs, residue, monogenic), "
-                             f"got {type(decomposition).__name__}") from None
+            raise InputError(
+                f"expected an HHTResult or a tuple (imfs, residue, monogenic), got {type(decomposition).__name__}"
+            ) from None
     imfs = np.asarray(imfs, dtype=np.float64)
     residue = np.asarray(residue, dtype=np.float64)
     frequency = np.asarray(getattr(mono, "frequency", None), dtype=np.float64)

@@ -72,6 +72,7 @@ removed on every connected component, which keeps each component's size
 boundary weights; its mean is removed too, for the same reason).  What it
 does to the enclosed volume: ``benchmarks/results/design_notes.md``.
 """
+
 from __future__ import annotations
 
 import warnings
@@ -81,31 +82,29 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import linalg
-from ..errors import InputError
 from ..decomposition.quality import QualityWarning
-from ..geometry.signals import fluctuation
-from ..geometry.signals import mean_curvature
+from ..errors import InputError
+from ..geometry.signals import fluctuation, mean_curvature
 from ..geometry.surface import Surface
 from ..geometry.validation import check_signal, check_surface
 from ..records import Record, option
-from .filters import decomposition_parts, evaluate_gain
 
-__all__ = ["ReconstructionOptions", "FilterOptions", "position_weights", "reconstruct", "reconstruct_from_change",
-           "filter_geometry", "edit_frequency", "automatic_weight", "check_mean_curvature_signal", "INTERIOR_WEIGHT",
-           "BOUNDARY_WEIGHT", "STIFFNESS_FRACTION", "DISPLACEMENT_LIMIT", "MAX_WEIGHT"]
+__all__ = [
+    "ReconstructionOptions",
+    "position_weights",
+    "reconstruct",
+    "reconstruct_from_change",
+    "check_mean_curvature_signal",
+    "INTERIOR_WEIGHT",
+    "BOUNDARY_WEIGHT",
+    "DISPLACEMENT_LIMIT",
+    "MAX_WEIGHT",
+]
 
 #: Default position weight ``μ`` of interior vertices (paper, Sec. 5.1).
 INTERIOR_WEIGHT = 0.01
 #: Default position weight ``μ`` of boundary vertices (paper, Sec. 5.1).
 BOUNDARY_WEIGHT = 1.0
-#: :func:`filter_geometry` holds positions below this fraction of the lowest edited frequency.
-STIFFNESS_FRACTION = 1 / 3
-#: ... and weighs boundary positions this many times more than interior ones (the paper's 1.0 / 0.01).
-BOUNDARY_RATIO = 100.0
-#: The percentile (by changed energy) of the edited frequencies that counts as the lowest.
-EDIT_PERCENTILE = 5.0
-#: A gain within this of 1 changes nothing.
-_UNCHANGED = 1e-12
 #: A vertex moved by more than this fraction of the bounding-box diagonal gets a warning.
 DISPLACEMENT_LIMIT = 0.05
 #: The HHT signal must equal the surface's mean curvature to this relative accuracy.
@@ -120,33 +119,26 @@ class ReconstructionOptions(Record):
 
     label = "reconstruction"
 
-    interior_weight: float = option(INTERIOR_WEIGHT, "position weight μ of interior vertices (Eq. 27)", minimum=0,
-                                    maximum=MAX_WEIGHT, open_minimum=True)
-    boundary_weight: float = option(BOUNDARY_WEIGHT, "position weight μ of boundary vertices (Eq. 27)", minimum=0,
-                                    maximum=MAX_WEIGHT, open_minimum=True)
+    interior_weight: float = option(
+        INTERIOR_WEIGHT,
+        "position weight μ of interior vertices (Eq. 27)",
+        minimum=0,
+        maximum=MAX_WEIGHT,
+        open_minimum=True,
+    )
+    boundary_weight: float = option(
+        BOUNDARY_WEIGHT,
+        "position weight μ of boundary vertices (Eq. 27)",
+        minimum=0,
+        maximum=MAX_WEIGHT,
+        open_minimum=True,
+    )
     preserve_scale: bool = option(True, "remove the mean curvature change per component")
 
 
-_WEIGHTS = ReconstructionOptions.specs()
-_AUTOMATIC = "; null: from the gain, positions hold below a third of the lowest edited frequency"
-
-
-@dataclass(frozen=True)
-class FilterOptions(Record):
-    """The settings of :func:`filter_geometry`: :class:`ReconstructionOptions` whose weights follow the gain
-    when left out."""
-
-    label = "geometry filter"
-
-    interior_weight: float | None = option(None, _WEIGHTS["interior_weight"].doc + _AUTOMATIC,
-                                           like=_WEIGHTS["interior_weight"])
-    boundary_weight: float | None = option(None, _WEIGHTS["boundary_weight"].doc + _AUTOMATIC,
-                                           like=_WEIGHTS["boundary_weight"])
-    preserve_scale: bool = option(True, _WEIGHTS["preserve_scale"].doc, like=_WEIGHTS["preserve_scale"])
-
-
-def position_weights(surface: Surface, interior_weight: float = INTERIOR_WEIGHT,
-                     boundary_weight: float = BOUNDARY_WEIGHT) -> np.ndarray:
+def position_weights(
+    surface: Surface, interior_weight: float = INTERIOR_WEIGHT, boundary_weight: float = BOUNDARY_WEIGHT
+) -> np.ndarray:
     """Per-vertex ``μ_i`` of Eq. (27): ``boundary_weight`` on boundary vertices, else ``interior_weight``.
 
     Both must be positive (a zero weight leaves the translation of a closed
@@ -167,9 +159,16 @@ def _weights(surface: Surface, options: ReconstructionOptions, weights) -> np.nd
     return mu
 
 
-def reconstruct_from_change(surface: Surface, change, options: ReconstructionOptions | dict | None = None, *,
-                            weights=None, backend: str | None = None, name: str | None = None,
-                            **overrides) -> Surface:
+def reconstruct_from_change(
+    surface: Surface,
+    change,
+    options: ReconstructionOptions | dict | None = None,
+    *,
+    weights=None,
+    backend: str | None = None,
+    name: str | None = None,
+    **overrides,
+) -> Surface:
     """New surface whose mean-curvature signal changed by ``change = s' − s`` (Eq. 27).
 
     Solves ``(L M⁻¹ L + W) (V' − V) = L diag(s' − s) N`` (see the module
@@ -211,24 +210,41 @@ def reconstruct_from_change(surface: Surface, change, options: ReconstructionOpt
     mu = _weights(surface, options, weights)
     area = surface.mass_diagonal
     mean_area = float(np.mean(area))
-    w = mu * area / mean_area ** 2
+    w = mu * area / mean_area**2
     lap = surface.stiffness
     system = (lap @ sp.diags(1.0 / area) @ lap + sp.diags(w)).tocsr()
     rhs = lap @ (ds[:, None] * surface.normals)
     displacement = linalg.factorize(system, backend).solve(rhs) if np.any(ds) else np.zeros_like(rhs)
     largest = float(np.max(np.linalg.norm(displacement, axis=1))) / surface.bounding_box_diagonal
     if largest > DISPLACEMENT_LIMIT:
-        warnings.warn(f"{surface.name}: the reconstruction moved a vertex by {largest:.3g} of the bounding-box "
-                      f"diagonal (more than {DISPLACEMENT_LIMIT}): the curvature change has coarse-scale content "
-                      "or the mesh has bad triangles; raise interior_weight or check the result",
-                      QualityWarning, stacklevel=2)
-    return Surface(surface.vertices + displacement, surface.faces, colors=surface.colors,
-                   attributes=dict(surface.attributes), laplacian=surface.laplacian,
-                   n_neighbors=surface.n_neighbors, name=name or f"{surface.name}_filtered")
+        warnings.warn(
+            f"{surface.name}: the reconstruction moved a vertex by {largest:.3g} of the bounding-box "
+            f"diagonal (more than {DISPLACEMENT_LIMIT}): the curvature change has coarse-scale content "
+            "or the mesh has bad triangles; raise interior_weight or check the result",
+            QualityWarning,
+            stacklevel=2,
+        )
+    return Surface(
+        surface.vertices + displacement,
+        surface.faces,
+        colors=surface.colors,
+        attributes=dict(surface.attributes),
+        laplacian=surface.laplacian,
+        n_neighbors=surface.n_neighbors,
+        name=name or f"{surface.name}_filtered",
+    )
 
 
-def reconstruct(surface: Surface, signal, options: ReconstructionOptions | dict | None = None, *, weights=None,
-                backend: str | None = None, name: str | None = None, **overrides) -> Surface:
+def reconstruct(
+    surface: Surface,
+    signal,
+    options: ReconstructionOptions | dict | None = None,
+    *,
+    weights=None,
+    backend: str | None = None,
+    name: str | None = None,
+    **overrides,
+) -> Surface:
     """New surface whose mean-curvature signal (Eq. 24) is ``signal`` (Eq. 27).
 
     ``s = mean_curvature(surface)`` is the reference; the vertices move by
@@ -251,8 +267,9 @@ def reconstruct(surface: Surface, signal, options: ReconstructionOptions | dict 
     options = ReconstructionOptions.of(options, **overrides)
     surface = check_surface(surface)
     target = check_signal(surface, signal, "filtered signal")
-    return reconstruct_from_change(surface, target - mean_curvature(surface), options, weights=weights,
-                                   backend=backend, name=name)
+    return reconstruct_from_change(
+        surface, target - mean_curvature(surface), options, weights=weights, backend=backend, name=name
+    )
 
 
 def check_mean_curvature_signal(surface: Surface, signal) -> None:
@@ -264,100 +281,8 @@ def check_mean_curvature_signal(surface: Surface, signal) -> None:
         errors.append(float(np.max(np.abs(np.asarray(signal) - reference))))
     error = min(errors)
     if not error <= _SIGNAL_RTOL * scale:
-        raise InputError(f"{surface.name}: geometry filtering needs the HHT of the mean-curvature signal "
-                         "(Eq. 24, hht3d.geometry.signals.mean_curvature); this result's signal differs from it "
-                         f"by up to {error:.3g} (scale {scale:.3g})")
-
-
-def edit_frequency(result, gain) -> float | None:
-    """The lowest frequency a gain edits: the 5th percentile, by changed energy, of the
-    instantaneous frequencies where ``μ(ω) ≠ 1``; ``None`` when the gain changes nothing.
-
-    Each vertex and IMF weighs ``|μ(ω_k) − 1| a_k² A``, its share of the change (Eqs. 21, 26).
-    """
-    imfs, _, frequency = decomposition_parts(result)
-    change = np.abs(evaluate_gain(gain, frequency) - 1.0)
-    weight = change * np.asarray(result.monogenic.amplitude) ** 2 * result.surface.mass_diagonal
-    if not np.any(change > _UNCHANGED) or not weight.max() > 0:
-        return None
-    order = np.argsort(frequency, axis=None)
-    cumulative = np.cumsum(weight.ravel()[order])
-    return float(frequency.ravel()[order][np.searchsorted(cumulative, EDIT_PERCENTILE / 100 * cumulative[-1])])
-
-
-def automatic_weight(surface: Surface, frequency: float) -> float:
-    """The interior ``μ`` under which positions hold below ``frequency`` × :data:`STIFFNESS_FRACTION`.
-
-    With ``w_i = μ A_i / Ā²`` (module notes, "Weights") a displacement of
-    frequency ``ω`` costs ``ω⁴ A_i`` in the Laplacian term, so
-    ``μ = Ā² (STIFFNESS_FRACTION · frequency)⁴`` puts the crossover there.
-    """
-    return float(np.mean(surface.mass_diagonal)) ** 2 * (STIFFNESS_FRACTION * frequency) ** 4
-
-
-def filter_geometry(result, gain, options: FilterOptions | dict | None = None, *, weights=None,
-                    backend: str | None = None, name: str | None = None, **overrides) -> Surface:
-    """Hilbert-spectrum geometry filtering: Eq. (26) on the mean curvature, then Eq. (27).
-
-    Parameters
-    ----------
-    result : HHTResult
-        :func:`hht3d.transform.hht` of ``mean_curvature(surface)``.
-    gain : callable
-        ``μ(ω)``, e.g. :class:`~hht3d.apps.filters.BandStop`.
-    options : FilterOptions or dict, optional
-        ``interior_weight``, ``boundary_weight``: the ``μ`` of Eq. (27) (see
-        :func:`reconstruct_from_change`), and ``preserve_scale``.  By
-        default the interior weight follows the gain: positions hold only
-        below a third of the lowest frequency it edits (:func:`edit_frequency`,
-        :func:`automatic_weight`), and the boundary weight is
-        :data:`BOUNDARY_RATIO` times the interior one, the paper's ratio
-        (1.0 / 0.01).  A fixed weight damps edits at coarse scales: on a
-        unit sphere with 60 random bumps (σ 0.05–0.12) a low-pass at 3
-        rad/unit lowered the distance to the clean sphere 1.6× with the
-        paper's 0.01 and 3.3× with the automatic weight.  The largest
-        displacement is checked (:data:`DISPLACEMENT_LIMIT`).
-    weights, backend, name
-        See :func:`reconstruct_from_change`.
-    **overrides
-        Settings that replace those of ``options``.
-
-    Returns
-    -------
-    Surface
-        The filtered geometry, same faces.  A gain that changes no
-        frequency returns the surface unchanged with a
-        :class:`~hht3d.decomposition.quality.QualityWarning`.
-
-    Notes
-    -----
-    The change ``s' − s = Σ_k (μ(ω_k) − 1) f_k`` is formed directly, so a
-    gain of 1 moves no vertex at all.
-    """
-    options = FilterOptions.of(options, **overrides)
-    surface = check_surface(getattr(result, "surface", None))
-    imfs, _, frequency = decomposition_parts(result)
-    check_mean_curvature_signal(surface, result.signal)
-    mu = evaluate_gain(gain, frequency)
-    edited = edit_frequency(result, gain)
-    if edited is None:
-        warnings.warn(f"{surface.name}: the gain changes no frequency (all {frequency.size} instantaneous "
-                      f"frequencies, {frequency.min(initial=0):.3g} to {frequency.max(initial=0):.3g} rad/unit, "
-                      "get gain 1): the surface is returned unchanged; is the cutoff beyond the spectrum?",
-                      QualityWarning, stacklevel=2)
-        return _copy(surface, name)
-    interior, boundary = options.interior_weight, options.boundary_weight
-    if weights is None and interior is None:
-        interior = automatic_weight(surface, edited)
-    if boundary is None:
-        boundary = BOUNDARY_RATIO * (INTERIOR_WEIGHT if interior is None else interior)
-    change = np.sum((mu - 1.0) * imfs, axis=0)
-    return reconstruct_from_change(surface, change, weights=weights, backend=backend, name=name,
-                                   interior_weight=INTERIOR_WEIGHT if interior is None else interior,
-                                   boundary_weight=boundary, preserve_scale=options.preserve_scale)
-
-
-def _copy(surface: Surface, name: str | None) -> Surface:
-    return Surface(surface.vertices, surface.faces, colors=surface.colors, attributes=dict(surface.attributes),
-                   laplacian=surface.laplacian, n_neighbors=surface.n_neighbors,
-                   name=name or f"{surface.name}_filtered")
+        raise InputError(
+            f"{surface.name}: geometry filtering needs the HHT of the mean-curvature signal "
+            "(Eq. 24, hht3d.geometry.signals.mean_curvature); this result's signal differs from it "
+            f"by up to {error:.3g} (scale {scale:.3g})"
+        )

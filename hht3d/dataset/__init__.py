@@ -5,6 +5,7 @@
 * :mod:`~hht3d.dataset.guard` — a failing task becomes a record of its step and reason;
 * :mod:`~hht3d.dataset.summary` — one row per file, ``summary.json`` and ``summary.csv``.
 """
+
 from .run import RESULT_SUFFIXES, dataset_graph, output_paths, run_dataset
 from .summary import ItemSummary, write_summary
 

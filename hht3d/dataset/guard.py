@@ -3,6 +3,7 @@
 So one unreadable or degenerate file is reported with its step and reason
 while the other files of a dataset or pipeline run finish.
 """
+
 from __future__ import annotations
 
 import time

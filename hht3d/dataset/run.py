@@ -16,27 +16,50 @@ or an fsspec URL is decided in one place, :class:`hht3d.io.folder.OutputFolder`.
 :mod:`hht3d.execution` and writes ``summary.json`` and ``summary.csv``
 (:mod:`hht3d.dataset.summary`).
 """
+
 from __future__ import annotations
 
 from dask import delayed
 from dask.base import tokenize
 
-from ..graph import stages as graph
 from ..errors import InputError, shown
+from ..execution import compute
 from ..geometry.signals import SIGNALS
+from ..graph import stages as graph
 from ..io.folder import OutputFolder, check_locations
 from ..io.manifest import new_run_id
 from ..io.storage import file_name, join, local_path, resolve_locations, stem
 from ..output_formats import plain_formats
 from ..transform import HHTResult
 from .guard import MAX_ERROR, Failure, Guarded
-from ..execution import compute
-from .summary import (SUMMARY_FILES, ItemSummary, item_summary, quality_fields, skipped_summary, summary_paths,
-                      write_summary, written_outputs)
+from .summary import (
+    SUMMARY_FILES,
+    ItemSummary,
+    item_summary,
+    quality_fields,
+    skipped_summary,
+    summary_paths,
+    write_summary,
+    written_outputs,
+)
 
-__all__ = ["Failure", "Guarded", "ItemSummary", "output_paths", "dataset_graph", "run_dataset", "write_summary",
-           "summary_paths", "item_summary", "skipped_summary", "quality_fields", "SUMMARY_FILES", "MAX_ERROR",
-           "RESULT_SUFFIXES", "items_graph"]
+__all__ = [
+    "Failure",
+    "Guarded",
+    "ItemSummary",
+    "output_paths",
+    "dataset_graph",
+    "run_dataset",
+    "write_summary",
+    "summary_paths",
+    "item_summary",
+    "skipped_summary",
+    "quality_fields",
+    "SUMMARY_FILES",
+    "MAX_ERROR",
+    "RESULT_SUFFIXES",
+    "items_graph",
+]
 
 #: The files a dataset item's result is saved as by default: the formats of an HHT result that take no
 #: options (:func:`hht3d.output_formats.plain_formats`, written by :meth:`HHTResult.save`).
@@ -48,8 +71,10 @@ def output_paths(source, out_dir, formats=RESULT_SUFFIXES, pattern: str = "{stem
     try:
         base = str(pattern).format(stem=stem(source))
     except (IndexError, KeyError, ValueError, AttributeError):  # "{0}", "{name}", "{", "{stem.x}"
-        raise InputError(f"output pattern {shown(pattern)}: the only field is {{stem}}, the input's file name "
-                         "without its suffix (write {{ and }} for literal braces)") from None
+        raise InputError(
+            f"output pattern {shown(pattern)}: the only field is {{stem}}, the input's file name "
+            "without its suffix (write {{ and }} for literal braces)"
+        ) from None
     return [join(out_dir, f"{base}{suffix}") for suffix in formats]
 
 
@@ -81,10 +106,20 @@ def _check_options(signal: str, formats) -> None:
             raise InputError(f"unknown output format {suffix!r}; run_dataset writes {', '.join(written)}")
 
 
-def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=RESULT_SUFFIXES,
-                  pattern: str = "{stem}_hht", resume: bool = False, overwrite: bool = False,
-                  load_options: dict | None = None, run: str | None = None, storage_options: dict | None = None,
-                  **hht_options):
+def dataset_graph(
+    inputs,
+    out_dir,
+    *,
+    signal: str = "mean_curvature",
+    formats=RESULT_SUFFIXES,
+    pattern: str = "{stem}_hht",
+    resume: bool = False,
+    overwrite: bool = False,
+    load_options: dict | None = None,
+    run: str | None = None,
+    storage_options: dict | None = None,
+    **hht_options,
+):
     """Lazy HHT of every input file; returns a delayed list of :class:`ItemSummary`.
 
     Parameters
@@ -140,13 +175,22 @@ def dataset_graph(inputs, out_dir, *, signal: str = "mean_curvature", formats=RE
         quality = tasks.task("quality", quality_fields)(stages["hht"], stages["load"])
         writes = [tasks.task(f"write {file_name(p)}", save)(stages["hht"], str(p)) for p in paths]
         return delayed(item_summary, pure=True, name=f"summary-{tokenize(str(source), paths)}")(
-            str(source), paths, stages["load"], stages["hht"], quality, [*stages.values(), quality], writes)
+            str(source), paths, stages["load"], stages["hht"], quality, [*stages.values(), quality], writes
+        )
 
     return items_graph(items, folder, item, resume=resume)
 
 
-def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int | None = None,
-                address: str | None = None, progress: bool = True, **options) -> list[ItemSummary]:
+def run_dataset(
+    inputs,
+    out_dir,
+    *,
+    scheduler: str = "processes",
+    workers: int | None = None,
+    address: str | None = None,
+    progress: bool = True,
+    **options,
+) -> list[ItemSummary]:
     """Build :func:`dataset_graph`, compute it, write the summary, return its rows.
 
     Parameters
@@ -180,8 +224,13 @@ def run_dataset(inputs, out_dir, *, scheduler: str = "processes", workers: int |
     ['spot_hht.npz', 'spot_hht.ply', 'summary.csv', 'summary.json']
     """
     run, out_dir = options.pop("run", None) or new_run_id(), local_path(out_dir)
-    (rows,) = compute(dataset_graph(inputs, out_dir, run=run, **options), scheduler=scheduler, workers=workers,
-                      address=address, progress=progress)
+    (rows,) = compute(
+        dataset_graph(inputs, out_dir, run=run, **options),
+        scheduler=scheduler,
+        workers=workers,
+        address=address,
+        progress=progress,
+    )
     OutputFolder(out_dir, storage_options=options.get("storage_options"), run=run).finish([], written_outputs(rows))
     write_summary(rows, out_dir, run, options.get("storage_options"))
     return rows

@@ -11,6 +11,7 @@ from the new rows when another run came first;
 write here: there the last of two runs finishing at once wins.  Secrets are
 redacted (:func:`hht3d.redaction.redact`).
 """
+
 from __future__ import annotations
 
 import csv
@@ -23,7 +24,8 @@ from ..decomposition.quality import decomposition_quality
 from ..errors import InputError
 from ..io import is_recorded, new_run_id, read_npz_shapes, read_ply_header
 from ..io.folder import OutputFolder
-from ..io.manifest import folder_lock, recording
+from ..io.lock import folder_lock
+from ..io.manifest import recording
 from ..io.read import _MAX_HEADER
 from ..io.storage import file_name, is_url, join, local_copy, local_path
 from ..io.uploads import atomic_location, update_object
@@ -32,8 +34,16 @@ from ..redaction import redact
 from ..transform import HHTResult
 from .guard import Failure, Timed
 
-__all__ = ["SUMMARY_FILES", "ItemSummary", "summary_paths", "quality_fields", "item_summary", "skipped_summary",
-           "written_outputs", "write_summary"]
+__all__ = [
+    "SUMMARY_FILES",
+    "ItemSummary",
+    "summary_paths",
+    "quality_fields",
+    "item_summary",
+    "skipped_summary",
+    "written_outputs",
+    "write_summary",
+]
 
 #: The summary table, in the output folder.
 SUMMARY_FILES = ("summary.json", "summary.csv")
@@ -82,9 +92,13 @@ def quality_fields(decomposition, surface) -> dict:
     else:
         imfs, residue = decomposition.imfs, decomposition.residue
         quality = decomposition_quality(surface, imfs.sum(axis=0) + residue, imfs, residue)
-    return {"energy_ratio": quality.energy_ratio, "orthogonality_index": quality.orthogonality_index,
-            "io_leaking": quality.io_leaking, "io_cancelling": quality.io_cancelling,
-            "warnings": tuple(quality.warnings)}
+    return {
+        "energy_ratio": quality.energy_ratio,
+        "orthogonality_index": quality.orthogonality_index,
+        "io_leaking": quality.io_leaking,
+        "io_cancelling": quality.io_cancelling,
+        "warnings": tuple(quality.warnings),
+    }
 
 
 def item_summary(source: str, paths, surface, decomposition, quality, parts, writes) -> ItemSummary:
@@ -104,8 +118,9 @@ def item_summary(source: str, paths, surface, decomposition, quality, parts, wri
     fields = {} if quality is None else quality.value
     vertices = surface.value.n_vertices
     advice = None if decomposition is None else slow_fallback(vertices, _backend_of(decomposition.value))
-    return ItemSummary(source, "ok", vertices=vertices, imfs=imfs, seconds=seconds,
-                       outputs=written, solver_advice=advice, **fields)
+    return ItemSummary(
+        source, "ok", vertices=vertices, imfs=imfs, seconds=seconds, outputs=written, solver_advice=advice, **fields
+    )
 
 
 def _backend_of(decomposition) -> str | None:
@@ -151,8 +166,9 @@ def written_outputs(rows: list[ItemSummary]) -> list[str]:
     return [path for row in rows if row.status != "skipped" for path in row.outputs]
 
 
-def write_summary(rows: list[ItemSummary], out_dir, run: str | None = None,
-                  storage_options: dict | None = None) -> list:
+def write_summary(
+    rows: list[ItemSummary], out_dir, run: str | None = None, storage_options: dict | None = None
+) -> list:
     """Write the summary table as ``summary.json`` and ``summary.csv`` (atomically, secrets redacted).
 
     The rows already there are merged in: runs into one folder, even at
@@ -214,8 +230,10 @@ def _csv_text(records: list[dict]) -> str:
     writer = csv.DictWriter(buffer, fieldnames=names, extrasaction="ignore")
     writer.writeheader()
     for r in records:
-        writer.writerow({k: r.get(k) for k in names} | {"outputs": ";".join(r.get("outputs") or []),
-                                                        "warnings": " | ".join(r.get("warnings") or [])})
+        writer.writerow(
+            {k: r.get(k) for k in names}
+            | {"outputs": ";".join(r.get("outputs") or []), "warnings": " | ".join(r.get("warnings") or [])}
+        )
     return redact(buffer.getvalue())
 
 

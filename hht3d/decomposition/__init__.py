@@ -4,18 +4,48 @@ Data flow: :mod:`.extrema` → :mod:`.envelopes` → :mod:`.sifting` →
 :mod:`.decompose` (:func:`emd`) → :mod:`.ensemble` (:func:`eemd`), with the
 settings in :mod:`.options` and the figures in :mod:`.quality`.
 """
+
 from .decompose import EMDResult, emd
 from .ensemble import combine_eemd, eemd, eemd_member
 from .envelopes import EnvelopeSolver, envelope_interpolation, envelope_operator
 from .extrema import extrema_spacing, local_extrema
-from .options import (EMD_DEFAULTS, ENSEMBLE_DEFAULTS, ENVELOPES, EXTREMA_RULES, GUARD_TENSIONS, PAPER_OPTIONS,
-                      STOPPING_RULES, EMDOptions, EnsembleOptions)
+from .options import (
+    EMD_DEFAULTS,
+    ENSEMBLE_DEFAULTS,
+    ENVELOPES,
+    EXTREMA_RULES,
+    GUARD_TENSIONS,
+    PAPER_OPTIONS,
+    STOPPING_RULES,
+    EMDOptions,
+    EnsembleOptions,
+)
 from .quality import ENERGY_RATIO_LIMIT, LEAKAGE_LIMIT, ORTHOGONALITY_LIMIT, SPIKE_LIMIT, Quality, QualityWarning
 
 __all__ = [
-    "EMDResult", "emd", "eemd", "eemd_member", "combine_eemd",
-    "EMDOptions", "EnsembleOptions", "EMD_DEFAULTS", "ENSEMBLE_DEFAULTS", "PAPER_OPTIONS",
-    "STOPPING_RULES", "ENVELOPES", "EXTREMA_RULES", "GUARD_TENSIONS",
-    "local_extrema", "extrema_spacing", "envelope_operator", "envelope_interpolation", "EnvelopeSolver",
-    "Quality", "QualityWarning", "ENERGY_RATIO_LIMIT", "ORTHOGONALITY_LIMIT", "LEAKAGE_LIMIT", "SPIKE_LIMIT",
+    "EMDResult",
+    "emd",
+    "eemd",
+    "eemd_member",
+    "combine_eemd",
+    "EMDOptions",
+    "EnsembleOptions",
+    "EMD_DEFAULTS",
+    "ENSEMBLE_DEFAULTS",
+    "PAPER_OPTIONS",
+    "STOPPING_RULES",
+    "ENVELOPES",
+    "EXTREMA_RULES",
+    "GUARD_TENSIONS",
+    "local_extrema",
+    "extrema_spacing",
+    "envelope_operator",
+    "envelope_interpolation",
+    "EnvelopeSolver",
+    "Quality",
+    "QualityWarning",
+    "ENERGY_RATIO_LIMIT",
+    "ORTHOGONALITY_LIMIT",
+    "LEAKAGE_LIMIT",
+    "SPIKE_LIMIT",
 ]

@@ -21,6 +21,7 @@ are then constrained in both envelopes, so their mean envelope is the signal
 itself: such a component contributes nothing to the IMFs and stays in the
 residue.
 """
+
 from __future__ import annotations
 
 import time
@@ -58,7 +59,8 @@ class EMDResult:
         ``stop`` — why sifting stopped: ``"sd"``, ``"rfg"``, ``"s_number"``,
         ``"fixed"``, ``"max_sifts"``, ``"extrema"`` or ``"guard"`` —,
         ``envelope`` and ``tension`` used, ``attempts`` of the cancellation
-        guard and ``skipped_tensions`` whose systems were not definite, ``step_energy_ratio``, ``mean_share`` (norm of the removed
+        guard and ``skipped_tensions`` whose systems were not definite, ``step_energy_ratio``,
+        ``mean_share`` (norm of the removed
         local mean over the IMF's), ``factorizations``, ``seconds``);
         totals ``sifts``, ``factorizations``, ``seconds``; ``backend``;
         ``stop_reason``; ``max_constraint_error`` (relative envelope error at
@@ -79,8 +81,9 @@ class EMDResult:
         return len(self.imfs)
 
 
-def emd(surface: Surface, signal, options: EMDOptions | dict | None = None, *, backend: str | None = None,
-        **overrides) -> EMDResult:
+def emd(
+    surface: Surface, signal, options: EMDOptions | dict | None = None, *, backend: str | None = None, **overrides
+) -> EMDResult:
     """Empirical mode decomposition of a signal on a surface (Sec. 4.1, Eq. 1).
 
     Parameters
@@ -92,7 +95,8 @@ def emd(surface: Surface, signal, options: EMDOptions | dict | None = None, *, b
         One finite value per vertex.
     options : EMDOptions or dict, optional
         The settings below, as a record (presets: :data:`~hht3d.decomposition.options.EMD_DEFAULTS`,
-        :data:`~hht3d.decomposition.options.PAPER_OPTIONS`) or a dict; default :data:`~hht3d.decomposition.options.EMD_DEFAULTS`.
+        :data:`~hht3d.decomposition.options.PAPER_OPTIONS`) or a dict; default
+        :data:`~hht3d.decomposition.options.EMD_DEFAULTS`.
     backend : str, optional
         Sparse solver of :mod:`hht3d.linalg`; default the fastest installed.
     **overrides

@@ -4,6 +4,7 @@ Each member decomposes the signal plus one seeded white-noise realisation
 (:func:`eemd_member`); members are independent, so the lazy graph runs them
 as tasks of their own, and :func:`combine_eemd` averages them.
 """
+
 from __future__ import annotations
 
 import numbers
@@ -35,8 +36,14 @@ def ensemble_settings(options, ensemble, overrides: dict) -> tuple[EMDOptions, E
     return EMDOptions.of(options, **emd_overrides), EnsembleOptions.of(ensemble, **ensemble_overrides)
 
 
-def eemd_member(surface: Surface, signal, member_index: int, options: EMDOptions, ensemble: EnsembleOptions,
-                backend: str | None = None) -> EMDResult:
+def eemd_member(
+    surface: Surface,
+    signal,
+    member_index: int,
+    options: EMDOptions,
+    ensemble: EnsembleOptions,
+    backend: str | None = None,
+) -> EMDResult:
     """EMD of the signal plus one seeded white-noise realisation (Wu & Huang 2009).
 
     Parameters
@@ -65,8 +72,11 @@ def eemd_member(surface: Surface, signal, member_index: int, options: EMDOptions
     """
     f = check_signal(check_surface(surface), signal)
     if isinstance(options, EnsembleOptions) and isinstance(ensemble, EMDOptions):
-        warnings.warn("eemd_member(surface, signal, i, ensemble, options) is deprecated: pass the EMD options "
-                      "first, as to eemd", DeprecationWarning, stacklevel=2)
+        warnings.warn(
+            "eemd_member(surface, signal, i, ensemble, options) is deprecated: pass the EMD options first, as to eemd",
+            DeprecationWarning,
+            stacklevel=2,
+        )
         options, ensemble = ensemble, options
     if isinstance(member_index, bool) or not isinstance(member_index, numbers.Integral) or member_index < 0:
         raise InputError(f"member_index must be an integer >= 0, got {member_index!r}")
@@ -101,7 +111,7 @@ def combine_eemd(surface: Surface, signal, members) -> EMDResult:
     k = max(m.n_imfs for m in members)
     imfs = np.zeros((k, len(f)))
     for m in members:
-        imfs[:m.n_imfs] += m.imfs
+        imfs[: m.n_imfs] += m.imfs
     imfs /= len(members)
     info = {
         "ensemble_size": len(members),
@@ -116,8 +126,15 @@ def combine_eemd(surface: Surface, signal, members) -> EMDResult:
     return result_with_quality(surface, f, imfs, info)
 
 
-def eemd(surface: Surface, signal, options: EMDOptions | dict | None = None, *,
-         ensemble: EnsembleOptions | dict | None = None, backend: str | None = None, **overrides) -> EMDResult:
+def eemd(
+    surface: Surface,
+    signal,
+    options: EMDOptions | dict | None = None,
+    *,
+    ensemble: EnsembleOptions | dict | None = None,
+    backend: str | None = None,
+    **overrides,
+) -> EMDResult:
     """Ensemble EMD (Wu & Huang 2009), the remedy for mode mixing.
 
     Runs :func:`eemd_member` for members ``0 .. ensemble_size − 1`` and

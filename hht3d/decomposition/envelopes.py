@@ -46,6 +46,7 @@ normal derivative at the boundary: on a strip or cylinder a biharmonic
 envelope is the *clamped* cubic spline through the extrema, the surface
 analogue of the mirrored end extrema of 1-D EMD codes.
 """
+
 from __future__ import annotations
 
 import math
@@ -154,8 +155,9 @@ def envelope_energies(surface: Surface) -> _EnvelopeEnergies:
     return energies
 
 
-def envelope_operator(surface: Surface, options: EMDOptions | dict | None = None, *, spacing: float | None = None,
-                      **overrides) -> sp.csr_matrix:
+def envelope_operator(
+    surface: Surface, options: EMDOptions | dict | None = None, *, spacing: float | None = None, **overrides
+) -> sp.csr_matrix:
     """The energy matrix ``Q`` of the envelope interpolation (Eqs. 8–11).
 
     ``Q = L M⁻¹ L`` for ``envelope="biharmonic"`` (thin-plate energy, the
@@ -219,8 +221,15 @@ class EnvelopeSolver:
         return factor.solve(rhs)
 
 
-def envelope_interpolation(surface: Surface, values, constrained, options: EMDOptions | dict | None = None, *,
-                           backend: str | None = None, **overrides) -> np.ndarray:
+def envelope_interpolation(
+    surface: Surface,
+    values,
+    constrained,
+    options: EMDOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    **overrides,
+) -> np.ndarray:
     """Interpolate ``values`` from the ``constrained`` vertices (Eq. 11).
 
     Solves ``min gᵀQg`` subject to ``g_C = values_C`` with ``Q`` from
@@ -251,13 +260,16 @@ def envelope_interpolation(surface: Surface, values, constrained, options: EMDOp
     c = np.asarray(constrained)
     if c.dtype == bool and c.shape != f.shape:
         raise InputError(f"constrained mask has shape {c.shape}; expected {f.shape}")
-    if c.dtype != bool and (c.size and (not np.issubdtype(c.dtype, np.integer)
-                                        or c.min() < -len(f) or c.max() >= len(f))):
+    if c.dtype != bool and (
+        c.size and (not np.issubdtype(c.dtype, np.integer) or c.min() < -len(f) or c.max() >= len(f))
+    ):
         raise InputError(f"constrained indices must be integers in [0, {len(f)})")
     mask = np.zeros(len(f), dtype=bool)
     mask[c] = True
     covered = np.bincount(surface.component_labels[mask], minlength=surface.n_components) > 0
     if not covered.all():
-        raise InputError(f"{int((~covered).sum())} connected components of {surface.name} have no "
-                         "constrained vertex; their interpolant is undefined")
+        raise InputError(
+            f"{int((~covered).sum())} connected components of {surface.name} have no "
+            "constrained vertex; their interpolant is undefined"
+        )
     return EnvelopeSolver(surface, backend).solve(f, mask, start, extrema_spacing(surface, mask.sum()))

@@ -13,6 +13,7 @@ Examples
 >>> maxima.tolist()
 [12]
 """
+
 from __future__ import annotations
 
 import math
@@ -30,8 +31,9 @@ __all__ = ["local_extrema", "extrema_masks", "extrema_spacing", "TIE_RTOL"]
 TIE_RTOL = 1e-9
 
 
-def local_extrema(surface: Surface, f, options: EMDOptions | dict | None = None, *, tie_rtol: float = TIE_RTOL,
-                  **overrides) -> tuple[np.ndarray, np.ndarray]:
+def local_extrema(
+    surface: Surface, f, options: EMDOptions | dict | None = None, *, tie_rtol: float = TIE_RTOL, **overrides
+) -> tuple[np.ndarray, np.ndarray]:
     """Indices of the local maxima and minima of a per-vertex signal.
 
     Parameters
@@ -73,8 +75,9 @@ def local_extrema(surface: Surface, f, options: EMDOptions | dict | None = None,
     return np.flatnonzero(is_max), np.flatnonzero(is_min)
 
 
-def extrema_masks(surface: Surface, f: np.ndarray, options: EMDOptions,
-                  tie_rtol: float = TIE_RTOL) -> tuple[np.ndarray, np.ndarray]:
+def extrema_masks(
+    surface: Surface, f: np.ndarray, options: EMDOptions, tie_rtol: float = TIE_RTOL
+) -> tuple[np.ndarray, np.ndarray]:
     """Boolean maximum and minimum masks of the ``extrema``, ``ring`` and ``ratio`` of ``options``
     (see :func:`local_extrema`)."""
     ring, ratio = (1, 1.0) if options.extrema == "strict" else (options.ring, options.ratio)

@@ -19,6 +19,7 @@ Examples
 >>> dataclasses.replace(PAPER_OPTIONS, max_imfs=3).envelope
 'biharmonic'
 """
+
 from __future__ import annotations
 
 import math
@@ -26,8 +27,18 @@ from dataclasses import dataclass
 
 from ..records import Record, option
 
-__all__ = ["EMDOptions", "EnsembleOptions", "EMD_DEFAULTS", "ENSEMBLE_DEFAULTS", "PAPER_OPTIONS",
-           "STOPPING_RULES", "ENVELOPES", "EXTREMA_RULES", "GUARD_TENSIONS", "start_tension"]
+__all__ = [
+    "EMDOptions",
+    "EnsembleOptions",
+    "EMD_DEFAULTS",
+    "ENSEMBLE_DEFAULTS",
+    "PAPER_OPTIONS",
+    "STOPPING_RULES",
+    "ENVELOPES",
+    "EXTREMA_RULES",
+    "GUARD_TENSIONS",
+    "start_tension",
+]
 
 #: Sifting stopping rules.
 STOPPING_RULES = ("sd", "rfg", "s_number", "fixed")
@@ -82,23 +93,41 @@ class EMDOptions(Record):
     s_number: int = option(4, "S-number: unchanged extrema counts in a row", minimum=1, maximum=100)
     fixed_sifts: int = option(10, "sifts per IMF with stopping: fixed", minimum=1, maximum=MAX_SIFTS)
     max_sifts: int = option(50, "cap on sifts per IMF", minimum=1, maximum=MAX_SIFTS)
-    envelope: str = option("tension", "envelope interpolant: thin plate in tension, the paper's thin plate "
-                           "(Eqs. 8, 11) or membrane", choices=ENVELOPES)
-    tension: float = option(3.0, "tension of the envelope, relative to the extrema spacing", minimum=0,
-                            maximum=MAX_TENSION)
+    envelope: str = option(
+        "tension",
+        "envelope interpolant: thin plate in tension, the paper's thin plate (Eqs. 8, 11) or membrane",
+        choices=ENVELOPES,
+    )
+    tension: float = option(
+        3.0, "tension of the envelope, relative to the extrema spacing", minimum=0, maximum=MAX_TENSION
+    )
     cancellation_tolerance: float | None = option(
-        0.05, "largest energy increase one IMF may cause before more tension is tried (null: no guard)",
-        minimum=0, maximum=1, nullable=True)
+        0.05,
+        "largest energy increase one IMF may cause before more tension is tried (null: no guard)",
+        minimum=0,
+        maximum=1,
+        nullable=True,
+    )
     mean_correction: float | None = option(
-        0.6, "move each IMF's part slower than this many of its wavelengths to the residue (null: off)",
-        minimum=0, maximum=10, nullable=True)
-    extrema: str = option("strict", "extremum rule: above the whole 1-ring, or above ratio of the ring-ring (Sec. 5.2)", choices=EXTREMA_RULES)
+        0.6,
+        "move each IMF's part slower than this many of its wavelengths to the residue (null: off)",
+        minimum=0,
+        maximum=10,
+        nullable=True,
+    )
+    extrema: str = option(
+        "strict",
+        "extremum rule: above the whole 1-ring, or above ratio of the ring-ring (Sec. 5.2)",
+        choices=EXTREMA_RULES,
+    )
     ring: int = option(2, "neighbourhood in edges of the relaxed extremum rule", minimum=1, maximum=MAX_RING)
-    ratio: float = option(0.8, "fraction of the neighbourhood a relaxed extremum exceeds", minimum=0.5, maximum=1, open_minimum=True)
-    boundary_extrema: bool = option(False, "let open-boundary vertices be extrema (the paper's rule; a trend "
-                                    "then enters the IMFs)")
-    energy_threshold: float = option(1e-8, "stop when the residue keeps less of the energy", minimum=0,
-                                     maximum=1)
+    ratio: float = option(
+        0.8, "fraction of the neighbourhood a relaxed extremum exceeds", minimum=0.5, maximum=1, open_minimum=True
+    )
+    boundary_extrema: bool = option(
+        False, "let open-boundary vertices be extrema (the paper's rule; a trend then enters the IMFs)"
+    )
+    energy_threshold: float = option(1e-8, "stop when the residue keeps less of the energy", minimum=0, maximum=1)
 
     @property
     def tensions(self) -> tuple[float, ...]:
@@ -116,8 +145,7 @@ class EnsembleOptions(Record):
     label = "EEMD"
 
     ensemble_size: int = option(100, "EEMD members", minimum=1, maximum=MAX_ENSEMBLE)
-    noise_std: float = option(0.2, "EEMD noise, relative to the signal's standard deviation", minimum=0,
-                              maximum=10)
+    noise_std: float = option(0.2, "EEMD noise, relative to the signal's standard deviation", minimum=0, maximum=10)
     seed: int = option(0, "EEMD noise seed", minimum=0, maximum=MAX_SEED)
 
 
@@ -126,5 +154,6 @@ EMD_DEFAULTS = EMDOptions()
 #: The defaults of :func:`~hht3d.decomposition.eemd`'s ensemble.
 ENSEMBLE_DEFAULTS = EnsembleOptions()
 #: The paper's EMD (Sec. 4.1): thin-plate envelopes, no cancellation guard, no local-mean correction.
-PAPER_OPTIONS = EMDOptions(envelope="biharmonic", cancellation_tolerance=None, mean_correction=None,
-                           boundary_extrema=True)
+PAPER_OPTIONS = EMDOptions(
+    envelope="biharmonic", cancellation_tolerance=None, mean_correction=None, boundary_extrema=True
+)

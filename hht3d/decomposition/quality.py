@@ -24,6 +24,7 @@ each connected component, ``f_k`` the IMFs and ``r`` the residue,
 documented limit into warnings that name the likely cause and the option to
 try.  :class:`QualityWarning` is the warning category the core emits.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -126,17 +127,24 @@ class Quality:
     def summary(self) -> str:
         """One line: ``energy ratio 1.12, IO -0.06 (+0.03 leaking, -0.09 cancelling), spike 3.1``
         plus ``; WARNING: ...``."""
-        text = (f"energy ratio {self.energy_ratio:.3g}, IO {self.orthogonality_index:.3g} "
-                f"({self.io_leaking:+.2g} leaking, {self.io_cancelling:+.2g} cancelling), "
-                f"spike {self.signal_spike:.3g}")
+        text = (
+            f"energy ratio {self.energy_ratio:.3g}, IO {self.orthogonality_index:.3g} "
+            f"({self.io_leaking:+.2g} leaking, {self.io_cancelling:+.2g} cancelling), "
+            f"spike {self.signal_spike:.3g}"
+        )
         return text + "".join(f"; WARNING: {w}" for w in self.warnings)
 
     def as_dict(self) -> dict:
         """Plain numbers and strings, for JSON summaries."""
-        return {"energy_ratio": self.energy_ratio, "orthogonality_index": self.orthogonality_index,
-                "io_leaking": self.io_leaking, "io_cancelling": self.io_cancelling,
-                "energy_share": [float(x) for x in self.energy_share], "signal_spike": self.signal_spike,
-                "warnings": list(self.warnings)}
+        return {
+            "energy_ratio": self.energy_ratio,
+            "orthogonality_index": self.orthogonality_index,
+            "io_leaking": self.io_leaking,
+            "io_cancelling": self.io_cancelling,
+            "energy_share": [float(x) for x in self.energy_share],
+            "signal_spike": self.signal_spike,
+            "warnings": list(self.warnings),
+        }
 
 
 def _spike(s: np.ndarray) -> float:
@@ -193,15 +201,21 @@ def decomposition_quality(surface: Surface, signal, imfs, residue) -> Quality:
 def _warnings(ratio: float, io: float, spike: float) -> tuple[str, ...]:
     found = []
     if ratio > ENERGY_RATIO_LIMIT or io < ORTHOGONALITY_LIMIT:
-        found.append(f"the IMFs cancel each other (energy ratio {ratio:.3g} > {ENERGY_RATIO_LIMIT}, "
-                     f"or IO {io:.3g} < {ORTHOGONALITY_LIMIT}): envelopes overshoot between sparse "
-                     "extrema; keep the default envelope and cancellation guard, or try EEMD "
-                     "(ensemble_size) or a higher emd option tension")
+        found.append(
+            f"the IMFs cancel each other (energy ratio {ratio:.3g} > {ENERGY_RATIO_LIMIT}, "
+            f"or IO {io:.3g} < {ORTHOGONALITY_LIMIT}): envelopes overshoot between sparse "
+            "extrema; keep the default envelope and cancellation guard, or try EEMD "
+            "(ensemble_size) or a higher emd option tension"
+        )
     if io > LEAKAGE_LIMIT:
-        found.append(f"neighbouring IMFs share content (IO {io:.3g} > {LEAKAGE_LIMIT}): a component is split "
-                     "over several IMFs; read adjacent IMFs together, or try EEMD (ensemble_size)")
+        found.append(
+            f"neighbouring IMFs share content (IO {io:.3g} > {LEAKAGE_LIMIT}): a component is split "
+            "over several IMFs; read adjacent IMFs together, or try EEMD (ensemble_size)"
+        )
     if spike > SPIKE_LIMIT:
-        found.append(f"the signal spikes to {spike:.3g}x its 99th percentile: likely tiny-area, needle "
-                     "or cap triangles; use the curvature signals with their default min_area, or "
-                     "clean or remesh the surface")
+        found.append(
+            f"the signal spikes to {spike:.3g}x its 99th percentile: likely tiny-area, needle "
+            "or cap triangles; use the curvature signals with their default min_area, or "
+            "clean or remesh the surface"
+        )
     return tuple(found)

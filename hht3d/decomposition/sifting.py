@@ -53,6 +53,7 @@ orthogonal to the rest brought IO within ±0.12, but by adding cancelling
 cross terms, and it recovered known components worse
 (``benchmarks/results/design_notes.md``, "Leakage").
 """
+
 from __future__ import annotations
 
 import math
@@ -138,8 +139,10 @@ class Sifter:
         if c is None or not stiffness > 0:
             return imf
         e = self.solver.energies
-        spacing = max(extrema_spacing(self.surface, info["n_maxima"] + info["n_minima"]),
-                      np.pi * np.sqrt(float(np.dot(self.mass * imf, imf)) / stiffness))
+        spacing = max(
+            extrema_spacing(self.surface, info["n_maxima"] + info["n_minima"]),
+            np.pi * np.sqrt(float(np.dot(self.mass * imf, imf)) / stiffness),
+        )
         data = (c * spacing) ** 4 * e.smoothing
         data[e.diagonal] += self.mass
         try:
@@ -230,8 +233,7 @@ class Sifter:
                     break
             candidate = h - mean
             candidate_step = (self.energy(candidate) + self.energy(residue - candidate)) / reference
-            if o.cancellation_tolerance is not None and sifts > 0 \
-                    and candidate_step > 1 + o.cancellation_tolerance:
+            if o.cancellation_tolerance is not None and sifts > 0 and candidate_step > 1 + o.cancellation_tolerance:
                 stop = "guard"
                 break
             if o.stopping == "sd":  # Cauchy criterion: |h_k-1 - h_k|² / |h_k-1|²

@@ -6,10 +6,19 @@
 * :mod:`~hht3d.execution.progress` — progress bars and plain progress lines;
 * :mod:`~hht3d.execution.cluster` — gathering results from a cluster that may lose its workers.
 """
+
 from .cluster import ClusterLost
 from .progress import PROGRESS_INTERVAL, ProgressLines
 from .schedulers import MAX_WORKERS, SCHEDULERS, compute, open_client
 from .workers import worker_count
 
-__all__ = ["SCHEDULERS", "MAX_WORKERS", "compute", "open_client", "worker_count", "PROGRESS_INTERVAL",
-           "ProgressLines", "ClusterLost"]
+__all__ = [
+    "SCHEDULERS",
+    "MAX_WORKERS",
+    "compute",
+    "open_client",
+    "worker_count",
+    "PROGRESS_INTERVAL",
+    "ProgressLines",
+    "ClusterLost",
+]

@@ -12,6 +12,7 @@ time:
   ``DASK_HHT3D__NO_WORKERS_TIMEOUT``);
 * a task killed its worker more often than allowed.
 """
+
 from __future__ import annotations
 
 import asyncio
@@ -56,8 +57,10 @@ def gather_bounded(client, futures, where: str) -> list:
         except CancelledError:
             raise ClusterLost(f"lost the connection to the Dask scheduler at {where}") from None
         except KilledWorker as exc:
-            raise ClusterLost(f"a task ended its Dask worker at {where} too often "
-                              f"(distributed.scheduler.allowed-failures): {one_line(exc)}") from None
+            raise ClusterLost(
+                f"a task ended its Dask worker at {where} too often "
+                f"(distributed.scheduler.allowed-failures): {one_line(exc)}"
+            ) from None
         if client.status != "running" or any(f.status == "cancelled" for f in futures):
             raise ClusterLost(f"lost the connection to the Dask scheduler at {where}")
         if client.scheduler_info().get("workers"):
@@ -65,5 +68,6 @@ def gather_bounded(client, futures, where: str) -> list:
         elif alone_since is None:
             alone_since = time.monotonic()
         elif time.monotonic() - alone_since > patience:
-            raise ClusterLost(f"the Dask cluster at {where} has had no workers for {patience:.0f} s "
-                              "(hht3d.no-workers-timeout)")
+            raise ClusterLost(
+                f"the Dask cluster at {where} has had no workers for {patience:.0f} s (hht3d.no-workers-timeout)"
+            )

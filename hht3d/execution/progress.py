@@ -4,6 +4,7 @@ The plain lines are records of the ``hht3d.progress`` logger (:mod:`hht3d.logs`)
 :func:`hht3d.execution.compute` shows them on stderr unless the application has
 configured logging.
 """
+
 from __future__ import annotations
 
 import sys

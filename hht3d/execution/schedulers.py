@@ -15,6 +15,7 @@ graph runs unchanged on
 Progress goes to stderr (:mod:`hht3d.execution.progress`); local workers are
 set up by :mod:`hht3d.execution.workers`.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -58,8 +59,13 @@ def open_client(workers: int | None = None, address: str | None = None, *, annou
         with sigint_ignored_by_children():
             # Only critical logs: a worker stopped mid-heartbeat (SIGTERM, Ctrl-C) logs an ERROR with a
             # traceback; task errors reach the client and the summary rows anyway.
-            cluster = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1,
-                                   processes=True, dashboard_address=":0", silence_logs=logging.CRITICAL)
+            cluster = LocalCluster(
+                n_workers=workers or os.cpu_count(),
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=":0",
+                silence_logs=logging.CRITICAL,
+            )
         client = Client(cluster)
     try:
         if announce:
@@ -71,8 +77,14 @@ def open_client(workers: int | None = None, address: str | None = None, *, annou
             cluster.close()
 
 
-def compute(*graphs, scheduler: str = "threads", workers: int | None = None, address: str | None = None,
-            progress: bool = True, client=None):
+def compute(
+    *graphs,
+    scheduler: str = "threads",
+    workers: int | None = None,
+    address: str | None = None,
+    progress: bool = True,
+    client=None,
+):
     """Compute Dask objects and return their values (a tuple, like ``dask.compute``).
 
     Parameters
@@ -120,21 +132,19 @@ def _process_pool(workers: int | None):
     """A pool of ``workers`` processes (default one per core) with BLAS limited to one thread, all
     started at once with SIGINT ignored (so that Ctrl-C, sent to the whole process group, reaches the
     main process only, even while a worker is still starting)."""
-    from concurrent.futures import ProcessPoolExecutor
     import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
 
     count = workers or os.cpu_count() or 1
     context = multiprocessing.get_context(dask.config.get("multiprocessing.context", "spawn"))
     with sigint_ignored_by_children():
-        pool = ProcessPoolExecutor(count, mp_context=context, initializer=limit_blas_threads,
-                                   initargs=(os.getpid(),))
+        pool = ProcessPoolExecutor(count, mp_context=context, initializer=limit_blas_threads, initargs=(os.getpid(),))
         for _ in range(count):  # each submission finding no idle worker starts one
             pool.submit(os.getpid)
     try:
         yield pool
     finally:
         pool.shutdown(wait=False, cancel_futures=True)
-
 
 
 def _compute_distributed(client, graphs, progress: bool, where: str = "the given client"):

@@ -5,6 +5,7 @@ Process-pool workers run their BLAS, OpenMP and MKL with one thread each
 cores, and ignore SIGINT: Ctrl-C reaches the whole process group, and the
 main process stops them (:mod:`hht3d.stopping`).
 """
+
 from __future__ import annotations
 
 import ast
@@ -15,8 +16,14 @@ import sys
 
 import dask
 
-__all__ = ["SINGLE_THREAD_ENV", "worker_count", "limit_blas_threads", "end_with_parent", "sigint_ignored_by_children",
-           "check_main_guard"]
+__all__ = [
+    "SINGLE_THREAD_ENV",
+    "worker_count",
+    "limit_blas_threads",
+    "end_with_parent",
+    "sigint_ignored_by_children",
+    "check_main_guard",
+]
 
 #: Environment that keeps each worker process's BLAS/OpenMP/MKL to one thread.
 SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
@@ -116,8 +123,9 @@ def check_main_guard(what: str) -> None:
     if spec == "__main__" or spec.endswith(".__main__"):  # python -m PACKAGE: spawned workers skip it
         return
     frame = sys._getframe(1)
-    while frame is not None and not (frame.f_globals is getattr(main, "__dict__", None)
-                                     and frame.f_code.co_name == "<module>"):
+    while frame is not None and not (
+        frame.f_globals is getattr(main, "__dict__", None) and frame.f_code.co_name == "<module>"
+    ):
         frame = frame.f_back
     if frame is None or path is None:  # not called from a script's top level (a function, a notebook, -c)
         return
@@ -126,18 +134,22 @@ def check_main_guard(what: str) -> None:
     except (OSError, SyntaxError, ValueError):
         return
     line = frame.f_lineno
-    guarded = any(isinstance(node, ast.If) and _is_main_test(node.test)
-                  and node.body[0].lineno <= line <= (node.body[-1].end_lineno or line)
-                  for node in ast.walk(tree))
+    guarded = any(
+        isinstance(node, ast.If)
+        and _is_main_test(node.test)
+        and node.body[0].lineno <= line <= (node.body[-1].end_lineno or line)
+        for node in ast.walk(tree)
+    )
     if not guarded:
-        raise InputError(f"{path}:{line}: the {what} starts worker processes, and each imports this script "
-                         "again: put the call under `if __name__ == \"__main__\":`")
+        raise InputError(
+            f"{path}:{line}: the {what} starts worker processes, and each imports this script "
+            'again: put the call under `if __name__ == "__main__":`'
+        )
 
 
 def _is_main_test(test) -> bool:
     """Whether ``test`` is ``__name__ == "__main__"`` (either way round)."""
-    if not (isinstance(test, ast.Compare) and len(test.ops) == 1
-            and isinstance(test.ops[0], ast.Eq)):
+    if not (isinstance(test, ast.Compare) and len(test.ops) == 1 and isinstance(test.ops[0], ast.Eq)):
         return False
     sides = [test.left, *test.comparators]
     names = {s.id for s in sides if isinstance(s, ast.Name)}

@@ -1,10 +1,24 @@
 """Geometry: the Surface value, mesh cleaning, discrete operators, topology and signals on surfaces."""
+
+from . import cleaning, operators, topology
 from .normals import FLAT, estimate_point_normals, principal_axes
-from .surface import MIN_VERTICES, LAPLACIANS, MAX_NEIGHBORS, Surface, SurfaceOptions
-from . import cleaning
-from . import operators
-from . import topology
-from .signals import (MIN_AREA_FRACTION, CLUSTER_AREA_FRACTION, ROUND_OFF_ULPS, NEEDLE_ANGLE, CAP_ANGLE,
-                      unreliable_vertices, mean_curvature, gaussian_curvature, centroid_distance, coordinate,
-                      luminance, stored, check_signal_path, load_signal, SIGNALS, signal)
-from .validation import check_surface, check_signal, as_signals, as_imfs
+from .signals import (
+    CAP_ANGLE,
+    CLUSTER_AREA_FRACTION,
+    MIN_AREA_FRACTION,
+    NEEDLE_ANGLE,
+    ROUND_OFF_ULPS,
+    SIGNALS,
+    centroid_distance,
+    check_signal_path,
+    coordinate,
+    gaussian_curvature,
+    load_signal,
+    luminance,
+    mean_curvature,
+    signal,
+    stored,
+    unreliable_vertices,
+)
+from .surface import LAPLACIANS, MAX_NEIGHBORS, MIN_VERTICES, Surface, SurfaceOptions
+from .validation import as_imfs, as_signals, check_signal, check_surface

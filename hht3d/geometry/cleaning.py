@@ -4,6 +4,7 @@ Cleaning welds vertices at identical positions, drops degenerate and
 duplicated faces and removes unreferenced vertices.  It returns index maps so
 per-vertex data (colours, stored scalars, user signals) can follow.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -39,17 +40,23 @@ class CleanReport:
 
     @property
     def changed(self) -> bool:
-        return bool(self.merged_duplicate_vertices or self.removed_unreferenced_vertices
-                    or self.removed_degenerate_faces or self.removed_duplicate_faces)
+        return bool(
+            self.merged_duplicate_vertices
+            or self.removed_unreferenced_vertices
+            or self.removed_degenerate_faces
+            or self.removed_duplicate_faces
+        )
 
     def summary(self) -> str:
         """One line for logs and the CLI."""
         if not self.changed:
             return "clean: nothing to change"
-        return (f"clean: merged {self.merged_duplicate_vertices} duplicate vertices, "
-                f"removed {self.removed_unreferenced_vertices} unreferenced vertices, "
-                f"{self.removed_degenerate_faces} degenerate faces, "
-                f"{self.removed_duplicate_faces} duplicate faces")
+        return (
+            f"clean: merged {self.merged_duplicate_vertices} duplicate vertices, "
+            f"removed {self.removed_unreferenced_vertices} unreferenced vertices, "
+            f"{self.removed_degenerate_faces} degenerate faces, "
+            f"{self.removed_duplicate_faces} duplicate faces"
+        )
 
 
 def _weld(vertices: np.ndarray):
@@ -102,6 +109,7 @@ def clean_points(points: np.ndarray):
     kept = np.unique(representative)
     old_to_kept = np.full(len(points), -1, dtype=np.int64)
     old_to_kept[kept] = np.arange(len(kept))
-    report = CleanReport(merged_duplicate_vertices=int(merged), kept_vertices=kept,
-                         original_to_new=old_to_kept[representative])
+    report = CleanReport(
+        merged_duplicate_vertices=int(merged), kept_vertices=kept, original_to_new=old_to_kept[representative]
+    )
     return points[kept], report

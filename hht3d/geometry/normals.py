@@ -1,5 +1,6 @@
 """Normals and principal axes of point clouds (meshes get their normals from
 :func:`hht3d.geometry.operators.vertex_normals`)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -41,8 +42,10 @@ def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
             pcd.orient_normals_consistent_tangent_plane(k)
         except RuntimeError as exc:
             reason = one_line(str(exc).split("\n", 1)[0])
-            raise InputError(f"cannot orient the point normals ({reason}); the cloud may be degenerate: "
-                             "check it with `hht3d info`, or store normals (nx, ny, nz) in the file") from None
+            raise InputError(
+                f"cannot orient the point normals ({reason}); the cloud may be degenerate: "
+                "check it with `hht3d info`, or store normals (nx, ny, nz) in the file"
+            ) from None
         normals = np.asarray(pcd.normals, dtype=np.float64)
     if np.einsum("ij,ij->", normals, centered) < 0:
         normals = -normals
@@ -53,6 +56,5 @@ def principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Singular values (descending) and principal axes of centred points; collinear points are an error."""
     _, spread, axes = np.linalg.svd(centered, full_matrices=False)
     if spread[1] <= FLAT * spread[0]:
-        raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two "
-                         "directions")
+        raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two directions")
     return spread, axes

@@ -15,6 +15,7 @@ Conventions
   length ``3 n``; ``(G @ f).reshape(n, 3)`` holds one tangent vector per
   vertex.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -89,8 +90,9 @@ def cotan_laplacian(vertices: np.ndarray, faces: np.ndarray) -> sp.csr_matrix:
     i = faces[:, [1, 2, 0]].ravel()
     j = faces[:, [2, 0, 1]].ravel()
     w = 0.5 * cot.ravel()
-    off = sp.coo_matrix((np.concatenate([-w, -w]), (np.concatenate([i, j]), np.concatenate([j, i]))),
-                        shape=(n, n)).tocsr()
+    off = sp.coo_matrix(
+        (np.concatenate([-w, -w]), (np.concatenate([i, j]), np.concatenate([j, i]))), shape=(n, n)
+    ).tocsr()
     diag = -np.asarray(off.sum(axis=1)).ravel()
     lap = (off + sp.diags(diag)).tocsr()
     lap.sum_duplicates()
@@ -115,9 +117,7 @@ def mixed_voronoi_mass(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     voronoi = (sq[:, [1, 2, 0]] * cot[:, [1, 2, 0]] + sq[:, [2, 0, 1]] * cot[:, [2, 0, 1]]) / 8.0
     obtuse_corner = cot < 0
     obtuse_face = obtuse_corner.any(axis=1)
-    share = np.where(obtuse_face[:, None],
-                     np.where(obtuse_corner, area[:, None] / 2, area[:, None] / 4),
-                     voronoi)
+    share = np.where(obtuse_face[:, None], np.where(obtuse_corner, area[:, None] / 2, area[:, None] / 4), voronoi)
     mass = np.zeros(n)
     for k in range(3):
         np.add.at(mass, faces[:, k], share[:, k])
@@ -128,8 +128,9 @@ def robust_mesh_operators(vertices: np.ndarray, faces: np.ndarray, mollify_facto
     """``(L, mass_diagonal)`` from ``robust_laplacian.mesh_laplacian`` (intrinsic Delaunay)."""
     import robust_laplacian
 
-    lap, mass = robust_laplacian.mesh_laplacian(np.ascontiguousarray(vertices),
-                                                np.ascontiguousarray(faces), mollify_factor)
+    lap, mass = robust_laplacian.mesh_laplacian(
+        np.ascontiguousarray(vertices), np.ascontiguousarray(faces), mollify_factor
+    )
     return sp.csr_matrix(lap), np.asarray(mass.diagonal(), dtype=np.float64)
 
 
@@ -137,8 +138,7 @@ def point_cloud_operators(points: np.ndarray, n_neighbors: int = 30, mollify_fac
     """``(L, mass_diagonal)`` from ``robust_laplacian.point_cloud_laplacian``."""
     import robust_laplacian
 
-    lap, mass = robust_laplacian.point_cloud_laplacian(np.ascontiguousarray(points),
-                                                       mollify_factor, n_neighbors)
+    lap, mass = robust_laplacian.point_cloud_laplacian(np.ascontiguousarray(points), mollify_factor, n_neighbors)
     return sp.csr_matrix(lap), np.asarray(mass.diagonal(), dtype=np.float64)
 
 
@@ -184,8 +184,9 @@ def k_ring(adj: sp.csr_matrix, k: int) -> sp.csr_matrix:
 GRADIENT_BLOCK = 1 << 16
 
 
-def tangent_gradient(vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matrix,
-                     block: int = GRADIENT_BLOCK) -> sp.csr_matrix:
+def tangent_gradient(
+    vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matrix, block: int = GRADIENT_BLOCK
+) -> sp.csr_matrix:
     """Tangent-plane least-squares gradient of Eq. (17) as a sparse ``(3n, n)`` operator.
 
     At vertex ``i`` with unit normal ``n_i`` and neighbours ``j``, ``P_ij`` is
@@ -233,8 +234,8 @@ def tangent_gradient(vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matr
 
 def _gradient_coefficients(vertices, normals, adj: sp.csr_matrix, first: int, last: int) -> np.ndarray:
     """``(P^T P)^+ P_ij / |v_j - v_i|`` for the edges leaving vertices ``first..last-1``."""
-    rows = np.repeat(np.arange(first, last), np.diff(adj.indptr[first:last + 1]))
-    cols = adj.indices[adj.indptr[first]:adj.indptr[last]]
+    rows = np.repeat(np.arange(first, last), np.diff(adj.indptr[first : last + 1]))
+    cols = adj.indices[adj.indptr[first] : adj.indptr[last]]
     d = vertices[cols] - vertices[rows]
     length = np.linalg.norm(d, axis=1)
     nrm = normals[rows]
@@ -264,7 +265,7 @@ def face_gradient(vertices: np.ndarray, faces: np.ndarray) -> sp.csr_matrix:
     unit = np.divide(fn, dbl_area[:, None], out=np.zeros_like(fn), where=dbl_area[:, None] > 0)
     e = _edges(vertices, faces)
     coef = np.cross(unit[:, None, :], e) / np.where(dbl_area > 0, dbl_area, 1.0)[:, None, None]
-    rows = (3 * np.arange(f)[:, None, None] + np.arange(3)[None, None, :])  # (f,1,3)
+    rows = 3 * np.arange(f)[:, None, None] + np.arange(3)[None, None, :]  # (f,1,3)
     rows = np.broadcast_to(rows, (f, 3, 3))
     cols = np.broadcast_to(faces[:, :, None], (f, 3, 3))
     grad = sp.coo_matrix((coef.ravel(), (rows.ravel(), cols.ravel())), shape=(3 * f, n)).tocsr()
@@ -309,8 +310,9 @@ def corner_angles(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return np.arctan2(np.linalg.norm(np.cross(a, b), axis=2), np.einsum("fki,fki->fk", a, b))
 
 
-def grown_regions(adj: sp.csr_matrix, mass: np.ndarray, seeds: np.ndarray, min_area,
-                  max_rings: int = 8) -> sp.csr_matrix:
+def grown_regions(
+    adj: sp.csr_matrix, mass: np.ndarray, seeds: np.ndarray, min_area, max_rings: int = 8
+) -> sp.csr_matrix:
     """Vertex regions around ``seeds``, grown ring by ring until they hold ``min_area``.
 
     Each region starts as the closed 1-ring of its seed and gains one ring

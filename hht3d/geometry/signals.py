@@ -4,6 +4,7 @@ Every function returns a float64 array of shape ``(n,)`` for a
 :class:`~hht3d.geometry.surface.Surface`.  :func:`signal` selects one by name, which
 is how the CLI and pipelines refer to them.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -11,8 +12,8 @@ from pathlib import Path
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
-from . import operators as ops
 from ..errors import InputError
+from . import operators as ops
 from .surface import Surface
 from .validation import check_signal
 
@@ -196,10 +197,15 @@ def gaussian_curvature(surface: Surface, *, min_area: float = MIN_AREA_FRACTION)
 
 
 def _fraction(min_area) -> float:
-    if isinstance(min_area, bool) or not isinstance(min_area, (int, float, np.number)) \
-            or not np.isfinite(min_area) or not 0 <= min_area <= 100:
-        raise InputError(f"min_area must be a number in [0, 100] (a fraction of the median vertex area), "
-                         f"got {min_area!r}")
+    if (
+        isinstance(min_area, bool)
+        or not isinstance(min_area, (int, float, np.number))
+        or not np.isfinite(min_area)
+        or not 0 <= min_area <= 100
+    ):
+        raise InputError(
+            f"min_area must be a number in [0, 100] (a fraction of the median vertex area), got {min_area!r}"
+        )
     return float(min_area)
 
 
@@ -228,8 +234,9 @@ def luminance(surface: Surface) -> np.ndarray:
 def stored(surface: Surface, name: str) -> np.ndarray:
     """A per-vertex scalar stored in the input file (e.g. a PLY vertex property)."""
     if name not in surface.attributes:
-        raise InputError(f"{surface.name}: no stored vertex attribute {name!r}; "
-                         f"available: {sorted(surface.attributes) or 'none'}")
+        raise InputError(
+            f"{surface.name}: no stored vertex attribute {name!r}; available: {sorted(surface.attributes) or 'none'}"
+        )
     return check_signal(surface, surface.attributes[name], f"attribute {name!r}")
 
 
@@ -237,8 +244,10 @@ def check_signal_path(path) -> Path:
     """``path`` if it names an existing ``.npy`` file; else an :class:`InputError` saying what it is."""
     path = Path(path)
     if path.suffix.lower() != ".npy":
-        raise InputError(f"{path}: a signal file must be a .npy file written by numpy.save(path, values), "
-                         f"not {path.suffix or 'a file without extension'}")
+        raise InputError(
+            f"{path}: a signal file must be a .npy file written by numpy.save(path, values), "
+            f"not {path.suffix or 'a file without extension'}"
+        )
     if not path.is_file():
         raise InputError(f"{path}: no such signal file" + (" (it is a folder)" if path.is_dir() else ""))
     return path
@@ -250,8 +259,10 @@ def load_signal(surface: Surface, path) -> np.ndarray:
     try:
         values = np.load(path, allow_pickle=False)
     except ValueError:  # numpy's message on object arrays recommends allow_pickle; we never unpickle
-        raise InputError(f"{path}: not a .npy file of numbers (it holds Python objects or is not a .npy "
-                         "file); save a float array with numpy.save") from None
+        raise InputError(
+            f"{path}: not a .npy file of numbers (it holds Python objects or is not a .npy "
+            "file); save a float array with numpy.save"
+        ) from None
     except OSError as exc:
         raise InputError(f"{path}: cannot read the signal ({exc.strerror or exc})") from None
     return check_signal(surface, values, f"signal {path}")
@@ -268,8 +279,7 @@ SIGNALS = {
 }
 
 
-def signal(surface: Surface, kind: str, *, attribute: str | None = None, path=None,
-           values=None) -> np.ndarray:
+def signal(surface: Surface, kind: str, *, attribute: str | None = None, path=None, values=None) -> np.ndarray:
     """Compute a signal by name.
 
     ``kind`` is one of :data:`SIGNALS`, or ``"stored"`` (with ``attribute``),

@@ -6,6 +6,7 @@ lazily (:mod:`hht3d.geometry.operators`), caching them in :attr:`Surface.cache`.
 cache is dropped on pickling, so a surface is cheap to send to another
 process, which rebuilds what it needs.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -13,11 +14,11 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..errors import InputError
+from ..records import Record, option
 from . import operators as ops
 from .cleaning import CleanReport, clean_mesh, clean_points
 from .normals import estimate_point_normals, principal_axes
-from ..errors import InputError
-from ..records import Record, option
 
 __all__ = ["Surface", "SurfaceOptions", "MIN_VERTICES", "LAPLACIANS", "MAX_NEIGHBORS"]
 
@@ -36,8 +37,9 @@ class SurfaceOptions(Record):
     label = "surface"
 
     laplacian: str = option("cotan", "mesh Laplacian (point clouds always use the robust one)", choices=LAPLACIANS)
-    n_neighbors: int = option(30, "neighbours of the point-cloud Laplacian and normals", minimum=3,
-                              maximum=MAX_NEIGHBORS)
+    n_neighbors: int = option(
+        30, "neighbours of the point-cloud Laplacian and normals", minimum=3, maximum=MAX_NEIGHBORS
+    )
 
 
 @dataclass(frozen=True)
@@ -73,9 +75,19 @@ class Surface:
         Set by the loaders when cleaning changed the input.
     """
 
-    def __init__(self, vertices, faces=None, *, normals=None, colors=None, attributes=None,
-                 laplacian: str = "cotan", n_neighbors: int = 30, name: str | None = None,
-                 clean_report: CleanReport | None = None):
+    def __init__(
+        self,
+        vertices,
+        faces=None,
+        *,
+        normals=None,
+        colors=None,
+        attributes=None,
+        laplacian: str = "cotan",
+        n_neighbors: int = 30,
+        name: str | None = None,
+        clean_report: CleanReport | None = None,
+    ):
         self.name = name or "surface"
         self.vertices = _as_vertices(vertices, self.name)
         n = len(self.vertices)
@@ -89,15 +101,15 @@ class Surface:
         self.laplacian = laplacian
         self.n_neighbors = int(n_neighbors)
         self.colors = None if colors is None else _as_per_vertex(colors, n, 3, "colors", self.name)
-        self.attributes = {str(k): _as_per_vertex(v, n, None, f"attribute {k!r}", self.name)
-                           for k, v in (attributes or {}).items()}
+        self.attributes = {
+            str(k): _as_per_vertex(v, n, None, f"attribute {k!r}", self.name) for k, v in (attributes or {}).items()
+        }
         self.clean_report = clean_report
         self.cache: dict = {}
         if normals is not None:
             normals = _as_per_vertex(normals, n, 3, "normals", self.name)
             length = np.linalg.norm(normals, axis=1, keepdims=True)
-            self.cache["normals"] = np.divide(normals, length, out=np.zeros_like(normals),
-                                              where=length > 0)
+            self.cache["normals"] = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
 
     # -- construction -----------------------------------------------------------------
     @classmethod
@@ -122,8 +134,9 @@ class Surface:
         normals = options.pop("normals", None)
         if normals is not None:
             normals = np.asarray(normals, dtype=np.float64)[kept]
-        return cls(vertices, faces, colors=colors, attributes=attributes, normals=normals,
-                   clean_report=report, **options)
+        return cls(
+            vertices, faces, colors=colors, attributes=attributes, normals=normals, clean_report=report, **options
+        )
 
     # -- pickling: operators and factorizations are rebuilt where needed ----------------
     def __getstate__(self):
@@ -180,8 +193,11 @@ class Surface:
                 lap = ops.cotan_laplacian(self.vertices, self.faces)
                 mass = ops.mixed_voronoi_mass(self.vertices, self.faces)
             if not np.all(mass > 0):
-                hint = ("load with clean=True to remove unreferenced vertices" if self.clean_report is None
-                        else "they are isolated or on zero-area faces only")
+                hint = (
+                    "load with clean=True to remove unreferenced vertices"
+                    if self.clean_report is None
+                    else "they are isolated or on zero-area faces only"
+                )
                 raise InputError(f"{self.name}: {int(np.sum(mass <= 0))} vertices have zero area; {hint}")
             return _Operators(sp.csr_matrix(lap, dtype=np.float64), mass)
 
@@ -205,8 +221,9 @@ class Surface:
     @property
     def adjacency(self) -> sp.csr_matrix:
         """Boolean 1-ring adjacency (mesh edges; for point clouds, the Laplacian's graph)."""
-        return self._cached("adjacency", lambda: ops.adjacency(
-            self.n_vertices, self.faces, None if self.is_mesh else self.stiffness))
+        return self._cached(
+            "adjacency", lambda: ops.adjacency(self.n_vertices, self.faces, None if self.is_mesh else self.stiffness)
+        )
 
     def ring(self, k: int = 1) -> sp.csr_matrix:
         """Boolean ``(n, n)`` matrix of the vertices within ``k`` edges, self excluded."""
@@ -242,8 +259,9 @@ class Surface:
         averaged to vertices with area weights (meshes only).
         """
         if kind == "lsq":
-            return self._cached("gradient:lsq", lambda: ops.tangent_gradient(
-                self.vertices, self.normals, self.adjacency))
+            return self._cached(
+                "gradient:lsq", lambda: ops.tangent_gradient(self.vertices, self.normals, self.adjacency)
+            )
         if kind == "fem":
             self._require_mesh("the FEM gradient")
             return self._cached("gradient:fem", lambda: ops.vertex_fem_gradient(self.vertices, self.faces))
@@ -262,8 +280,10 @@ class Surface:
 def _check_cloud(points: np.ndarray, n_neighbors: int, name: str) -> None:
     """What the point-cloud Laplacian needs: more points than neighbours, not all on a line."""
     if len(points) <= n_neighbors:
-        raise InputError(f"{name}: a point cloud of {len(points)} points cannot give each point "
-                         f"n_neighbors={n_neighbors} neighbours; lower n_neighbors below {len(points)}")
+        raise InputError(
+            f"{name}: a point cloud of {len(points)} points cannot give each point "
+            f"n_neighbors={n_neighbors} neighbours; lower n_neighbors below {len(points)}"
+        )
     try:
         principal_axes(points - points.mean(axis=0))
     except InputError as exc:
@@ -285,12 +305,16 @@ def _as_vertices(vertices, name: str) -> np.ndarray:
         raise InputError(f"{name}: {len(v)} vertices; a surface needs at least {MIN_VERTICES}")
     bad = ~np.isfinite(v).all(axis=1)
     if bad.any():
-        raise InputError(f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates "
-                         f"(first: vertex {int(np.flatnonzero(bad)[0])}); remove or repair them")
+        raise InputError(
+            f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates "
+            f"(first: vertex {int(np.flatnonzero(bad)[0])}); remove or repair them"
+        )
     largest = np.abs(v).max()
     if largest > MAX_COORDINATE:
-        raise InputError(f"{name}: coordinates reach {largest:.3g}; beyond {MAX_COORDINATE:.0e} areas and curvatures "
-                         "overflow float64: scale the surface down")
+        raise InputError(
+            f"{name}: coordinates reach {largest:.3g}; beyond {MAX_COORDINATE:.0e} areas and curvatures "
+            "overflow float64: scale the surface down"
+        )
     return v
 
 

@@ -1,4 +1,5 @@
 """Topological facts about a surface, for ``hht3d info`` and input checks."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -20,8 +21,9 @@ def _non_manifold_vertices(surface: Surface) -> int:
     """Vertices whose incident faces do not form one fan (Open3D's test)."""
     import open3d as o3d
 
-    mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(surface.vertices),
-                                      o3d.utility.Vector3iVector(surface.faces))
+    mesh = o3d.geometry.TriangleMesh(
+        o3d.utility.Vector3dVector(surface.vertices), o3d.utility.Vector3iVector(surface.faces)
+    )
     return len(mesh.get_non_manifold_vertices())
 
 
@@ -49,15 +51,17 @@ def describe(surface: Surface) -> dict:
         graph = sp.coo_matrix((np.ones(len(boundary)), (boundary[:, 0], boundary[:, 1])), shape=(n, n))
         labels = connected_components(graph, directed=False)[1]
         loops = len(np.unique(labels[np.unique(boundary)]))
-    info.update({
-        "faces": len(surface.faces),
-        "edges": len(edges),
-        "euler_characteristic": n - len(edges) + len(surface.faces),
-        "boundary_loops": loops,
-        "boundary_vertices": int(surface.boundary_vertices.sum()),
-        "non_manifold_edges": int(np.sum(counts > 2)),
-        "non_manifold_vertices": _non_manifold_vertices(surface),
-        "closed": bool(len(boundary) == 0),
-        "surface_area": float(surface.face_areas.sum()),
-    })
+    info.update(
+        {
+            "faces": len(surface.faces),
+            "edges": len(edges),
+            "euler_characteristic": n - len(edges) + len(surface.faces),
+            "boundary_loops": loops,
+            "boundary_vertices": int(surface.boundary_vertices.sum()),
+            "non_manifold_edges": int(np.sum(counts > 2)),
+            "non_manifold_vertices": _non_manifold_vertices(surface),
+            "closed": bool(len(boundary) == 0),
+            "surface_area": float(surface.face_areas.sum()),
+        }
+    )
     return info

@@ -8,6 +8,7 @@ these instead of writing their own; a new check belongs here when a second
 module needs it.  Scalar settings are checked by the option records that
 declare them (:mod:`hht3d.records`).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -42,8 +43,9 @@ def check_signal(surface: Surface, values, what: str = "signal") -> np.ndarray:
     length after cleaning says how to index the signal.
     """
     if np.iscomplexobj(values):
-        raise InputError(f"{what} is complex; pass a real signal, e.g. its real part (values.real) or its "
-                         "magnitude (abs(values))")
+        raise InputError(
+            f"{what} is complex; pass a real signal, e.g. its real part (values.real) or its magnitude (abs(values))"
+        )
     try:
         a = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError):
@@ -51,13 +53,16 @@ def check_signal(surface: Surface, values, what: str = "signal") -> np.ndarray:
     if a.ndim != 1 or len(a) != surface.n_vertices:
         hint = ""
         if surface.clean_report is not None and surface.clean_report.changed and a.ndim == 1:
-            hint = (f"; cleaning changed the vertex count ({surface.clean_report.summary()}): "
-                    "index it with surface.clean_report.kept_vertices or load with clean=False")
+            hint = (
+                f"; cleaning changed the vertex count ({surface.clean_report.summary()}): "
+                "index it with surface.clean_report.kept_vertices or load with clean=False"
+            )
         raise InputError(f"{what} has shape {a.shape}; {surface.name} has {surface.n_vertices} vertices{hint}")
     bad = ~np.isfinite(a)
     if bad.any():
-        raise InputError(f"{what} has {int(bad.sum())} NaN or infinite values "
-                         f"(first at vertex {int(np.flatnonzero(bad)[0])})")
+        raise InputError(
+            f"{what} has {int(bad.sum())} NaN or infinite values (first at vertex {int(np.flatnonzero(bad)[0])})"
+        )
     return a
 
 
@@ -69,8 +74,7 @@ def as_signals(surface: Surface, f, what: str = "signal") -> tuple[np.ndarray, b
         raise InputError(f"{what} is not numeric") from None
     n = surface.n_vertices
     if a.ndim not in (1, 2) or a.shape[-1] != n:
-        raise InputError(f"{what} must have shape ({n},) or (k, {n}) for {surface.name} "
-                         f"({n} vertices), got {a.shape}")
+        raise InputError(f"{what} must have shape ({n},) or (k, {n}) for {surface.name} ({n} vertices), got {a.shape}")
     bad = ~np.isfinite(a)
     if bad.any():
         first = np.argwhere(bad)[0]

@@ -5,15 +5,58 @@ Data flow: :mod:`.tasks` (how tasks are made and surfaces shared) →
 :mod:`hht3d.dataset`; graphs run on the schedulers of :mod:`hht3d.execution`
 (:func:`compute` is re-exported here).
 """
+
 from ..execution import SCHEDULERS, compute, open_client, worker_count
-from .stages import (eemd, emd, filter_geometry, filter_signal, hht, hks_features, imf_enhancement, load,
-                     manifold_harmonics_filter, mirror, monogenic, monogenic_from_potential, operators,
-                     prominent_features, reconstruct, save, signal, transform, transform_file)
+from .stages import (
+    eemd,
+    emd,
+    filter_geometry,
+    filter_signal,
+    hht,
+    hks_features,
+    imf_enhancement,
+    load,
+    manifold_harmonics_filter,
+    mirror,
+    monogenic,
+    monogenic_from_potential,
+    operators,
+    prominent_features,
+    reconstruct,
+    save,
+    signal,
+    transform,
+    transform_file,
+)
 from .tasks import Builder, as_key, from_surface, resident, riesz_potential
 
 __all__ = [
-    "Builder", "mirror", "compute", "load", "from_surface", "as_key", "resident", "operators", "signal", "emd",
-    "eemd", "riesz_potential", "monogenic", "monogenic_from_potential", "hht", "save", "transform",
-    "transform_file", "filter_signal", "filter_geometry", "reconstruct", "prominent_features", "hks_features",
-    "imf_enhancement", "manifold_harmonics_filter", "SCHEDULERS", "open_client", "worker_count",
+    "Builder",
+    "mirror",
+    "compute",
+    "load",
+    "from_surface",
+    "as_key",
+    "resident",
+    "operators",
+    "signal",
+    "emd",
+    "eemd",
+    "riesz_potential",
+    "monogenic",
+    "monogenic_from_potential",
+    "hht",
+    "save",
+    "transform",
+    "transform_file",
+    "filter_signal",
+    "filter_geometry",
+    "reconstruct",
+    "prominent_features",
+    "hks_features",
+    "imf_enhancement",
+    "manifold_harmonics_filter",
+    "SCHEDULERS",
+    "open_client",
+    "worker_count",
 ]

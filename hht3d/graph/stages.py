@@ -35,6 +35,7 @@ How the tasks are made, and how workers keep each surface's operators, is
 :mod:`hht3d.graph.tasks`.  Settings are checked when the graph is built:
 ``graph.emd(s, f, max_imf=2)`` raises before anything runs.
 """
+
 from __future__ import annotations
 
 import functools
@@ -48,28 +49,55 @@ from ..decomposition.decompose import emd as _emd
 from ..decomposition.ensemble import eemd as _eemd
 from ..decomposition.ensemble import ensemble_settings
 from ..decomposition.options import EMDOptions, EnsembleOptions
+from ..execution import compute
 from ..geometry.signals import signal as _signal
 from ..geometry.surface import Surface
 from ..io.read import load as _load
 from ..spectral.monogenic_signal import monogenic_from_potential as _monogenic_from_potential
 from ..spectral.options import RieszOptions
 from ..transform import HHTOptions, HHTResult, decomposition_stage, hht_settings, hht_stages
-from ..execution import compute
 from .tasks import Builder, as_key, from_surface, resident, riesz_potential
 
 __all__ = [
-    "Builder", "mirror", "compute", "load", "from_surface", "as_key", "resident", "operators", "signal", "emd",
-    "eemd", "riesz_potential", "monogenic", "monogenic_from_potential", "hht", "save", "transform",
-    "transform_file", "filter_signal", "filter_geometry", "reconstruct", "prominent_features", "hks_features",
-    "imf_enhancement", "manifold_harmonics_filter",
+    "Builder",
+    "mirror",
+    "compute",
+    "load",
+    "from_surface",
+    "as_key",
+    "resident",
+    "operators",
+    "signal",
+    "emd",
+    "eemd",
+    "riesz_potential",
+    "monogenic",
+    "monogenic_from_potential",
+    "hht",
+    "save",
+    "transform",
+    "transform_file",
+    "filter_signal",
+    "filter_geometry",
+    "reconstruct",
+    "prominent_features",
+    "hks_features",
+    "imf_enhancement",
+    "manifold_harmonics_filter",
 ]
 
 P = ParamSpec("P")
 _PLAIN = Builder()
 
 
-def mirror(func: Callable[P, Any], build: Callable | None = None, *, settle: Callable | None = None,
-           tasks: str = "one task", examples: str = "") -> Callable[P, Delayed]:
+def mirror(
+    func: Callable[P, Any],
+    build: Callable | None = None,
+    *,
+    settle: Callable | None = None,
+    tasks: str = "one task",
+    examples: str = "",
+) -> Callable[P, Delayed]:
     """The lazy twin of the core function ``func``: its name, signature and docstring; a ``Delayed`` result.
 
     The twin's type is ``func``'s parameters returning ``Delayed``, so a type
@@ -137,13 +165,15 @@ def _settle_emd(arguments: dict) -> None:
 
 
 def _settle_eemd(arguments: dict) -> None:
-    arguments["options"], arguments["ensemble"] = ensemble_settings(arguments["options"], arguments["ensemble"],
-                                                                    arguments["overrides"])
+    arguments["options"], arguments["ensemble"] = ensemble_settings(
+        arguments["options"], arguments["ensemble"], arguments["overrides"]
+    )
     arguments["overrides"] = {}
 
 
-def _eemd_tasks(builder: Builder, surface, signal, options: EMDOptions, *, ensemble: EnsembleOptions,
-                backend: str | None = None):
+def _eemd_tasks(
+    builder: Builder, surface, signal, options: EMDOptions, *, ensemble: EnsembleOptions, backend: str | None = None
+):
     return decomposition_stage(builder, surface, signal, options, ensemble, backend)
 
 
@@ -152,8 +182,15 @@ emd = mirror(_emd, settle=_settle_emd)
 eemd = mirror(_eemd, _eemd_tasks, settle=_settle_eemd, tasks="one task per member, then one averaging task")
 
 
-def monogenic(surface: Surface, imfs, options: RieszOptions | dict | None = None, *, backend: str | None = None,
-              riesz_tasks: int | None = None, **overrides) -> Delayed:
+def monogenic(
+    surface: Surface,
+    imfs,
+    options: RieszOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    riesz_tasks: int | None = None,
+    **overrides,
+) -> Delayed:
     """Lazy :func:`hht3d.spectral.monogenic`: the shift-group tasks of :func:`riesz_potential`
     (``riesz_tasks`` of them, default one per worker), then one task of
     :func:`hht3d.spectral.monogenic_from_potential`.  Arguments as the eager function's."""
@@ -166,8 +203,16 @@ def monogenic(surface: Surface, imfs, options: RieszOptions | dict | None = None
 monogenic_from_potential = mirror(_monogenic_from_potential)
 
 
-def transform(builder: Builder, surface, signal, options: HHTOptions | dict | None = None, *,
-              backend: str | None = None, riesz_tasks: int | None = None, **overrides) -> dict:
+def transform(
+    builder: Builder,
+    surface,
+    signal,
+    options: HHTOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    riesz_tasks: int | None = None,
+    **overrides,
+) -> dict:
     """The tasks of one HHT by stage name (:func:`hht3d.transform.hht_stages`): ``emd``, ``imfs``,
     ``riesz``, ``monogenic``, ``hht``.  Settings (as for :func:`hht3d.hht`) are checked now, before
     any task runs."""
@@ -175,16 +220,24 @@ def transform(builder: Builder, surface, signal, options: HHTOptions | dict | No
     return hht_stages(Builder(builder.guard, riesz_tasks), surface, signal, options, backend=backend)
 
 
-def transform_file(builder: Builder, path, signal: str = "mean_curvature", load_options: dict | None = None,
-                   **options) -> dict:
+def transform_file(
+    builder: Builder, path, signal: str = "mean_curvature", load_options: dict | None = None, **options
+) -> dict:
     """:func:`transform` of one file's signal, with its ``load`` and ``signal`` tasks."""
     surface = _load_tasks(builder, path, **(load_options or {}))
     values = builder.task("signal", _signal)(surface, signal)
     return {"load": surface, "signal": values, **transform(builder, surface, values, **options)}
 
 
-def hht(surface: Surface, signal, options: HHTOptions | dict | None = None, *, backend: str | None = None,
-        riesz_tasks: int | None = None, **overrides) -> Delayed:
+def hht(
+    surface: Surface,
+    signal,
+    options: HHTOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    riesz_tasks: int | None = None,
+    **overrides,
+) -> Delayed:
     """Lazy :func:`hht3d.hht`: the tasks of :func:`transform` (``riesz_tasks`` shift groups of the
     Riesz quadrature, default one per worker).  Arguments as the eager function's.
 

@@ -14,6 +14,7 @@ so a worker builds ``L``, ``M``, the gradient, the spectral bounds and the
 symbolic analysis of the shifted systems once for all the tasks it runs on
 that surface.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -26,6 +27,7 @@ import numpy as np
 from dask import delayed
 from dask.base import tokenize
 
+from ..execution.workers import worker_count
 from ..geometry.surface import Surface
 from ..linalg.backends import default_backend
 from ..records import Record, option
@@ -33,10 +35,18 @@ from ..spectral.options import RieszOptions
 from ..spectral.quadrature import combine_quadrature_parts, quadrature_part, quadrature_plan
 from ..spectral.riesz_transform import fractional_laplacian
 from ..spectral.shifts import shift_analysis
-from ..execution.workers import worker_count
 
-__all__ = ["Builder", "GraphOptions", "resident", "as_key", "from_surface", "riesz_potential", "RESIDENT_SURFACES",
-           "ARRAY_KEY_SIZE", "MAX_RIESZ_TASKS"]
+__all__ = [
+    "Builder",
+    "GraphOptions",
+    "resident",
+    "as_key",
+    "from_surface",
+    "riesz_potential",
+    "RESIDENT_SURFACES",
+    "ARRAY_KEY_SIZE",
+    "MAX_RIESZ_TASKS",
+]
 
 #: Arrays with more entries than this enter a graph as a key of their own (shared by reference);
 #: smaller ones are copied into each task, where a key would cost more than the copy.
@@ -53,8 +63,13 @@ class GraphOptions(Record):
 
     label = "graph"
 
-    riesz_tasks: int | None = option(None, "parallel shift-group tasks of the quadrature (default: one per "
-                                     "worker)", kind="int", minimum=1, maximum=MAX_RIESZ_TASKS)
+    riesz_tasks: int | None = option(
+        None,
+        "parallel shift-group tasks of the quadrature (default: one per worker)",
+        kind="int",
+        minimum=1,
+        maximum=MAX_RIESZ_TASKS,
+    )
 
 
 class Builder:
@@ -107,8 +122,9 @@ def resident(surface: Surface) -> Surface:
     normals; the :data:`RESIDENT_SURFACES` most recently used ones are kept.
     Returns the same object, whose ``cache`` is now the shared one.
     """
-    key = tokenize(surface.vertices, surface.faces, surface.laplacian, surface.n_neighbors,
-                   surface.cache.get("normals"))
+    key = tokenize(
+        surface.vertices, surface.faces, surface.laplacian, surface.n_neighbors, surface.cache.get("normals")
+    )
     with _RESIDENT_LOCK:
         cache = _RESIDENT.pop(key, surface.cache)
         for name, value in surface.cache.items():
@@ -186,8 +202,16 @@ def as_key(value):
     return value
 
 
-def riesz_potential(surface, imfs, options: RieszOptions | dict | None = None, *, backend: str | None = None,
-                    riesz_tasks: int | None = None, builder: Builder | None = None, **overrides):
+def riesz_potential(
+    surface,
+    imfs,
+    options: RieszOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    riesz_tasks: int | None = None,
+    builder: Builder | None = None,
+    **overrides,
+):
     """Lazy ``L^{-1/2}`` of all IMFs, ``(k, n)``, with the ``potential``, ``tol`` and ``eigenpairs`` of
     ``options`` (:class:`~hht3d.spectral.options.RieszOptions`, with ``overrides``).
 

@@ -8,10 +8,14 @@
 * :mod:`~hht3d.io.paths` — output confinement, file-name checks, input expansion;
 * :mod:`~hht3d.io.atomic` — atomic writes and their stale temporary files;
 * :mod:`~hht3d.io.manifest` — what hht3d wrote in an output folder (overwrite and resume rules);
+* :mod:`~hht3d.io.lock` — the lock an output folder's runs share;
 * :mod:`~hht3d.io.folder` — an output folder's rules, local (manifest, lock, confinement) or URL;
 * :mod:`~hht3d.io.storage` — fsspec URLs (``s3://``, ``gs://``, ...): locations, back-ends, listing, reading;
 * :mod:`~hht3d.io.uploads` — writing to them: atomic uploads, conditional updates, the check before a run.
 """
+
+from ..geometry.normals import estimate_point_normals
+from . import storage, uploads
 from .atomic import atomic_path, check_output_paths, remove_stale_parts
 from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS, check_regular_file
 from .manifest import check_overwrites, is_recorded, new_run_id, record
@@ -19,11 +23,34 @@ from .open3d import surface_from_open3d, surface_to_open3d
 from .paths import check_name, check_output_location, confined, resolve_inputs
 from .read import LoadOptions, PlyHeader, data_path, load, read_npz, read_npz_shapes, read_ply_header
 from .write import field_colors, write_colored_ply, write_npz, write_ply
-from ..geometry.normals import estimate_point_normals
-from . import storage, uploads
 
-__all__ = ["MESH_EXTENSIONS", "POINT_CLOUD_EXTENSIONS", "data_path", "load", "LoadOptions", "PlyHeader", "read_ply_header",
-           "read_npz", "read_npz_shapes", "surface_from_open3d", "surface_to_open3d", "estimate_point_normals",
-           "atomic_path", "check_output_paths", "remove_stale_parts", "check_regular_file", "check_overwrites",
-           "is_recorded", "new_run_id", "record", "check_name", "check_output_location", "confined",
-           "write_ply", "write_npz", "field_colors", "write_colored_ply", "resolve_inputs"]
+__all__ = [
+    "MESH_EXTENSIONS",
+    "POINT_CLOUD_EXTENSIONS",
+    "data_path",
+    "load",
+    "LoadOptions",
+    "PlyHeader",
+    "read_ply_header",
+    "read_npz",
+    "read_npz_shapes",
+    "surface_from_open3d",
+    "surface_to_open3d",
+    "estimate_point_normals",
+    "atomic_path",
+    "check_output_paths",
+    "remove_stale_parts",
+    "check_regular_file",
+    "check_overwrites",
+    "is_recorded",
+    "new_run_id",
+    "record",
+    "check_name",
+    "check_output_location",
+    "confined",
+    "write_ply",
+    "write_npz",
+    "field_colors",
+    "write_colored_ply",
+    "resolve_inputs",
+]

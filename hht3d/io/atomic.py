@@ -14,6 +14,7 @@ resolve into that folder, and a writer confined to an output folder
 (:func:`check_inside`): a subfolder swapped for a symlink after the checks
 is refused, not followed.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -29,8 +30,16 @@ import psutil
 from ..errors import OutputError, one_line
 from .formats import NAME_MAX, short
 
-__all__ = ["atomic_path", "before_rename", "check_inside", "check_output_paths", "confined", "remove_stale_parts",
-           "stop_writes", "PART"]
+__all__ = [
+    "atomic_path",
+    "before_rename",
+    "check_inside",
+    "check_output_paths",
+    "confined",
+    "remove_stale_parts",
+    "stop_writes",
+    "PART",
+]
 
 #: A temporary file of :func:`atomic_path`: ``.NAME.PID-XXXXXXXX.part``.
 PART = re.compile(r"^\..*\.(\d+)-[a-z0-9_]{8}\.part$")
@@ -85,8 +94,10 @@ def atomic_path(path):
     try:
         yield tmp
         if not os.path.samestat(os.stat(tmp.parent), made_in):
-            raise OutputError(f"{short(path)}: not written: its folder {short(path.parent)} was replaced while the "
-                              "file was written (by a link?); nothing was renamed: check the output folder")
+            raise OutputError(
+                f"{short(path)}: not written: its folder {short(path.parent)} was replaced while the "
+                "file was written (by a link?); nothing was renamed: check the output folder"
+            )
         _record(tmp, path)
         _at(os.replace, folder, name, path.name, tmp, path)
     except BaseException as exc:
@@ -107,8 +118,11 @@ def _create(path: Path, folder: int | None) -> str:
     for _ in range(100):
         name = f"{_prefix(path.name)}{uuid.uuid4().hex[:8]}.part"
         try:
-            fd = os.open(name, flags, 0o666, dir_fd=folder) if folder is not None else \
-                os.open(path.parent / name, flags, 0o666)
+            fd = (
+                os.open(name, flags, 0o666, dir_fd=folder)
+                if folder is not None
+                else os.open(path.parent / name, flags, 0o666)
+            )
         except FileExistsError:
             continue
         os.close(fd)
@@ -141,9 +155,11 @@ def check_inside(tmp, path, folder) -> None:
     OutputError
     """
     if confined(tmp, folder) is None:
-        raise OutputError(f"{short(path)}: not written: its folder now resolves to "
-                          f"{short(os.path.realpath(Path(tmp).parent))}, outside the output folder {short(folder)} "
-                          "(swapped for a link after the check?); nothing outside was replaced")
+        raise OutputError(
+            f"{short(path)}: not written: its folder now resolves to "
+            f"{short(os.path.realpath(Path(tmp).parent))}, outside the output folder {short(folder)} "
+            "(swapped for a link after the check?); nothing outside was replaced"
+        )
 
 
 #: What this thread calls with ``(tmp, path)`` just before each rename of :func:`atomic_path`.
@@ -192,8 +208,10 @@ def remove_stale_parts(folders, own=()) -> list[Path]:
 
 
 def _cannot_write(path: Path, exc: OSError) -> OutputError:
-    return OutputError(f"{short(path)}: cannot write ({exc.strerror or one_line(exc)}); free space, fix the "
-                       "permissions or choose another output folder")
+    return OutputError(
+        f"{short(path)}: cannot write ({exc.strerror or one_line(exc)}); free space, fix the "
+        "permissions or choose another output folder"
+    )
 
 
 def check_output_paths(paths) -> None:
@@ -215,15 +233,17 @@ def check_output_paths(paths) -> None:
         try:
             _check_output_path(path, probed)
         except OSError as exc:
-            raise OutputError(f"{short(path)}: cannot write ({exc.strerror or one_line(exc)}); choose another "
-                              "output path") from None
+            raise OutputError(
+                f"{short(path)}: cannot write ({exc.strerror or one_line(exc)}); choose another output path"
+            ) from None
 
 
 def _check_output_path(path: Path, probed: set) -> None:
     """:func:`check_output_paths` of one path; ``probed`` holds the folders already found writable."""
     if path.is_dir():
-        raise OutputError(f"{short(path)}: cannot write: a folder of that name is in the way; remove it or change "
-                          "the output path")
+        raise OutputError(
+            f"{short(path)}: cannot write: a folder of that name is in the way; remove it or change the output path"
+        )
     existing = path.parent
     while not os.path.lexists(existing) and existing != existing.parent:
         existing = existing.parent
@@ -234,7 +254,8 @@ def _check_output_path(path: Path, probed: set) -> None:
     try:
         os.rmdir(tempfile.mkdtemp(prefix=".hht3d-probe-", dir=existing))
     except OSError as exc:
-        raise OutputError(f"{short(path)}: cannot write: creating anything in {existing} fails "
-                          f"({exc.strerror or one_line(exc)}); choose another output folder") from None
+        raise OutputError(
+            f"{short(path)}: cannot write: creating anything in {existing} fails "
+            f"({exc.strerror or one_line(exc)}); choose another output folder"
+        ) from None
     probed.add(existing)
-

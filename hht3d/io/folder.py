@@ -18,6 +18,7 @@
   elsewhere the last writer wins; no rule keeps hht3d from replacing an
   object it did not write.
 """
+
 from __future__ import annotations
 
 import json
@@ -27,8 +28,17 @@ from pathlib import Path, PurePosixPath
 from ..errors import OutputError
 from . import storage, uploads
 from .atomic import check_output_paths, remove_stale_parts
-from .manifest import (MANIFEST, Recorded, check_overwrites, digest, entries, is_recorded, new_run_id, updated,
-                       valid_entries)
+from .manifest import (
+    MANIFEST,
+    Recorded,
+    check_overwrites,
+    digest,
+    entries,
+    is_recorded,
+    new_run_id,
+    updated,
+    valid_entries,
+)
 from .paths import check_name, check_output_location
 
 __all__ = ["OutputFolder", "Uploaded", "check_locations"]
@@ -65,8 +75,9 @@ class OutputFolder:
         checked again, just before its rename, to resolve inside it.
     """
 
-    def __init__(self, location, *, storage_options: dict | None = None, run: str | None = None,
-                 allow_outside: bool = False):
+    def __init__(
+        self, location, *, storage_options: dict | None = None, run: str | None = None, allow_outside: bool = False
+    ):
         self.location, self.storage_options = storage.local_path(location), storage_options or None
         self.is_url, self.allow_outside = storage.is_url(self.location), allow_outside
         self.run = run or new_run_id()
@@ -105,8 +116,11 @@ class OutputFolder:
             if key is not None and sums is not None:
                 found[key] = sums
         if found:
-            uploads.update_object(storage.join(self.location, MANIFEST), lambda old: updated(
-                self._parsed(old), found, self.run).encode(), self.storage_options)
+            uploads.update_object(
+                storage.join(self.location, MANIFEST),
+                lambda old: updated(self._parsed(old), found, self.run).encode(),
+                self.storage_options,
+            )
 
     def recorded(self, url) -> bool:
         """Whether a URL folder's manifest object records ``url`` as it is now (same size and SHA-256)."""
@@ -118,8 +132,7 @@ class OutputFolder:
             except Exception:  # the back-ends raise many types: no manifest counts as empty
                 self._known = {}
         entry = self._known.get(storage.under(url, self.location))
-        return bool(entry) and _digest_of(url, self.storage_options, entry["size"]) == (
-            entry["size"], entry["sha256"])
+        return bool(entry) and _digest_of(url, self.storage_options, entry["size"]) == (entry["size"], entry["sha256"])
 
     @staticmethod
     def _parsed(data: bytes | None) -> dict:
@@ -176,8 +189,7 @@ def _digest_of(url: str, storage_options: dict | None, size: int | None = None) 
         return None
 
 
-def check_locations(items: dict, folder, *, allow_outside: bool = False,
-                    where=lambda source, path: str(path)) -> None:
+def check_locations(items: dict, folder, *, allow_outside: bool = False, where=lambda source, path: str(path)) -> None:
     """Refuse, before anything is computed, outputs that no file system takes, that resolve outside a
     local ``folder`` (unless ``allow_outside``), or that are one of the inputs.
 
@@ -189,6 +201,7 @@ def check_locations(items: dict, folder, *, allow_outside: bool = False,
     ------
     OutputError
     """
+
     def real(location):
         return str(location) if storage.is_url(location) else os.path.realpath(location)
 
@@ -201,8 +214,10 @@ def check_locations(items: dict, folder, *, allow_outside: bool = False,
                 _check_inside(path, folder, where(source, path))
             clash = inputs.get(real(path))
             if clash is not None:
-                raise OutputError(f"{where(source, path)}: {path} is the input {clash}; an input is never an "
-                                  "output: change the output path or folder")
+                raise OutputError(
+                    f"{where(source, path)}: {path} is the input {clash}; an input is never an "
+                    "output: change the output path or folder"
+                )
 
 
 def _check_inside(path, folder, where: str) -> None:
@@ -210,5 +225,6 @@ def _check_inside(path, folder, where: str) -> None:
     if not storage.is_url(path):
         check_output_location(path, folder, where)
     elif storage.under(path, folder) is None:
-        raise OutputError(f"{where}: {path} leaves the output folder {folder}; write inside it (or set "
-                          "outputs.allow_outside: true)")
+        raise OutputError(
+            f"{where}: {path} leaves the output folder {folder}; write inside it (or set outputs.allow_outside: true)"
+        )

@@ -1,5 +1,6 @@
 """Which files can be read (extensions, the regular-file check done before opening one), and the
 length limits of file names."""
+
 from __future__ import annotations
 
 import os
@@ -10,8 +11,18 @@ from pathlib import Path
 from ..errors import MAX_SHOWN, InputError, one_line
 from ..errors import shown as shown_value
 
-__all__ = ["MESH_EXTENSIONS", "POINT_CLOUD_EXTENSIONS", "PLY_RESERVED", "check_extension", "check_regular_file",
-           "checked_name", "usable_name", "NAME_MAX", "PATH_MAX", "short"]
+__all__ = [
+    "MESH_EXTENSIONS",
+    "POINT_CLOUD_EXTENSIONS",
+    "PLY_RESERVED",
+    "check_extension",
+    "check_regular_file",
+    "checked_name",
+    "usable_name",
+    "NAME_MAX",
+    "PATH_MAX",
+    "short",
+]
 
 MESH_EXTENSIONS = (".ply", ".obj", ".off", ".stl", ".glb", ".gltf")
 POINT_CLOUD_EXTENSIONS = (".ply", ".pcd", ".xyz", ".xyzn", ".pts")
@@ -30,15 +41,22 @@ def short(path) -> str:
     return one_line(path, MAX_SHOWN)
 
 
-_KINDS = {stat.S_IFIFO: "a FIFO (named pipe)", stat.S_IFCHR: "a character device", stat.S_IFBLK: "a block device",
-          stat.S_IFSOCK: "a socket", stat.S_IFDIR: "a folder"}
+_KINDS = {
+    stat.S_IFIFO: "a FIFO (named pipe)",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFSOCK: "a socket",
+    stat.S_IFDIR: "a folder",
+}
 
 
 def check_extension(path: Path) -> None:
     """Raise :class:`InputError` unless ``path`` has a mesh or point-cloud extension."""
     if path.suffix.lower() not in MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS:
-        raise InputError(f"{path}: unknown extension {path.suffix.lower() or '(none)'!r}; meshes: "
-                         f"{', '.join(MESH_EXTENSIONS)}; point clouds: {', '.join(POINT_CLOUD_EXTENSIONS)}")
+        raise InputError(
+            f"{path}: unknown extension {path.suffix.lower() or '(none)'!r}; meshes: "
+            f"{', '.join(MESH_EXTENSIONS)}; point clouds: {', '.join(POINT_CLOUD_EXTENSIONS)}"
+        )
 
 
 def check_regular_file(path: Path, what: str = "a mesh or point-cloud file") -> None:
@@ -49,13 +67,15 @@ def check_regular_file(path: Path, what: str = "a mesh or point-cloud file") -> 
         mode = os.stat(path).st_mode
     except FileNotFoundError:
         dangling = os.path.islink(path)
-        raise InputError(f"{shown}: {'a symbolic link to a missing file' if dangling else 'no such file'}; "
-                         "check the path") from None
+        raise InputError(
+            f"{shown}: {'a symbolic link to a missing file' if dangling else 'no such file'}; check the path"
+        ) from None
     except OSError as exc:
         raise InputError(f"{shown}: cannot read ({exc.strerror or one_line(exc)})") from None
     except ValueError:  # an embedded NUL, which no file system takes
-        raise InputError(f"{shown_value(os.fspath(path))}: the path holds a NUL character; give the file's real "
-                         "name") from None
+        raise InputError(
+            f"{shown_value(os.fspath(path))}: the path holds a NUL character; give the file's real name"
+        ) from None
     if stat.S_ISDIR(mode):
         raise InputError(f"{shown}: is a folder, not {what}; give one file (pipeline inputs take folders)")
     if not stat.S_ISREG(mode):
@@ -66,8 +86,10 @@ def check_regular_file(path: Path, what: str = "a mesh or point-cloud file") -> 
 def checked_name(key) -> str:
     """``key`` if it is usable as a written PLY property, else an :class:`InputError`."""
     if not _NAME.match(str(key)) or key in PLY_RESERVED:
-        raise InputError(f"attribute name {key!r} is not usable as a PLY property "
-                         "(letters, digits, '_', '.', '-'; not x/y/z/nx/ny/nz/red/green/blue/alpha)")
+        raise InputError(
+            f"attribute name {key!r} is not usable as a PLY property "
+            "(letters, digits, '_', '.', '-'; not x/y/z/nx/ny/nz/red/green/blue/alpha)"
+        )
     return str(key)
 
 

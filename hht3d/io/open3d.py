@@ -1,4 +1,5 @@
 """Conversion between :class:`~hht3d.geometry.surface.Surface` and Open3D geometries (legacy and tensor)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -32,9 +33,10 @@ def surface_from_open3d(geometry, *, clean: bool = True, name: str | None = None
     elif isinstance(geometry, (o3d.t.geometry.TriangleMesh, o3d.t.geometry.PointCloud)):
         is_mesh = isinstance(geometry, o3d.t.geometry.TriangleMesh)
         attrs = geometry.vertex if is_mesh else geometry.point
-        data = {"vertices": attrs["positions"].numpy(),
-                "faces": geometry.triangle["indices"].numpy() if is_mesh and "indices" in geometry.triangle
-                else None}
+        data = {
+            "vertices": attrs["positions"].numpy(),
+            "faces": geometry.triangle["indices"].numpy() if is_mesh and "indices" in geometry.triangle else None,
+        }
         n = len(data["vertices"])
         for key in list(attrs):
             values = attrs[key].numpy()
@@ -58,7 +60,7 @@ def surface_to_open3d(surface: Surface, attributes: dict | None = None):
     import open3d as o3d
     import open3d.core as o3c
 
-    geometry = (o3d.t.geometry.TriangleMesh() if surface.is_mesh else o3d.t.geometry.PointCloud())
+    geometry = o3d.t.geometry.TriangleMesh() if surface.is_mesh else o3d.t.geometry.PointCloud()
     store = geometry.vertex if surface.is_mesh else geometry.point
     store["positions"] = o3c.Tensor(surface.vertices)
     store["normals"] = o3c.Tensor(surface.normals)

@@ -11,6 +11,7 @@
   symlink loop is listed once, and files that hht3d wrote (recorded in a
   manifest, :mod:`hht3d.io.manifest`) are never taken as inputs.
 """
+
 from __future__ import annotations
 
 import glob
@@ -19,11 +20,19 @@ from pathlib import Path
 
 from ..errors import InputError, OutputError, one_line, shown
 from .atomic import confined
+from .formats import (
+    MESH_EXTENSIONS,
+    NAME_MAX,
+    PATH_MAX,
+    POINT_CLOUD_EXTENSIONS,
+    check_extension,
+    check_regular_file,
+    short,
+)
 from .manifest import recorded_names
-from .formats import (MESH_EXTENSIONS, NAME_MAX, PATH_MAX, POINT_CLOUD_EXTENSIONS, check_extension,
-                      check_regular_file, short)
 
 __all__ = ["NAME_MAX", "PATH_MAX", "confined", "check_output_location", "check_name", "resolve_inputs", "short"]
+
 
 def check_output_location(path, folder, where: str) -> None:
     """Refuse an output that resolves outside ``folder`` (``where`` names the step or output).
@@ -34,8 +43,10 @@ def check_output_location(path, folder, where: str) -> None:
         Naming ``where``, the resolved path and the folder.
     """
     if confined(path, folder) is None:
-        raise OutputError(f"{where}: {short(path)} resolves to {short(os.path.realpath(path))}, outside the "
-                          f"output folder {short(folder)}; write inside it (or set outputs.allow_outside: true)")
+        raise OutputError(
+            f"{where}: {short(path)} resolves to {short(os.path.realpath(path))}, outside the "
+            f"output folder {short(folder)}; write inside it (or set outputs.allow_outside: true)"
+        )
 
 
 def check_name(path, where: str) -> None:
@@ -54,8 +65,10 @@ def check_name(path, where: str) -> None:
     for part in Path(text).parts:
         size = len(os.fsencode(part))
         if size > NAME_MAX:
-            raise OutputError(f"{where}: the file name {short(part)} is {size} bytes long; the limit is "
-                              f"{NAME_MAX}; shorten the path pattern or the name")
+            raise OutputError(
+                f"{where}: the file name {short(part)} is {size} bytes long; the limit is "
+                f"{NAME_MAX}; shorten the path pattern or the name"
+            )
 
 
 def resolve_inputs(spec) -> list[Path]:
@@ -85,8 +98,9 @@ def resolve_inputs(spec) -> list[Path]:
         except OSError as exc:
             raise InputError(f"{short(text)}: cannot read ({exc.strerror or one_line(exc)})") from None
         if not matches:
-            raise InputError(f"{text}: matches no mesh or point-cloud file "
-                             f"({', '.join(sorted(usable))}), or only files hht3d wrote")
+            raise InputError(
+                f"{text}: matches no mesh or point-cloud file ({', '.join(sorted(usable))}), or only files hht3d wrote"
+            )
         found.extend(matches)
     return _once(found)
 
@@ -101,8 +115,9 @@ def _input_files(text: str, usable) -> list[Path]:
         check_extension(path)
         return [path]
     if any(ch in text for ch in "*?["):
-        return _not_outputs(p for p in map(Path, glob.iglob(text, recursive=True))
-                            if p.suffix.lower() in usable and p.is_file())
+        return _not_outputs(
+            p for p in map(Path, glob.iglob(text, recursive=True)) if p.suffix.lower() in usable and p.is_file()
+        )
     raise InputError(f"{text}: no such file or folder")
 
 

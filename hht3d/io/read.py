@@ -9,6 +9,7 @@
   (:mod:`hht3d.io.references`).
 * Only regular files are read (:func:`~hht3d.io.formats.check_regular_file`).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -19,13 +20,28 @@ import numpy as np
 
 from ..errors import InputError, one_line
 from ..geometry.surface import Surface, SurfaceOptions
-from ..records import option
 from ..open3d_quiet import quiet_open3d
-from .formats import MESH_EXTENSIONS, PLY_RESERVED, POINT_CLOUD_EXTENSIONS, check_extension, check_regular_file, usable_name
+from ..records import option
+from .formats import (
+    MESH_EXTENSIONS,
+    PLY_RESERVED,
+    POINT_CLOUD_EXTENSIONS,
+    check_extension,
+    check_regular_file,
+    usable_name,
+)
 from .references import check_references
 
-__all__ = ["data_path", "MESH_EXTENSIONS", "POINT_CLOUD_EXTENSIONS", "load", "LoadOptions", "PlyHeader", "read_ply_header",
-           "read_npz_shapes"]
+__all__ = [
+    "data_path",
+    "MESH_EXTENSIONS",
+    "POINT_CLOUD_EXTENSIONS",
+    "load",
+    "LoadOptions",
+    "PlyHeader",
+    "read_ply_header",
+    "read_npz_shapes",
+]
 
 
 def data_path(name: str) -> Path:
@@ -54,8 +70,14 @@ class LoadOptions(SurfaceOptions):
     clean: bool = option(True, "weld duplicate vertices, drop degenerate faces and unused vertices")
 
 
-def load(path, options: LoadOptions | dict | None = None, *, name: str | None = None,
-         storage_options: dict | None = None, **overrides) -> Surface:
+def load(
+    path,
+    options: LoadOptions | dict | None = None,
+    *,
+    name: str | None = None,
+    storage_options: dict | None = None,
+    **overrides,
+) -> Surface:
     """Load a triangle mesh or point cloud as a :class:`~hht3d.geometry.surface.Surface`.
 
     Parameters
@@ -89,6 +111,7 @@ def load(path, options: LoadOptions | dict | None = None, *, name: str | None = 
     """
     options = LoadOptions.of(options, **overrides)
     from .storage import is_url, load_url, local_path
+
     path = local_path(path)
     if is_url(path):  # object storage: through a temporary local copy
         return load_url(load, path, storage_options, options=options, name=name)
@@ -125,8 +148,10 @@ def _read_ply(path: Path) -> dict:
     names = vertex.dtype.names or ()
     if not {"x", "y", "z"} <= set(names):
         raise InputError(f"{path}: PLY vertices lack x, y, z properties (found {names})")
-    data = {"vertices": np.column_stack([vertex["x"], vertex["y"], vertex["z"]]).astype(np.float64),
-            "faces": _ply_faces(ply, path)}
+    data = {
+        "vertices": np.column_stack([vertex["x"], vertex["y"], vertex["z"]]).astype(np.float64),
+        "faces": _ply_faces(ply, path),
+    }
     if {"red", "green", "blue"} <= set(names):
         rgb = np.column_stack([vertex["red"], vertex["green"], vertex["blue"]]).astype(np.float64)
         data["colors"] = rgb / 255.0 if np.issubdtype(vertex["red"].dtype, np.integer) else rgb
@@ -213,8 +238,10 @@ def check_declared(path: Path) -> None:
         crowded = {e: n for e, n in header.property_counts.items() if n > MAX_PLY_PROPERTIES}
         if crowded:
             element, count = next(iter(crowded.items()))
-            raise InputError(f"{path}: the PLY element {element!r} declares {count:,} properties; at most "
-                             f"{MAX_PLY_PROPERTIES:,} are read")
+            raise InputError(
+                f"{path}: the PLY element {element!r} declares {count:,} properties; at most "
+                f"{MAX_PLY_PROPERTIES:,} are read"
+            )
         needed = sum(n * max(1, header.property_counts.get(e, 1)) for e, n in header.counts.items())
         points = header.counts.get("vertex", 0)
     elif ext == ".pcd":
@@ -223,12 +250,16 @@ def check_declared(path: Path) -> None:
         return
     size = path.stat().st_size
     if needed > size:
-        raise InputError(f"{path}: the header declares {points:,} vertices ({needed:,} values), more than its "
-                         f"{size:,} bytes can hold: the file is truncated or its header is wrong")
+        raise InputError(
+            f"{path}: the header declares {points:,} vertices ({needed:,} values), more than its "
+            f"{size:,} bytes can hold: the file is truncated or its header is wrong"
+        )
     memory = available_memory()
     if memory is not None and 24 * points > memory:
-        raise InputError(f"{path}: {points:,} vertices need {24 * points / 2**30:.1f} GiB to read; "
-                         f"{memory / 2**30:.1f} GiB are available")
+        raise InputError(
+            f"{path}: {points:,} vertices need {24 * points / 2**30:.1f} GiB to read; "
+            f"{memory / 2**30:.1f} GiB are available"
+        )
 
 
 def _pcd_points(path: Path) -> int:
@@ -284,8 +315,11 @@ def read_npz_shapes(path) -> dict[str, tuple[int, ...]]:
             for name in archive.namelist():
                 with archive.open(name) as member:
                     version = np.lib.format.read_magic(member)
-                    read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
-                            else np.lib.format.read_array_header_2_0)
+                    read = (
+                        np.lib.format.read_array_header_1_0
+                        if version == (1, 0)
+                        else np.lib.format.read_array_header_2_0
+                    )
                     shapes[name.removesuffix(".npy")] = read(member)[0]
     except (OSError, ValueError, zipfile.BadZipFile) as exc:
         raise InputError(f"{path}: not a readable .npz file ({one_line(exc)})") from None
@@ -306,15 +340,16 @@ def _ply_faces(ply, path: Path):
     if sizes.min() < 3:
         raise InputError(f"{path}: PLY has faces with fewer than 3 vertices")
     # fan-triangulate polygons
-    return np.array([(p[0], p[i], p[i + 1]) for p in polygons for i in range(1, len(p) - 1)],
-                    dtype=np.int64)
+    return np.array([(p[0], p[i], p[i + 1]) for p in polygons for i in range(1, len(p) - 1)], dtype=np.int64)
 
 
 def _read_open3d_mesh(path: Path) -> dict:
     with quiet_open3d() as o3d:
         mesh = o3d.io.read_triangle_mesh(str(path))
-    data = {"vertices": np.asarray(mesh.vertices, dtype=np.float64),
-            "faces": np.asarray(mesh.triangles, dtype=np.int64)}
+    data = {
+        "vertices": np.asarray(mesh.vertices, dtype=np.float64),
+        "faces": np.asarray(mesh.triangles, dtype=np.int64),
+    }
     if len(data["vertices"]) and len(data["faces"]) == 0:
         raise InputError(f"{path}: the mesh file holds no triangles")
     if mesh.has_vertex_colors():

@@ -14,6 +14,7 @@ readers treat them as part of the path; an OBJ or MTL file name may hold
 spaces, so every tail of a directive's words (``../outside/a b.png``, then
 ``b.png``) must stay inside.
 """
+
 from __future__ import annotations
 
 import json
@@ -72,8 +73,9 @@ def _tails(argument: str) -> list[str]:
 _AMBIGUOUS = "a name with '?', '#' or '\\', which the readers take as part of a path that may leave the folder"
 
 
-def _inside(scan: Path, reference: str, target: str | None, required: bool = True,
-            problem: str = "outside the file's folder") -> Path:
+def _inside(
+    scan: Path, reference: str, target: str | None, required: bool = True, problem: str = "outside the file's folder"
+) -> Path:
     """The referenced file, if it lies inside the scan's folder and is a regular file (or, unless
     ``required``, is missing: Open3D then skips it); else an :class:`InputError` saying ``problem``
     for a reference that cannot be checked (``target`` None) or leaves the folder."""
@@ -87,8 +89,10 @@ def _inside(scan: Path, reference: str, target: str | None, required: bool = Tru
             problem = "a missing file"
         else:
             return resolved
-    raise InputError(f"{short(scan)}: refers to {shown(reference)}, {problem}; a scan may only refer to "
-                     "files beside it (or embed them)")
+    raise InputError(
+        f"{short(scan)}: refers to {shown(reference)}, {problem}; a scan may only refer to "
+        "files beside it (or embed them)"
+    )
 
 
 def _gltf_uris(path: Path, binary: bool) -> list[str]:

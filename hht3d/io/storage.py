@@ -16,6 +16,7 @@ paths go to :mod:`hht3d.io.read` unchanged, and writing is
 The back-ends are extras: ``pip install 'hht3d[s3]'`` (s3fs), ``[gcs]``
 (gcsfs), ``[azure]`` (adlfs); a missing one is named with its pip command.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -31,13 +32,36 @@ from ..redaction import redact, remember_secrets
 from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS
 from .paths import resolve_inputs
 
-__all__ = ["EXTRAS", "is_url", "local_path", "under", "options_for", "filesystem", "file_name", "stem", "parent_name",
-           "join", "resolve_locations", "local_copy", "load_url", "TEMPORARY_PREFIX", "temporary_folder",
-           "remove_temporary_folders"]
+__all__ = [
+    "EXTRAS",
+    "is_url",
+    "local_path",
+    "under",
+    "options_for",
+    "filesystem",
+    "file_name",
+    "stem",
+    "parent_name",
+    "join",
+    "resolve_locations",
+    "local_copy",
+    "load_url",
+    "TEMPORARY_PREFIX",
+    "temporary_folder",
+    "remove_temporary_folders",
+]
 
 #: The hht3d extra that installs each protocol's back-end.
-EXTRAS = {"s3": "s3", "s3a": "s3", "gs": "gcs", "gcs": "gcs", "az": "azure", "abfs": "azure", "abfss": "azure",
-          "adl": "azure"}
+EXTRAS = {
+    "s3": "s3",
+    "s3a": "s3",
+    "gs": "gcs",
+    "gcs": "gcs",
+    "az": "azure",
+    "abfs": "azure",
+    "abfss": "azure",
+    "adl": "azure",
+}
 _GLOB = "*?["
 
 
@@ -67,8 +91,9 @@ def local_path(location):
 
     parts = urlsplit(location)
     if parts.netloc not in ("", "localhost"):
-        raise InputError(f"{location}: a file:// URL names a local path, not one on host {parts.netloc!r}; "
-                         "write file:///path")
+        raise InputError(
+            f"{location}: a file:// URL names a local path, not one on host {parts.netloc!r}; write file:///path"
+        )
     return Path(url2pathname(parts.path))
 
 
@@ -111,11 +136,13 @@ def filesystem(url: str, storage_options: dict | None = None):
     except ImportError:
         extra = EXTRAS.get(protocol)
         how = f"pip install 'hht3d[{extra}]'" if extra else "install the fsspec back-end for it"
-        raise InputError(f"{redact(url)}: reading and writing {protocol}:// needs a back-end that is not installed; "
-                         f"{how}") from None
+        raise InputError(
+            f"{redact(url)}: reading and writing {protocol}:// needs a back-end that is not installed; {how}"
+        ) from None
     except (ValueError, TypeError) as exc:
-        raise InputError(f"{redact(url)}: cannot open {protocol}:// ({one_line(exc)}); check the URL and "
-                         "storage_options") from None
+        raise InputError(
+            f"{redact(url)}: cannot open {protocol}:// ({one_line(exc)}); check the URL and storage_options"
+        ) from None
 
 
 def _key(url: str) -> str:
@@ -161,13 +188,15 @@ def under(url: str, folder: str) -> str | None:
     """The key of the URL ``url`` relative to the URL ``folder``, both normalised lexically; ``None`` if
     ``url`` does not lie under ``folder``."""
     root, found = _normalised(folder).rstrip("/") + "/", _normalised(url)
-    return found[len(root):] if found.startswith(root) and len(found) > len(root) else None
+    return found[len(root) :] if found.startswith(root) and len(found) > len(root) else None
 
 
 def _access_error(exc: Exception) -> str:
     if isinstance(exc, TypeError):  # an option of another back-end, e.g. S3's endpoint_url given to https
-        return (f"storage_options do not fit this back-end: {one_line(exc)}; for runs that mix stores, key "
-                "them by protocol, e.g. {s3: {client_kwargs: ...}, https: {}}")
+        return (
+            f"storage_options do not fit this back-end: {one_line(exc)}; for runs that mix stores, key "
+            "them by protocol, e.g. {s3: {client_kwargs: ...}, https: {}}"
+        )
     if isinstance(exc, PermissionError):
         return "access denied; check the credentials (environment, config files or instance role)"
     if isinstance(exc, FileNotFoundError):
@@ -205,8 +234,9 @@ def _remote_inputs(url: str, storage_options) -> list[str]:
         elif fs.isfile(path):
             suffix = PurePosixPath(_key(url)).suffix.lower()  # a signed URL's query is no part of its name
             if suffix not in usable:
-                raise InputError(redact(f"{url}: unknown extension {suffix or '(none)'!r}; use one of "
-                                        f"{', '.join(sorted(usable))}"))
+                raise InputError(
+                    redact(f"{url}: unknown extension {suffix or '(none)'!r}; use one of {', '.join(sorted(usable))}")
+                )
             return [url]
         else:
             raise InputError(f"{redact(url)}: no such object or folder; check the URL")

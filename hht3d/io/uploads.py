@@ -13,6 +13,7 @@
 
 Locations, back-ends and reading are :mod:`hht3d.io.storage`'s.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -74,8 +75,10 @@ def _upload(fs, local: str, path: str, location: str) -> None:
                     if fs.exists(partial):
                         fs.rm_file(partial)
     except Exception as exc:  # the back-ends raise many types (network, client errors)
-        raise OutputError(f"{redact(location)}: cannot write ({_access_error(exc)}); check the bucket and "
-                          "the credentials, or choose another output folder") from None
+        raise OutputError(
+            f"{redact(location)}: cannot write ({_access_error(exc)}); check the bucket and "
+            "the credentials, or choose another output folder"
+        ) from None
     finally:
         fs.invalidate_cache(str(PurePosixPath(path).parent))
 
@@ -125,8 +128,10 @@ def update_object(url: str, update, storage_options: dict | None = None) -> None
             return
         except Exception as exc:  # the back-ends raise many types (network, client errors)
             if not (conditional and _came_first(exc)):
-                raise OutputError(f"{redact(url)}: cannot write ({_access_error(exc)}); check the bucket and the "
-                                  "credentials, or choose another output folder") from None
+                raise OutputError(
+                    f"{redact(url)}: cannot write ({_access_error(exc)}); check the bucket and the "
+                    "credentials, or choose another output folder"
+                ) from None
     raise OutputError(f"{redact(url)}: cannot write: other runs kept changing it ({_UPDATE_TRIES} tries); run again")
 
 
@@ -159,13 +164,17 @@ def _check_remote_folder(folder: str, storage_options) -> None:
     protocol = _protocol(folder)
     try:
         if protocol in _ATOMIC_UPLOAD - {"memory"} and not fs.exists(bucket):
-            raise OutputError(f"{redact(folder)}: cannot write: the bucket {bucket!r} does not exist (or these "
-                              "credentials cannot see it); create it or choose another output folder")
+            raise OutputError(
+                f"{redact(folder)}: cannot write: the bucket {bucket!r} does not exist (or these "
+                "credentials cannot see it); create it or choose another output folder"
+            )
         probe = f"{path.rstrip('/')}/.hht3d-probe-{uuid.uuid4().hex}"
         fs.pipe_file(probe, b"")
         fs.rm_file(probe)
     except HHT3DError:
         raise
     except Exception as exc:  # the back-ends raise many types (network, client errors)
-        raise OutputError(f"{redact(folder)}: cannot write ({_access_error(exc)}); choose another output "
-                          "folder or fix the permissions") from None
+        raise OutputError(
+            f"{redact(folder)}: cannot write ({_access_error(exc)}); choose another output "
+            "folder or fix the permissions"
+        ) from None

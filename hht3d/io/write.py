@@ -2,6 +2,7 @@
 
 Every write is atomic (:func:`hht3d.io.atomic.atomic_path`).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -79,8 +80,9 @@ def field_colors(values, *, cmap: str = "viridis", limits=None) -> np.ndarray:
     return rgba[:, :3]
 
 
-def write_colored_ply(path, surface: Surface, values, *, cmap: str = "viridis", limits=None,
-                      name: str = "field") -> Path:
+def write_colored_ply(
+    path, surface: Surface, values, *, cmap: str = "viridis", limits=None, name: str = "field"
+) -> Path:
     """Write a PLY whose vertex colours show one field (for any mesh viewer); the raw
     values are kept as attribute ``name``."""
     values = per_vertex(surface, name, values)

@@ -5,13 +5,33 @@
 * :mod:`~hht3d.linalg.estimate` — time and memory known before factorizing, and the advice that follows;
 * :mod:`~hht3d.linalg.pardiso`, :mod:`~hht3d.linalg.cholmod`, :mod:`~hht3d.linalg.superlu` — the backends.
 """
+
 from . import backends
-from .backends import (BACKEND_VARIABLE, SOLVER_BACKENDS, Backend, register_backend, available_backends,
-                       default_backend, BackendStatus, backend_report, check_backend)
+from .backends import (
+    BACKEND_VARIABLE,
+    SOLVER_BACKENDS,
+    Backend,
+    BackendStatus,
+    available_backends,
+    backend_report,
+    check_backend,
+    default_backend,
+    register_backend,
+)
+from .estimate import (
+    SLOW_FALLBACK_VERTICES,
+    Estimate,
+    SlowSolverWarning,
+    available_memory,
+    backend_estimates,
+    check_memory,
+    estimate_hht,
+    estimate_lines,
+    slow_fallback,
+    warn_slow_fallback,
+)
 from .factor import Factor
 from .symbolic import SymbolicFactorization, factorize
-from .estimate import (Estimate, estimate_hht, backend_estimates, available_memory, check_memory, estimate_lines,
-                       SLOW_FALLBACK_VERTICES, SlowSolverWarning, slow_fallback, warn_slow_fallback)
 
 
 def __getattr__(name: str):

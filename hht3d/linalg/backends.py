@@ -2,7 +2,8 @@
 
 EMD (Sec. 4.1) and the quadrature for ``L^{-1/2}`` (Sec. 4.2) factorize many
 matrices that share one sparsity pattern.  A
-:class:`~hht3d.linalg.symbolic.SymbolicFactorization` analyses that pattern once (fill-reducing ordering, symbolic factorization)
+:class:`~hht3d.linalg.symbolic.SymbolicFactorization` analyses that pattern once
+(fill-reducing ordering, symbolic factorization)
 and then only refactorizes numerically.
 
 Backends, in order of preference
@@ -44,6 +45,7 @@ it, and a lock unless the library may be entered by several threads at once
 :data:`hht3d.linalg.estimate.COSTS` adds its time and memory estimates.  Pipelines (``backend:``), EMD, the Riesz
 transform and ``hht3d info`` read the registry.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -187,9 +189,12 @@ def backend_report() -> tuple[list[BackendStatus], str]:
         reason = f"set by the environment variable {BACKEND_VARIABLE}={chosen}"
     else:
         names = list(SOLVER_BACKENDS)
-        faster = names[:names.index(default)]
-        reason = ("the fastest backend" if not faster else
-                  f"the fastest installed backend ({', '.join(faster)} not installed)")
+        faster = names[: names.index(default)]
+        reason = (
+            "the fastest backend"
+            if not faster
+            else f"the fastest installed backend ({', '.join(faster)} not installed)"
+        )
         reason += f"; override with {BACKEND_VARIABLE}=NAME or backend=NAME"
     statuses = []
     for name, backend in SOLVER_BACKENDS.items():
@@ -207,33 +212,57 @@ def check_backend(backend: str | None, where: str = "backend") -> str:
     if backend is None:
         return default_backend()
     if backend not in SOLVER_BACKENDS:
-        raise InputError(f"unknown sparse solver backend {backend!r} ({where}); "
-                         f"choose one of {tuple(SOLVER_BACKENDS)}")
+        raise InputError(f"unknown sparse solver backend {backend!r} ({where}); choose one of {tuple(SOLVER_BACKENDS)}")
     if not SOLVER_BACKENDS[backend].available:
-        raise InputError(f"sparse solver backend {backend!r} ({where}) is not available: "
-                         f"{SOLVER_BACKENDS[backend].missing}; installed: {available_backends()}")
+        raise InputError(
+            f"sparse solver backend {backend!r} ({where}) is not available: "
+            f"{SOLVER_BACKENDS[backend].missing}; installed: {available_backends()}"
+        )
     return backend
 
 
-register_backend(Backend(
-    "pardiso", "pypardiso", ("pypardiso",),
-    "MKL PARDISO, supernodal, METIS ordering, symbolic analysis reused",
-    "pypardiso is not installed (MKL, x86-64 only): pip install 'hht3d[fast]'", PardisoPattern, PARDISO_LOCK))
-register_backend(Backend(
-    "cholmod", "cvxopt", ("cvxopt", "cvxopt.cholmod"),
-    "CHOLMOD supernodal Cholesky, AMD ordering, symbolic analysis reused",
-    "cvxopt is not installed (no wheel for this platform?): pip install 'hht3d[fast]'", CholmodPattern,
-    CHOLMOD_LOCK))
-register_backend(Backend(
-    "superlu", "scipy", ("scipy.sparse.linalg",),
-    "SciPy SuperLU without pivoting, MMD ordering once per pattern, then reused",
-    "scipy is always installed", SuperLUPattern))
+register_backend(
+    Backend(
+        "pardiso",
+        "pypardiso",
+        ("pypardiso",),
+        "MKL PARDISO, supernodal, METIS ordering, symbolic analysis reused",
+        "pypardiso is not installed (MKL, x86-64 only): pip install 'hht3d[fast]'",
+        PardisoPattern,
+        PARDISO_LOCK,
+    )
+)
+register_backend(
+    Backend(
+        "cholmod",
+        "cvxopt",
+        ("cvxopt", "cvxopt.cholmod"),
+        "CHOLMOD supernodal Cholesky, AMD ordering, symbolic analysis reused",
+        "cvxopt is not installed (no wheel for this platform?): pip install 'hht3d[fast]'",
+        CholmodPattern,
+        CHOLMOD_LOCK,
+    )
+)
+register_backend(
+    Backend(
+        "superlu",
+        "scipy",
+        ("scipy.sparse.linalg",),
+        "SciPy SuperLU without pivoting, MMD ordering once per pattern, then reused",
+        "scipy is always installed",
+        SuperLUPattern,
+    )
+)
 
 
 def _deprecated_backends() -> tuple[str, ...]:
     """What ``BACKENDS`` gave, the backends' names fastest first, with a warning to the code that asked."""
-    warnings.warn("hht3d.linalg.BACKENDS is deprecated and goes in 0.3.0; use tuple(hht3d.linalg.SOLVER_BACKENDS), "
-                  "which also holds the backends registered later", DeprecationWarning, stacklevel=3)
+    warnings.warn(
+        "hht3d.linalg.BACKENDS is deprecated and goes in 0.3.0; use tuple(hht3d.linalg.SOLVER_BACKENDS), "
+        "which also holds the backends registered later",
+        DeprecationWarning,
+        stacklevel=3,
+    )
     return tuple(SOLVER_BACKENDS)
 
 

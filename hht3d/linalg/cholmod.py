@@ -1,4 +1,5 @@
 """CHOLMOD through ``cvxopt`` (extra ``fast``; GPL, hence not a core dependency)."""
+
 from __future__ import annotations
 
 import threading
@@ -29,8 +30,9 @@ class CholmodPattern:
         self._cvxopt, self._cholmod = module, module.cholmod
         self._lower = UpperTriangle(pattern)  # CSR upper == CSC lower
         # CSC lower: column = CSR row, row = CSR column; values 1 so that none is dropped
-        self._matrix = module.spmatrix(1.0, self._lower.indices.astype(np.int64),
-                                        self._lower.rows.astype(np.int64), (self.n, self.n))
+        self._matrix = module.spmatrix(
+            1.0, self._lower.indices.astype(np.int64), self._lower.rows.astype(np.int64), (self.n, self.n)
+        )
         if len(self._matrix.V) != len(self._lower.rows):  # pragma: no cover - cvxopt invariant
             raise NumericalError("cvxopt changed the sparsity pattern of the matrix")
         try:
@@ -45,8 +47,9 @@ class CholmodPattern:
         try:
             self._cholmod.numeric(self._matrix, self._factor)
         except ArithmeticError as exc:
-            raise NumericalError(f"CHOLMOD: the matrix is not positive definite (pivot {exc.args[0]} "
-                                 "of the permuted matrix)") from exc
+            raise NumericalError(
+                f"CHOLMOD: the matrix is not positive definite (pivot {exc.args[0]} of the permuted matrix)"
+            ) from exc
         except (ValueError, MemoryError) as exc:
             raise NumericalError(f"CHOLMOD factorization failed: {exc}") from exc
         token = self._latest.claim()

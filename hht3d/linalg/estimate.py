@@ -17,6 +17,7 @@ smallest).  :func:`slow_fallback` names the extra to install when a slow
 backend was chosen for a large mesh, and :func:`warn_slow_fallback` says it
 once per process as a Python warning.
 """
+
 from __future__ import annotations
 
 import math
@@ -28,9 +29,21 @@ from ..errors import InputError
 from . import backends
 from .backends import available_backends, check_backend
 
-__all__ = ["Cost", "COSTS", "Estimate", "estimate_hht", "backend_estimates", "available_memory",
-           "check_memory", "estimate_lines", "BASELINE", "SLOW_FALLBACK_VERTICES", "SlowSolverWarning", "slow_fallback",
-           "warn_slow_fallback"]
+__all__ = [
+    "Cost",
+    "COSTS",
+    "Estimate",
+    "estimate_hht",
+    "backend_estimates",
+    "available_memory",
+    "check_memory",
+    "estimate_lines",
+    "BASELINE",
+    "SLOW_FALLBACK_VERTICES",
+    "SlowSolverWarning",
+    "slow_fallback",
+    "warn_slow_fallback",
+]
 
 #: Meshes above this many vertices get the slow-fallback advice (:func:`slow_fallback`).
 SLOW_FALLBACK_VERTICES = 20_000
@@ -108,7 +121,7 @@ def estimate_hht(vertices: int, backend: str | None = None) -> Estimate | None:
 
 
 #: Resident memory of a Python process that has imported hht3d (bytes, measured: 66-100 MB); part of every estimate.
-BASELINE = 100 * 2 ** 20
+BASELINE = 100 * 2**20
 
 
 def backend_estimates(vertices: int) -> list[Estimate]:
@@ -119,8 +132,10 @@ def backend_estimates(vertices: int) -> list[Estimate]:
 def estimate_lines(vertices: int) -> list[str]:
     """For ``hht3d info --backends``: each installed backend's estimate at ``vertices``, and what is available."""
     available = available_memory()
-    lines = [f"estimated whole HHT of {vertices:,} vertices (memory available: "
-             f"{'unknown' if available is None else _size(available)}):"]
+    lines = [
+        f"estimated whole HHT of {vertices:,} vertices (memory available: "
+        f"{'unknown' if available is None else _size(available)}):"
+    ]
     for found in backend_estimates(vertices):
         fits = "" if available is None or found.added_bytes <= available else "  (does not fit)"
         lines.append(f"    {found.backend:<8} ~{_duration(found.seconds):>7}  peak ~{_size(found.peak_bytes)}{fits}")
@@ -133,12 +148,14 @@ def available_memory() -> int | None:
     limits, vms = [], None
     try:
         import psutil
+
         limits.append(psutil.virtual_memory().available)
         vms = psutil.Process().memory_info().vms
     except (ImportError, OSError):  # depends on the platform
         pass
     try:
         import resource
+
         soft = resource.getrlimit(resource.RLIMIT_AS)[0]
         if soft != resource.RLIM_INFINITY and vms is not None:
             limits.append(soft - vms)
@@ -167,8 +184,10 @@ def check_memory(vertices: int, backend: str | None = None, available: int | Non
     found = estimate_hht(vertices, backend)
     available = available_memory() if available is None else int(available)
     if found is not None and available is not None and found.added_bytes > available:
-        raise InputError(f"a surface of {vertices:,} vertices needs {found.describe()} but only "
-                         f"{_size(available)} is available; {_FIX}")
+        raise InputError(
+            f"a surface of {vertices:,} vertices needs {found.describe()} but only "
+            f"{_size(available)} is available; {_FIX}"
+        )
     return found
 
 
@@ -184,8 +203,10 @@ def slow_fallback(vertices: int, backend: str | None = None) -> str | None:
         return None
     faster = [name for name, c in COSTS.items() if not c.slow and name in backends.SOLVER_BACKENDS]
     found = estimate_hht(vertices, backend)
-    return (f"{backend} is a slow sparse solver for {vertices:,} vertices (the HHT needs {found.describe()}); "
-            f"pip install 'hht3d[fast]' for {' or '.join(faster)}")
+    return (
+        f"{backend} is a slow sparse solver for {vertices:,} vertices (the HHT needs {found.describe()}); "
+        f"pip install 'hht3d[fast]' for {' or '.join(faster)}"
+    )
 
 
 _WARNED: set[str] = set()
@@ -200,7 +221,7 @@ def warn_slow_fallback(vertices: int, backend: str | None = None) -> None:
 
 
 def _size(nbytes: float) -> str:
-    return f"{nbytes / 2 ** 30:.1f} GiB" if nbytes >= 2 ** 30 else f"{nbytes / 2 ** 20:.0f} MiB"
+    return f"{nbytes / 2**30:.1f} GiB" if nbytes >= 2**30 else f"{nbytes / 2**20:.0f} MiB"
 
 
 def _duration(seconds: float) -> str:

@@ -1,4 +1,5 @@
 """What every backend shares: the :class:`Factor` it returns and the fixed-pattern bookkeeping."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -1,4 +1,5 @@
 """MKL PARDISO through ``pypardiso`` (extra ``fast``, x86-64 only)."""
+
 from __future__ import annotations
 
 import ctypes
@@ -62,12 +63,24 @@ class PardisoPattern:
         values ``upper``, with the right-hand sides ``b`` (n, k) in Fortran order."""
         s, int_p = self.solver, ctypes.POINTER(ctypes.c_int32)
         x, error = np.zeros_like(b), ctypes.c_int32(0)
-        s._mkl_pardiso(s.pt.ctypes.data_as(ctypes.POINTER(s._pt_type[0])), _int32(1), _int32(1), _int32(s.mtype),
-                       _int32(phase), _int32(self.n), upper.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-                       self._indptr.ctypes.data_as(int_p), self._indices.ctypes.data_as(int_p),
-                       s.perm.ctypes.data_as(int_p), _int32(b.shape[1]), s.iparm.ctypes.data_as(int_p),
-                       _int32(s.msglvl), b.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-                       x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)), ctypes.byref(error))
+        s._mkl_pardiso(
+            s.pt.ctypes.data_as(ctypes.POINTER(s._pt_type[0])),
+            _int32(1),
+            _int32(1),
+            _int32(s.mtype),
+            _int32(phase),
+            _int32(self.n),
+            upper.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            self._indptr.ctypes.data_as(int_p),
+            self._indices.ctypes.data_as(int_p),
+            s.perm.ctypes.data_as(int_p),
+            _int32(b.shape[1]),
+            s.iparm.ctypes.data_as(int_p),
+            _int32(s.msglvl),
+            b.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            x.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+            ctypes.byref(error),
+        )
         if error.value != 0:
             raise NumericalError(f"PARDISO phase {phase} failed: {self._error(error.value)}")
         return x

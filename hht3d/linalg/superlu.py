@@ -15,6 +15,7 @@ the first factorization orders with multiple minimum degree on ``A + Aᵀ``
 by that ordering through a fixed index map and factorizes it with
 ``NATURAL``, skipping the ordering.
 """
+
 from __future__ import annotations
 
 import numpy as np

@@ -1,4 +1,5 @@
 """Analyse a sparsity pattern once, factorize many matrices on it, on any registered backend."""
+
 from __future__ import annotations
 
 import contextlib
@@ -70,6 +71,7 @@ def factorize(a, backend: str | None = None) -> Factor:
 
 def _holding(lock, solve):
     """``solve`` called with ``lock`` held."""
+
     def locked(b: np.ndarray) -> np.ndarray:
         with lock:
             return solve(b)

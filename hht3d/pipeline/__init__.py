@@ -19,19 +19,34 @@ and runs it on any scheduler of :mod:`hht3d.execution`.
 
 This layer adds configuration only: nothing in the core knows YAML exists.
 """
+
 from ..output_formats import FORMATS, Format
+from .document import apply_overrides
 from .params import Param
 from .plan import ExecutionOptions, Output, Pipeline, Step
 from .registry import OPERATIONS, Operation, Slot
 from .runner import failures, pipeline_graph, run_pipeline
-from .document import apply_overrides
 from .validation import VERSION, builtin_models, load_pipeline, parse_pipeline
 
 __all__ = [
-    "VERSION", "load_pipeline", "parse_pipeline", "apply_overrides", "builtin_models",
-    "Pipeline", "ExecutionOptions", "Step", "Output",
-    "OPERATIONS", "Operation", "Slot", "Param", "FORMATS", "Format",
-    "pipeline_graph", "run_pipeline", "failures",
+    "VERSION",
+    "load_pipeline",
+    "parse_pipeline",
+    "apply_overrides",
+    "builtin_models",
+    "Pipeline",
+    "ExecutionOptions",
+    "Step",
+    "Output",
+    "OPERATIONS",
+    "Operation",
+    "Slot",
+    "Param",
+    "FORMATS",
+    "Format",
+    "pipeline_graph",
+    "run_pipeline",
+    "failures",
 ]
 
 

@@ -7,6 +7,7 @@ that place.  :func:`apply_overrides` applies the CLI's ``--set KEY.PATH=VALUE``
 to a read document, recording ``--set ...`` as the place of what it sets.
 Nothing here knows what a pipeline contains.
 """
+
 from __future__ import annotations
 
 import re
@@ -15,8 +16,16 @@ import yaml
 
 from ..errors import MAX_SHOWN, PipelineError, did_you_mean, one_line, shown
 
-__all__ = ["YAMLMapping", "MAX_YAML_VALUES", "read_yaml", "at", "known_keys", "as_mapping", "apply_overrides",
-           "add_implicit_load"]
+__all__ = [
+    "YAMLMapping",
+    "MAX_YAML_VALUES",
+    "read_yaml",
+    "at",
+    "known_keys",
+    "as_mapping",
+    "apply_overrides",
+    "add_implicit_load",
+]
 
 
 # -- YAML with line numbers ------------------------------------------------------------------------
@@ -49,17 +58,26 @@ def _expanded_size(node, sizes: dict, source: str) -> int:
     key = id(node)
     if key in sizes:
         if sizes[key] is None:
-            raise PipelineError(f"{source}:{node.start_mark.line + 1}: an alias refers to its own anchor; "
-                                "a pipeline cannot be recursive")
+            raise PipelineError(
+                f"{source}:{node.start_mark.line + 1}: an alias refers to its own anchor; "
+                "a pipeline cannot be recursive"
+            )
         return sizes[key]
     sizes[key] = None
-    children = node.value if isinstance(node, yaml.SequenceNode) else \
-        [n for pair in node.value for n in pair] if isinstance(node, yaml.MappingNode) else []
+    children = (
+        node.value
+        if isinstance(node, yaml.SequenceNode)
+        else [n for pair in node.value for n in pair]
+        if isinstance(node, yaml.MappingNode)
+        else []
+    )
     sizes[key] = 1 + sum(_expanded_size(child, sizes, source) for child in children)
     if sizes[key] > MAX_YAML_VALUES:
-        raise PipelineError(f"{source}:{node.start_mark.line + 1}: this YAML expands to more than "
-                            f"{MAX_YAML_VALUES} values through aliases (&anchor, *alias); write the pipeline "
-                            "out without them")
+        raise PipelineError(
+            f"{source}:{node.start_mark.line + 1}: this YAML expands to more than "
+            f"{MAX_YAML_VALUES} values through aliases (&anchor, *alias); write the pipeline "
+            "out without them"
+        )
     return sizes[key]
 
 
@@ -78,6 +96,7 @@ def read_yaml(text: str, source: str):
         ``"source:LINE:COLUMN: YAML syntax error: ..."``, an alias bomb, or
         nesting too deep.
     """
+
     def place(node) -> str:
         return f"{source}:{node.start_mark.line + 1}" if "\n" in text.strip() else source
 
@@ -87,9 +106,11 @@ def read_yaml(text: str, source: str):
         def compose_node(self, parent, index):
             self.nodes += 1
             if self.nodes > MAX_YAML_VALUES:
-                raise PipelineError(f"{source}:{self.peek_event().start_mark.line + 1}: the YAML holds more than "
-                                    f"{MAX_YAML_VALUES} values; list input files with a folder or a glob, and "
-                                    "outputs with path placeholders")
+                raise PipelineError(
+                    f"{source}:{self.peek_event().start_mark.line + 1}: the YAML holds more than "
+                    f"{MAX_YAML_VALUES} values; list input files with a folder or a glob, and "
+                    "outputs with path placeholders"
+                )
             return super().compose_node(parent, index)
 
         def get_single_node(self):
@@ -119,8 +140,9 @@ def read_yaml(text: str, source: str):
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         reason = ": ".join(filter(None, [exc.context, exc.problem]))
-        raise _YAMLSyntaxError(f"{source}:{mark.line + 1}:{mark.column + 1}: YAML syntax error: "
-                               f"{one_line(reason)}") from None
+        raise _YAMLSyntaxError(
+            f"{source}:{mark.line + 1}:{mark.column + 1}: YAML syntax error: {one_line(reason)}"
+        ) from None
     except yaml.YAMLError as exc:
         raise _YAMLSyntaxError(f"{source}: YAML syntax error: {one_line(exc)}") from None
     except RecursionError:
@@ -147,7 +169,7 @@ def apply_overrides(document, overrides) -> None:
             value = raw
         node = document
         for depth, key in enumerate(keys[:-1]):
-            node = _child(node, key, ".".join(keys[:depth + 1]), where)
+            node = _child(node, key, ".".join(keys[: depth + 1]), where)
         _assign(node, keys[-1], value, where)
 
 
@@ -166,8 +188,10 @@ def _index(items: list, key: str, dotted: str, where: str) -> int:
         return int(key)
     names = [item.get("id", item.get("op")) if isinstance(item, dict) else None for item in items]
     if key not in names:
-        raise PipelineError(f"{where}: {dotted} matches no list item (give an index < {len(items)} or a "
-                            f"step id){did_you_mean(key, [n for n in names if isinstance(n, str)])}")
+        raise PipelineError(
+            f"{where}: {dotted} matches no list item (give an index < {len(items)} or a "
+            f"step id){did_you_mean(key, [n for n in names if isinstance(n, str)])}"
+        )
     return names.index(key)
 
 

@@ -25,6 +25,7 @@ Examples
 >>> emd["properties"]["params"]["properties"]["max_imfs"]
 {'type': 'integer', 'description': 'at most this many IMFs', 'default': 10, 'minimum': 0, 'maximum': 64}
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -66,9 +67,12 @@ def _is_json(value) -> bool:
 
 def _object(params, *, description: str | None = None, extra: dict | None = None) -> dict:
     """An object of these parameters and no others (``extra``: more properties)."""
-    schema = {"type": "object", **({"description": description} if description else {}),
-              "properties": {**(extra or {}), **{p.name: param_schema(p) for p in params}},
-              "additionalProperties": False}
+    schema = {
+        "type": "object",
+        **({"description": description} if description else {}),
+        "properties": {**(extra or {}), **{p.name: param_schema(p) for p in params}},
+        "additionalProperties": False,
+    }
     required = [p.name for p in params if p.required]
     if required:
         schema["required"] = required
@@ -82,12 +86,25 @@ def _gain_schema() -> dict:
         fields = dataclasses.fields(cls)
         properties = {"kind": {"const": kind}}
         for f in fields:
-            properties[f.name] = ({"type": "array", "items": {"type": "array", "items": {"type": "number"},
-                                                              "minItems": 2, "maxItems": 2}, "minItems": 1}
-                                  if f.name == "points" else {"type": "number"})
+            properties[f.name] = (
+                {
+                    "type": "array",
+                    "items": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
+                    "minItems": 1,
+                }
+                if f.name == "points"
+                else {"type": "number"}
+            )
         required = ["kind", *(f.name for f in fields if f.default is dataclasses.MISSING)]
-        branches.append({"type": "object", "description": (cls.__doc__ or kind).strip().splitlines()[0],
-                         "properties": properties, "required": required, "additionalProperties": False})
+        branches.append(
+            {
+                "type": "object",
+                "description": (cls.__doc__ or kind).strip().splitlines()[0],
+                "properties": properties,
+                "required": required,
+                "additionalProperties": False,
+            }
+        )
     return {"description": "a gain μ(ω) of the instantaneous frequency", "oneOf": branches}
 
 
@@ -99,16 +116,24 @@ def _step_schema() -> dict:
         "properties": {
             "id": {**reference, "description": "the step's name (default: the op)"},
             "op": {"enum": list(OPERATIONS), "description": "the operation (`hht3d ops` lists them)"},
-            "from": {"description": "the step whose result feeds it, or {slot: step id}",
-                     "anyOf": [reference, {"type": "object", "additionalProperties": reference}]},
+            "from": {
+                "description": "the step whose result feeds it, or {slot: step id}",
+                "anyOf": [reference, {"type": "object", "additionalProperties": reference}],
+            },
             "params": {"type": ["object", "null"]},
         },
         "required": ["op"],
         "additionalProperties": False,
-        "allOf": [{"if": {"properties": {"op": {"const": op.name}}, "required": ["op"]},
-                   "then": {"description": op.summary,
-                            "properties": {"params": _object(op.params, description=op.summary)}}}
-                  for op in OPERATIONS.values()],
+        "allOf": [
+            {
+                "if": {"properties": {"op": {"const": op.name}}, "required": ["op"]},
+                "then": {
+                    "description": op.summary,
+                    "properties": {"params": _object(op.params, description=op.summary)},
+                },
+            }
+            for op in OPERATIONS.values()
+        ],
     }
 
 
@@ -124,8 +149,10 @@ def _output_schema() -> dict:
     properties = {
         "from": {"type": "string", "description": "the step whose result is written (default: the last step)"},
         "path": {"type": "string", "description": "file name pattern with {stem}, {parent} and {name}"},
-        "format": {"enum": sorted({name for formats in FORMATS.values() for name in formats}),
-                   "description": "default: from the path's suffix"},
+        "format": {
+            "enum": sorted({name for formats in FORMATS.values() for name in formats}),
+            "description": "default: from the path's suffix",
+        },
         **{name: variants[0] if len(variants) == 1 else {"anyOf": variants} for name, variants in options.items()},
     }
     return {"type": "object", "properties": properties, "required": ["path"], "additionalProperties": False}
@@ -143,21 +170,44 @@ def pipeline_schema() -> dict:
             "version": {"const": VERSION, "description": "the schema version"},
             "name": {"type": "string", "minLength": 1, "description": "default: the file's stem"},
             "execution": _object(EXECUTION, description="how the graph runs"),
-            "storage_options": {"type": "object", "description": "options of the fsspec back-end of URL inputs and "
-                                "outputs (endpoint, region...); never credentials"},
-            "inputs": {"description": "a file, a folder, a glob, a list of them, or {builtin: NAME}",
-                       "anyOf": [{"type": "string", "minLength": 1}, inputs_list,
-                                 {"type": "object", "properties": {"builtin": {"enum": sorted(builtin_models())}},
-                                  "required": ["builtin"], "additionalProperties": False}]},
-            "steps": {"type": "array", "items": {"$ref": "#/$defs/step"}, "minItems": 1,
-                      "description": "run per input file; a step without from takes the nearest earlier result"},
-            "outputs": {"type": "object", "additionalProperties": False, "properties": {
-                "folder": {"type": "string", "description": "default: out"},
-                "summary": {"type": "boolean", "default": True, "description": "summary.json and summary.csv"},
-                "allow_outside": {"type": "boolean", "default": False,
-                                  "description": "let outputs resolve outside folder (default: refused)"},
-                "files": {"type": "array", "items": {"$ref": "#/$defs/output"}},
-            }},
+            "storage_options": {
+                "type": "object",
+                "description": "options of the fsspec back-end of URL inputs and "
+                "outputs (endpoint, region...); never credentials",
+            },
+            "inputs": {
+                "description": "a file, a folder, a glob, a list of them, or {builtin: NAME}",
+                "anyOf": [
+                    {"type": "string", "minLength": 1},
+                    inputs_list,
+                    {
+                        "type": "object",
+                        "properties": {"builtin": {"enum": sorted(builtin_models())}},
+                        "required": ["builtin"],
+                        "additionalProperties": False,
+                    },
+                ],
+            },
+            "steps": {
+                "type": "array",
+                "items": {"$ref": "#/$defs/step"},
+                "minItems": 1,
+                "description": "run per input file; a step without from takes the nearest earlier result",
+            },
+            "outputs": {
+                "type": "object",
+                "additionalProperties": False,
+                "properties": {
+                    "folder": {"type": "string", "description": "default: out"},
+                    "summary": {"type": "boolean", "default": True, "description": "summary.json and summary.csv"},
+                    "allow_outside": {
+                        "type": "boolean",
+                        "default": False,
+                        "description": "let outputs resolve outside folder (default: refused)",
+                    },
+                    "files": {"type": "array", "items": {"$ref": "#/$defs/output"}},
+                },
+            },
         },
         "required": ["version", "inputs", "steps", "outputs"],
         "additionalProperties": False,

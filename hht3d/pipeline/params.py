@@ -6,6 +6,7 @@ the core function receives, or raises :class:`~hht3d.errors.PipelineError`
 saying where, what was expected and what was found.  :func:`did_you_mean`
 adds the closest known name to messages about unknown names.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -42,8 +43,14 @@ def yaml_text(value) -> str:
 
 def _what(value) -> str:
     """How a YAML value reads in a message: ``'six' (a string)``, ``null``."""
-    names = {str: "a string", bool: "a boolean", int: "an integer", float: "a number", list: "a list",
-             dict: "a mapping"}
+    names = {
+        str: "a string",
+        bool: "a boolean",
+        int: "an integer",
+        float: "a number",
+        list: "a list",
+        dict: "a mapping",
+    }
     kind = next((n for t, n in names.items() if isinstance(value, t)), type(value).__name__)
     return "null" if value is None else f"{shown(value)} ({kind})"
 
@@ -87,8 +94,16 @@ class Param:
     @property
     def spec(self) -> Spec:
         """The parameter's allowed values as an option :class:`~hht3d.records.Spec`."""
-        return Spec(self.doc, self.kind, self.choices, self.minimum, self.maximum, self.open_minimum,
-                    self.open_maximum, self.nullable or self.default is None)
+        return Spec(
+            self.doc,
+            self.kind,
+            self.choices,
+            self.minimum,
+            self.maximum,
+            self.open_minimum,
+            self.open_maximum,
+            self.nullable or self.default is None,
+        )
 
     def describe(self) -> str:
         """The type and range, e.g. ``int >= 0``, ``float in (0.5, 1]``, ``sd | s_number | fixed``."""
@@ -122,8 +137,10 @@ class Param:
 def _gain(value, where: str):
     """A gain from ``{kind: NAME, PARAM: VALUE, ...}``."""
     if not isinstance(value, dict) or "kind" not in value:
-        raise PipelineError(f"{where} must be a mapping with a kind ({', '.join(GAINS)}) and its "
-                            f"parameters, e.g. {{kind: band_stop, low: 8, high: 20}}; got {_what(value)}")
+        raise PipelineError(
+            f"{where} must be a mapping with a kind ({', '.join(GAINS)}) and its "
+            f"parameters, e.g. {{kind: band_stop, low: 8, high: 20}}; got {_what(value)}"
+        )
     options = dict(value)
     kind = options.pop("kind")
     if not isinstance(kind, str) or kind not in GAINS:
@@ -141,5 +158,7 @@ def _gain(value, where: str):
 def record_params(record: type[Record]) -> tuple[Param, ...]:
     """One parameter per setting of an option record, with the record's default, range and description."""
     defaults = record.defaults()
-    return tuple(Param.of_spec(name, spec, REQUIRED if defaults[name] is dataclasses.MISSING else defaults[name])
-                 for name, spec in record.specs().items())
+    return tuple(
+        Param.of_spec(name, spec, REQUIRED if defaults[name] is dataclasses.MISSING else defaults[name])
+        for name, spec in record.specs().items()
+    )

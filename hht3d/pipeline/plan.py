@@ -4,6 +4,7 @@
 every default is filled in, every reference resolved, every input file
 found, so the runner (:mod:`hht3d.pipeline.runner`) only compiles it.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -36,8 +37,13 @@ class ExecutionOptions(Record):
     label = "execution"
 
     scheduler: str = option("threads", "Dask scheduler", choices=SCHEDULERS)
-    workers: int | None = option(None, "threads, processes or cluster workers (default: one per core)", kind="int",
-                                 minimum=1, maximum=MAX_WORKERS)
+    workers: int | None = option(
+        None,
+        "threads, processes or cluster workers (default: one per core)",
+        kind="int",
+        minimum=1,
+        maximum=MAX_WORKERS,
+    )
     address: str | None = option(None, "address of a running dask.distributed scheduler", kind="str")
     progress: bool = option(True, "progress bar on stderr")
     seed: int = option(0, "default seed of randomised steps", like=EnsembleOptions.specs()["seed"])
@@ -151,10 +157,14 @@ class Pipeline:
         where = f" at {ex.address}" if ex.address else ""
         files = f"{len(self.inputs)} input file{'' if len(self.inputs) == 1 else 's'}"
         header = f"pipeline {self.name!r} ({self.source}): {files}, {len(self.steps)} steps"
-        lines = [f"{header}, {len(self.outputs)} outputs per input",
-                 (f"execution: scheduler {ex.scheduler}{where}, workers {ex.workers or 'one per core'}, "
-                  f"progress {yaml_text(ex.progress)}, seed {ex.seed}"),
-                 "inputs:"]
+        lines = [
+            f"{header}, {len(self.outputs)} outputs per input",
+            (
+                f"execution: scheduler {ex.scheduler}{where}, workers {ex.workers or 'one per core'}, "
+                f"progress {yaml_text(ex.progress)}, seed {ex.seed}"
+            ),
+            "inputs:",
+        ]
         lines += [f"  {p}" for p in self.inputs]
         lines.append("steps:")
         width = max(len(s.id) for s in self.steps)

@@ -37,28 +37,36 @@ then add one entry to :data:`OPERATIONS`::
 Its lazy twin, if wanted outside pipelines, is one line in
 :mod:`hht3d.graph.stages`: ``smooth = mirror(smooth)``.
 """
+
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-import dataclasses
-
 from .. import graph, linalg
-from ..apps import (filter_geometry, filter_signal, hks_features, imf_enhancement, manifold_harmonics_filter,
-                    prominent_features, reconstruct)
+from ..apps import (
+    filter_geometry,
+    filter_signal,
+    hks_features,
+    imf_enhancement,
+    manifold_harmonics_filter,
+    prominent_features,
+    reconstruct,
+)
 from ..apps.baselines import EnhancementOptions, HarmonicFilterOptions, HKSOptions
 from ..apps.features import FeatureOptions
-from ..apps.reconstruction import FilterOptions, ReconstructionOptions
+from ..apps.geometry_filter import FilterOptions
+from ..apps.reconstruction import ReconstructionOptions
 from ..decomposition.decompose import emd
 from ..decomposition.ensemble import ensemble_settings
 from ..decomposition.options import EMDOptions, EnsembleOptions
 from ..errors import InputError, PipelineError, shown
+from ..geometry.signals import SIGNALS, check_signal_path, signal
 from ..graph.tasks import GraphOptions
 from ..io.read import LoadOptions, load
 from ..spectral.options import RieszOptions
 from ..transform import decomposition_stage
-from ..geometry.signals import SIGNALS, check_signal_path, signal
 from .params import REQUIRED, Param, did_you_mean, record_params
 
 __all__ = ["Slot", "Operation", "OPERATIONS", "RENAMED", "operation"]
@@ -159,14 +167,18 @@ class Operation:
 #: Former parameter names and their new ones, named in the message that refuses them.
 RENAMED = dict(RieszOptions.renamed)
 
-_BACKEND = Param("backend", "choice", "sparse solver (default: the fastest installed)", default=None,
-                 choices=SOLVERS)
+_BACKEND = Param("backend", "choice", "sparse solver (default: the fastest installed)", default=None, choices=SOLVERS)
 
 LOAD = record_params(LoadOptions)
 
 SIGNAL = (
-    Param("kind", "choice", "which signal; mean_curvature is Eq. 24", default=REQUIRED,
-          choices=(*SIGNALS, "stored", "file")),
+    Param(
+        "kind",
+        "choice",
+        "which signal; mean_curvature is Eq. 24",
+        default=REQUIRED,
+        choices=(*SIGNALS, "stored", "file"),
+    ),
     Param("attribute", "str", "vertex property of the file, with kind: stored", default=None),
     Param("path", "str", "a .npy file of one value per vertex, with kind: file", default=None),
 )
@@ -181,12 +193,16 @@ def _optional(params: tuple[Param, ...], **docs: str) -> tuple[Param, ...]:
 
 ENSEMBLE = _optional(record_params(EnsembleOptions), seed="EEMD noise seed (default: execution.seed)")
 SPECTRA = (*record_params(RieszOptions), *record_params(GraphOptions))
-HHT = (*record_params(EMDOptions),
-       *_optional(ENSEMBLE, ensemble_size="use EEMD with this many members (default: plain EMD)"),
-       *SPECTRA, _BACKEND)
+HHT = (
+    *record_params(EMDOptions),
+    *_optional(ENSEMBLE, ensemble_size="use EEMD with this many members (default: plain EMD)"),
+    *SPECTRA,
+    _BACKEND,
+)
 
-_GAIN = Param("gain", "gain", "μ(ω) of the instantaneous frequency, e.g. {kind: band_stop, low: 8, high: 20}",
-              default=REQUIRED)
+_GAIN = Param(
+    "gain", "gain", "μ(ω) of the instantaneous frequency, e.g. {kind: band_stop, low: 8, high: 20}", default=REQUIRED
+)
 
 
 # -- checks and builders -------------------------------------------------------------------------
@@ -195,8 +211,10 @@ def _check_signal(params, where):
     needs = {"stored": "attribute", "file": "path"}
     for name in ("attribute", "path"):
         if params[name] is not None and needs.get(kind) != name:
-            raise PipelineError(f"{where}: parameter {name} is only used with kind: "
-                                f"{'stored' if name == 'attribute' else 'file'} (kind is {kind})")
+            raise PipelineError(
+                f"{where}: parameter {name} is only used with kind: "
+                f"{'stored' if name == 'attribute' else 'file'} (kind is {kind})"
+            )
     if kind in needs and params[needs[kind]] is None:
         raise PipelineError(f"{where}: kind: {kind} needs the parameter {needs[kind]}")
     if kind == "file":
@@ -233,40 +251,117 @@ _IMFS = Slot("imfs", ("emd", "hht"))
 _HHT = Slot("hht", ("hht",))
 
 #: The operations by name.
-OPERATIONS: dict[str, Operation] = {op.name: op for op in (
-    Operation("load", "read a mesh or point cloud (PLY, OBJ, OFF, STL, GLB, PCD, XYZ, ...)",
-              (Slot("file", ("file",)),), "surface", LOAD, func=load),
-    Operation("signal", "a per-vertex signal: mean curvature (Eq. 24), coordinates, colour, stored values",
-              (_SURFACE,), "signal", SIGNAL, func=signal, check=_check_signal),
-    Operation("emd", "empirical mode decomposition with thin-plate envelopes (Sec. 4.1)",
-              (_SURFACE, _SIGNAL_IN), "emd", EMD, func=emd),
-    Operation("eemd", "ensemble EMD: one task per noisy member, then the average",
-              (_SURFACE, _SIGNAL_IN), "emd", ENSEMBLE + EMD, build=_eemd_tasks),
-    Operation("hht", "Hilbert–Huang transform: EMD, Riesz transform, Hilbert spectra (Alg. 2)",
-              (_SURFACE, _SIGNAL_IN), "hht", HHT, build=_hht_tasks, vertices=_eigenpair_vertices),
-    Operation("filter_signal", "the signal through a gain of the instantaneous frequency (Eq. 26)",
-              (_HHT,), "signal", (_GAIN,), func=filter_signal),
-    Operation("filter_geometry", "Hilbert-spectrum filtering of the mean curvature and new positions "
-                                 "(Eqs. 26-27)",
-              (_HHT,), "surface", (_GAIN, *record_params(FilterOptions), _BACKEND), func=filter_geometry),
-    Operation("reconstruct", "new positions whose mean curvature is the given signal (Eq. 27)",
-              (_SURFACE, _SIGNAL_IN), "surface", (*record_params(ReconstructionOptions), _BACKEND), func=reconstruct),
-    Operation("features", "prominent feature points from IMF extrema counts (Sec. 5.2)",
-              (_SURFACE, _IMFS), "features", record_params(FeatureOptions), func=prominent_features),
-    Operation("hks_features", "baseline: maxima of the heat kernel signature (Sun et al. 2009)",
-              (_SURFACE,), "features", (*record_params(HKSOptions), _BACKEND), func=hks_features,
-              vertices=_eigenpair_vertices),
-    Operation("imf_enhancement", "baseline: scale one IMF of the mean curvature (Hu et al. 2014)",
-              (_SURFACE, _IMFS), "surface", (*record_params(EnhancementOptions), _BACKEND), func=imf_enhancement),
-    Operation("manifold_harmonics_filter", "baseline: filter in the Laplacian eigenbasis (Vallet & Lévy 2008)",
-              (_SURFACE,), "surface", (_GAIN, *record_params(HarmonicFilterOptions), _BACKEND),
-              func=manifold_harmonics_filter, vertices=_eigenpair_vertices),
-)}
+OPERATIONS: dict[str, Operation] = {
+    op.name: op
+    for op in (
+        Operation(
+            "load",
+            "read a mesh or point cloud (PLY, OBJ, OFF, STL, GLB, PCD, XYZ, ...)",
+            (Slot("file", ("file",)),),
+            "surface",
+            LOAD,
+            func=load,
+        ),
+        Operation(
+            "signal",
+            "a per-vertex signal: mean curvature (Eq. 24), coordinates, colour, stored values",
+            (_SURFACE,),
+            "signal",
+            SIGNAL,
+            func=signal,
+            check=_check_signal,
+        ),
+        Operation(
+            "emd",
+            "empirical mode decomposition with thin-plate envelopes (Sec. 4.1)",
+            (_SURFACE, _SIGNAL_IN),
+            "emd",
+            EMD,
+            func=emd,
+        ),
+        Operation(
+            "eemd",
+            "ensemble EMD: one task per noisy member, then the average",
+            (_SURFACE, _SIGNAL_IN),
+            "emd",
+            ENSEMBLE + EMD,
+            build=_eemd_tasks,
+        ),
+        Operation(
+            "hht",
+            "Hilbert–Huang transform: EMD, Riesz transform, Hilbert spectra (Alg. 2)",
+            (_SURFACE, _SIGNAL_IN),
+            "hht",
+            HHT,
+            build=_hht_tasks,
+            vertices=_eigenpair_vertices,
+        ),
+        Operation(
+            "filter_signal",
+            "the signal through a gain of the instantaneous frequency (Eq. 26)",
+            (_HHT,),
+            "signal",
+            (_GAIN,),
+            func=filter_signal,
+        ),
+        Operation(
+            "filter_geometry",
+            "Hilbert-spectrum filtering of the mean curvature and new positions (Eqs. 26-27)",
+            (_HHT,),
+            "surface",
+            (_GAIN, *record_params(FilterOptions), _BACKEND),
+            func=filter_geometry,
+        ),
+        Operation(
+            "reconstruct",
+            "new positions whose mean curvature is the given signal (Eq. 27)",
+            (_SURFACE, _SIGNAL_IN),
+            "surface",
+            (*record_params(ReconstructionOptions), _BACKEND),
+            func=reconstruct,
+        ),
+        Operation(
+            "features",
+            "prominent feature points from IMF extrema counts (Sec. 5.2)",
+            (_SURFACE, _IMFS),
+            "features",
+            record_params(FeatureOptions),
+            func=prominent_features,
+        ),
+        Operation(
+            "hks_features",
+            "baseline: maxima of the heat kernel signature (Sun et al. 2009)",
+            (_SURFACE,),
+            "features",
+            (*record_params(HKSOptions), _BACKEND),
+            func=hks_features,
+            vertices=_eigenpair_vertices,
+        ),
+        Operation(
+            "imf_enhancement",
+            "baseline: scale one IMF of the mean curvature (Hu et al. 2014)",
+            (_SURFACE, _IMFS),
+            "surface",
+            (*record_params(EnhancementOptions), _BACKEND),
+            func=imf_enhancement,
+        ),
+        Operation(
+            "manifold_harmonics_filter",
+            "baseline: filter in the Laplacian eigenbasis (Vallet & Lévy 2008)",
+            (_SURFACE,),
+            "surface",
+            (_GAIN, *record_params(HarmonicFilterOptions), _BACKEND),
+            func=manifold_harmonics_filter,
+            vertices=_eigenpair_vertices,
+        ),
+    )
+}
 
 
 def operation(name: str, where: str) -> Operation:
     """The operation called ``name``; a :class:`PipelineError` with "did you mean" otherwise."""
     if not isinstance(name, str) or name not in OPERATIONS:
-        raise PipelineError(f"{where}: unknown op {shown(name)}{did_you_mean(name, OPERATIONS)} "
-                            "(`hht3d ops` lists them)")
+        raise PipelineError(
+            f"{where}: unknown op {shown(name)}{did_you_mean(name, OPERATIONS)} (`hht3d ops` lists them)"
+        )
     return OPERATIONS[name]

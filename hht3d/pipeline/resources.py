@@ -8,6 +8,7 @@ memory available is refused with one line before anything is computed.
 Inputs of other formats, and URLs, are measured only when loaded (the
 solver checks again before its first factorization).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -52,7 +53,7 @@ def resource_lines(plan: Pipeline) -> list[str]:
         if found is not None:
             lines.append(f"estimate: {source}: {found.describe()}")
     if lines and available is not None:
-        lines.append(f"estimate: memory available {available / 2 ** 30:.1f} GiB")
+        lines.append(f"estimate: memory available {available / 2**30:.1f} GiB")
     return lines
 
 

@@ -15,6 +15,7 @@ before anything is computed, a file hht3d did not write is refused unless
 output is recorded in the folder's manifest; a URL folder is probed and
 written by upload.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -56,19 +57,24 @@ def _item(plan: Pipeline, folder: OutputFolder, source: Path, paths: list[Path])
     writes = []
     for output, path in zip(plan.outputs, paths):
         write = _guarded(source, lambda task, label=f"write {file_name(path)}": label)
-        writes.append(write.task("write", folder.writer(output.format.write))(
-            results[output.step], results[plan.origin_of(output.step)], str(path), **output.options))
+        writes.append(
+            write.task("write", folder.writer(output.format.write))(
+                results[output.step], results[plan.origin_of(output.step)], str(path), **output.options
+            )
+        )
     surface = results[next(s.id for s in plan.steps if s.op.name == "load")]
     last = next((s.id for s in reversed(plan.steps) if s.kind in ("emd", "hht")), None)
     decomposition = quality = None
     if last is not None:
         decomposition = results[last]
         quality = _guarded(source, lambda task: f"{last} (quality)").task("quality", quality_fields)(
-            decomposition, results[plan.surface_of(last)])
+            decomposition, results[plan.surface_of(last)]
+        )
         parts[quality.key] = quality
     name = f"pipeline-item-{tokenize(plan.name, str(source), [str(p) for p in paths])}"
-    return delayed(item_summary, pure=True, name=name)(str(source), [str(p) for p in paths], surface,
-                                                       decomposition, quality, list(parts.values()), writes)
+    return delayed(item_summary, pure=True, name=name)(
+        str(source), [str(p) for p in paths], surface, decomposition, quality, list(parts.values()), writes
+    )
 
 
 def output_folder(plan: Pipeline, run: str | None = None) -> OutputFolder:
@@ -94,10 +100,18 @@ def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder
     return items_graph(items, folder, lambda source, paths: _item(plan, folder, source, paths), resume=resume)
 
 
-def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int | None = None,
-                 address: str | None = None, progress: bool | None = None,
-                 resume: bool = False, overwrite: bool = False, summary: bool = True,
-                 run: str | None = None) -> list[ItemSummary]:
+def run_pipeline(
+    plan: Pipeline,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    address: str | None = None,
+    progress: bool | None = None,
+    resume: bool = False,
+    overwrite: bool = False,
+    summary: bool = True,
+    run: str | None = None,
+) -> list[ItemSummary]:
     """Run a pipeline; return one :class:`~hht3d.dataset.summary.ItemSummary` per input file.
 
     Arguments left as ``None`` take the pipeline's ``execution`` block and
@@ -133,13 +147,19 @@ def run_pipeline(plan: Pipeline, *, scheduler: str | None = None, workers: int |
     ([('ok', 2)], ['spot_hht.npz'])
     """
     given = {"scheduler": scheduler, "workers": workers, "address": address, "progress": progress}
-    checked = {p.name: p.check(given[p.name], f"{p.name}={given[p.name]}") for p in EXECUTION
-               if given.get(p.name) is not None}
+    checked = {
+        p.name: p.check(given[p.name], f"{p.name}={given[p.name]}") for p in EXECUTION if given.get(p.name) is not None
+    }
     execution = dataclasses.replace(plan.execution, **checked)
     folder = output_folder(plan, run)
     folder.prepare(plan.written_paths(), overwrite=overwrite)
-    (rows,) = compute(pipeline_graph(plan, resume=resume, folder=folder), scheduler=execution.scheduler,
-                      workers=execution.workers, address=execution.address, progress=execution.progress)
+    (rows,) = compute(
+        pipeline_graph(plan, resume=resume, folder=folder),
+        scheduler=execution.scheduler,
+        workers=execution.workers,
+        address=execution.address,
+        progress=execution.progress,
+    )
     folder.finish(plan.written_paths(), written_outputs(rows))
     if summary and plan.summary:
         write_summary(rows, plan.folder, folder.run, plan.storage_options)

@@ -11,6 +11,7 @@ their usual places (``AWS_ACCESS_KEY_ID``/``AWS_SECRET_ACCESS_KEY``,
 ``~/.aws/credentials``, ``GOOGLE_APPLICATION_CREDENTIALS``,
 ``AZURE_STORAGE_*``, instance roles), so a key that names a secret is refused.
 """
+
 from __future__ import annotations
 
 from ..errors import PipelineError, shown
@@ -32,8 +33,9 @@ def storage_options(doc) -> dict:
     if block is None:
         return {}
     if not isinstance(block, dict):
-        raise PipelineError(f"{at(doc, 'storage_options')}: storage_options must be a mapping of fsspec "
-                            f"options, got {shown(block)}")
+        raise PipelineError(
+            f"{at(doc, 'storage_options')}: storage_options must be a mapping of fsspec options, got {shown(block)}"
+        )
     remember_secrets(block)
     _no_credentials(block, "storage_options")
     return dict(block)
@@ -42,9 +44,11 @@ def storage_options(doc) -> dict:
 def _no_credentials(block: dict, dotted: str) -> None:
     for key, value in block.items():
         if is_secret_name(key) and not isinstance(value, dict):
-            raise PipelineError(f"{at(block, key)}: {dotted}.{key}: credentials do not belong in a pipeline "
-                                "file; remove it and give them through the environment (e.g. "
-                                "AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY), the back-end's config file or an "
-                                "instance role")
+            raise PipelineError(
+                f"{at(block, key)}: {dotted}.{key}: credentials do not belong in a pipeline "
+                "file; remove it and give them through the environment (e.g. "
+                "AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY), the back-end's config file or an "
+                "instance role"
+            )
         if isinstance(value, dict):
             _no_credentials(value, f"{dotted}.{key}")

@@ -42,17 +42,14 @@ are relative to the working directory.  Every error is a
 :class:`~hht3d.errors.PipelineError` naming the file and line (or the
 ``--set`` override) and what to change.
 
-Validation checks everything that is cheap to know before computing, and
-builds no task graph: every numeric parameter against its documented range
-(``hht3d ops`` prints them; the upper bounds are in
-:mod:`hht3d.pipeline.registry`), input extensions, ``eigenpairs`` against the
-vertex count in PLY headers, output fields against ``max_imfs``, and that
-every output can be written.  Floats are read as in YAML 1.2 (``1e-8`` is a
-number), and a document that aliases expand past
-:data:`~hht3d.pipeline.document.MAX_YAML_VALUES` values is refused (reading
-the YAML with the place of every key, and ``--set``, are
-:mod:`hht3d.pipeline.document`; this module checks what it says).
+Validation checks everything cheap to know before computing, and builds no
+task graph: every parameter against its record's range (``hht3d ops``),
+input extensions, ``eigenpairs`` against PLY vertex counts, output fields
+against ``max_imfs``, and that every output can be written.  Reading the YAML
+(floats as in YAML 1.2, alias bombs refused, ``--set``) is
+:mod:`hht3d.pipeline.document`'s; this module checks what it says.
 """
+
 from __future__ import annotations
 
 import string
@@ -62,14 +59,25 @@ from ..errors import InputError, PipelineError, shown
 from ..io import data_path, read_ply_header
 from ..io.storage import is_url, resolve_locations
 from .document import YAMLMapping, add_implicit_load, apply_overrides, as_mapping, at, known_keys, read_yaml
+from .order import run_order
 from .output_checks import FILE_KEYS, OUTPUTS_KEYS, check_plan_outputs, read_outputs
 from .params import did_you_mean, record_params
 from .plan import FILE, ExecutionOptions, Pipeline, Step
 from .registry import OPERATIONS, RENAMED, operation
 from .storage_options import storage_options
 
-__all__ = ["VERSION", "EXECUTION", "TOP_KEYS", "STEP_KEYS", "OUTPUTS_KEYS", "FILE_KEYS", "load_pipeline",
-           "parse_pipeline", "builtin_models", "Validator"]
+__all__ = [
+    "VERSION",
+    "EXECUTION",
+    "TOP_KEYS",
+    "STEP_KEYS",
+    "OUTPUTS_KEYS",
+    "FILE_KEYS",
+    "load_pipeline",
+    "parse_pipeline",
+    "builtin_models",
+    "Validator",
+]
 
 #: The schema version this package reads.
 VERSION = 1
@@ -106,8 +114,9 @@ def load_pipeline(path, overrides=()) -> Pipeline:
     except OSError as exc:
         raise PipelineError(f"{path}: cannot read the pipeline ({exc.strerror or exc})") from None
     except UnicodeDecodeError as exc:
-        raise PipelineError(f"{path}: cannot read the pipeline: byte {exc.start} is not UTF-8 text; save the "
-                            "file as UTF-8") from None
+        raise PipelineError(
+            f"{path}: cannot read the pipeline: byte {exc.start} is not UTF-8 text; save the file as UTF-8"
+        ) from None
     return parse_pipeline(text, source=str(path), overrides=overrides)
 
 
@@ -115,8 +124,10 @@ def parse_pipeline(text: str, *, source: str = "<pipeline>", overrides=()) -> Pi
     """Validate pipeline YAML given as text; see :func:`load_pipeline`."""
     document = read_yaml(text, source)
     if not isinstance(document, dict):
-        raise PipelineError(f"{source}: a pipeline is a YAML mapping with version, inputs, steps and "
-                            f"outputs; got {type(document).__name__ if document is not None else 'an empty file'}")
+        raise PipelineError(
+            f"{source}: a pipeline is a YAML mapping with version, inputs, steps and "
+            f"outputs; got {type(document).__name__ if document is not None else 'an empty file'}"
+        )
     add_implicit_load(document)
     apply_overrides(document, overrides)
     return Validator(source).pipeline(document)
@@ -179,9 +190,18 @@ class Validator:
         inputs = self.inputs = self._inputs(doc)
         steps = self._steps(doc, execution)
         folder, summary, allow_outside, outputs = read_outputs(doc, steps, self.source)
-        plan = Pipeline(name=name, source=self.source, execution=execution, inputs=inputs, steps=steps,
-                        outputs=outputs, folder=folder, summary=summary, storage_options=self.storage_options,
-                        allow_outside=allow_outside)
+        plan = Pipeline(
+            name=name,
+            source=self.source,
+            execution=execution,
+            inputs=inputs,
+            steps=steps,
+            outputs=outputs,
+            folder=folder,
+            summary=summary,
+            storage_options=self.storage_options,
+            allow_outside=allow_outside,
+        )
         check_plan_outputs(plan, doc)
         return plan
 
@@ -189,33 +209,40 @@ class Validator:
         if "version" not in doc:
             raise PipelineError(f"{self.source}: missing 'version: {VERSION}' (the schema version) at the top")
         if doc["version"] != VERSION or isinstance(doc["version"], bool):
-            raise PipelineError(f"{at(doc, 'version')}: unsupported pipeline version {shown(doc['version'])}; "
-                                f"this hht3d reads version {VERSION}")
+            raise PipelineError(
+                f"{at(doc, 'version')}: unsupported pipeline version {shown(doc['version'])}; "
+                f"this hht3d reads version {VERSION}"
+            )
 
     def _execution(self, block) -> ExecutionOptions:
         block = as_mapping(block, at(block), "execution")
         known_keys(block, [p.name for p in EXECUTION], "execution")
-        values = {p.name: p.check(block[p.name], f"{at(block, p.name)}: execution") if p.name in block
-                  else p.default for p in EXECUTION}
+        values = {
+            p.name: p.check(block[p.name], f"{at(block, p.name)}: execution") if p.name in block else p.default
+            for p in EXECUTION
+        }
         return ExecutionOptions(**values)
 
     def _inputs(self, doc) -> tuple[Path | str, ...]:
         if "inputs" not in doc or doc["inputs"] in (None, [], ""):
-            raise PipelineError(f"{self.source}: missing inputs: give a file, a folder, a glob, a list of "
-                                "them, or {builtin: spot}")
+            raise PipelineError(
+                f"{self.source}: missing inputs: give a file, a folder, a glob, a list of them, or {{builtin: spot}}"
+            )
         spec, where = doc["inputs"], at(doc, "inputs")
         if isinstance(spec, dict):
             known_keys(spec, ["builtin"], "inputs")
             models = builtin_models()
             name = spec.get("builtin")
             if name not in models:
-                raise PipelineError(f"{at(spec, 'builtin')}: unknown builtin model {shown(name)}"
-                                    f"{did_you_mean(name, models)}")
+                raise PipelineError(
+                    f"{at(spec, 'builtin')}: unknown builtin model {shown(name)}{did_you_mean(name, models)}"
+                )
             return (models[name],)
         items = spec if isinstance(spec, list) else [spec]
         if not all(isinstance(item, str) and item for item in items):
-            raise PipelineError(f"{where}: inputs must be a path, a glob, a folder or a list of them, "
-                                f"got {shown(spec)}")
+            raise PipelineError(
+                f"{where}: inputs must be a path, a glob, a folder or a list of them, got {shown(spec)}"
+            )
         try:
             return tuple(resolve_locations(items, self.storage_options))
         except InputError as exc:
@@ -225,18 +252,23 @@ class Validator:
     def _steps(self, doc, execution: ExecutionOptions) -> tuple[Step, ...]:
         raw = doc.get("steps")
         if not isinstance(raw, list) or not raw:
-            raise PipelineError(f"{at(doc, 'steps') if 'steps' in doc else self.source}: steps must be a "
-                                "non-empty list of {id, op, params} entries")
+            raise PipelineError(
+                f"{at(doc, 'steps') if 'steps' in doc else self.source}: steps must be a "
+                "non-empty list of {id, op, params} entries"
+            )
         entries = [as_mapping(e, at(doc, "steps"), f"step {i + 1}") for i, e in enumerate(raw)]
         parsed = [self._step(entry, execution) for entry in entries]
         ids = [p[0] for p in parsed]
         for i, step_id in enumerate(ids):
             if step_id in ids[:i]:
-                raise PipelineError(f"{at(entries[i], 'id')}: two steps have the id {shown(step_id)}; give each "
-                                    "step a distinct id")
-        steps = [Step(step_id, op, params, self._refs(entries, parsed, i), given)
-                 for i, (step_id, op, params, given) in enumerate(parsed)]
-        return _ordered(steps, entries)
+                raise PipelineError(
+                    f"{at(entries[i], 'id')}: two steps have the id {shown(step_id)}; give each step a distinct id"
+                )
+        steps = [
+            Step(step_id, op, params, self._refs(entries, parsed, i), given)
+            for i, (step_id, op, params, given) in enumerate(parsed)
+        ]
+        return run_order(steps, entries)
 
     def _step(self, entry, execution: ExecutionOptions):
         known_keys(entry, STEP_KEYS, "a step")
@@ -246,24 +278,29 @@ class Validator:
         op = operation(entry["op"], where)
         step_id = entry.get("id", op.name)
         if not isinstance(step_id, str) or not 0 < len(step_id) <= MAX_ID or not set(step_id) <= _ID_CHARS:
-            raise PipelineError(f"{at(entry, 'id')}: step id must be 1 to {MAX_ID} letters, digits, '_' or '-', "
-                                f"got {shown(step_id)}")
+            raise PipelineError(
+                f"{at(entry, 'id')}: step id must be 1 to {MAX_ID} letters, digits, '_' or '-', got {shown(step_id)}"
+            )
         context = f"step {shown(step_id)} (op {op.name})"
         raw = as_mapping(entry.get("params") or YAMLMapping(at(entry)), at(entry, "params"), f"{context} params")
         for key in raw:
             if op.param(key) is None:
                 known = [p.name for p in op.params]
-                hint = (f"; did you mean {RENAMED[key]}? ({key} was renamed {RENAMED[key]} in 0.2.0)"
-                        if RENAMED.get(key) in known else did_you_mean(key, known))
-                raise PipelineError(f"{at(raw, key)}: {context}: unknown parameter {shown(key)}{hint} "
-                                    f"(`hht3d ops {op.name}` lists them)")
+                hint = (
+                    f"; did you mean {RENAMED[key]}? ({key} was renamed {RENAMED[key]} in 0.2.0)"
+                    if RENAMED.get(key) in known
+                    else did_you_mean(key, known)
+                )
+                raise PipelineError(
+                    f"{at(raw, key)}: {context}: unknown parameter {shown(key)}{hint} "
+                    f"(`hht3d ops {op.name}` lists them)"
+                )
         params = {}
         for p in op.params:
             if p.name in raw:
                 params[p.name] = p.check(raw[p.name], f"{at(raw, p.name)}: {context}")
             elif p.required:
-                raise PipelineError(f"{at(entry)}: {context}: missing required parameter {p.name} "
-                                    f"({p.describe()})")
+                raise PipelineError(f"{at(entry)}: {context}: missing required parameter {p.name} ({p.describe()})")
             else:
                 params[p.name] = p.default
         if "seed" in params and params["seed"] is None:
@@ -279,8 +316,10 @@ class Validator:
         """Refuse a parameter that needs more vertices than a PLY input declares in its header."""
         for source, count in self._counts().items():
             if count < fewest:
-                raise PipelineError(f"{where}: {name}: {params[name]} needs at least {fewest} vertices, but "
-                                    f"{source} has {count}; lower {name} below {count}")
+                raise PipelineError(
+                    f"{where}: {name}: {params[name]} needs at least {fewest} vertices, but "
+                    f"{source} has {count}; lower {name} below {count}"
+                )
 
     def _counts(self) -> dict[Path, int]:
         """Vertex counts of the PLY inputs, from their headers (others, and unreadable ones, are left out:
@@ -313,7 +352,8 @@ class Validator:
                     raise PipelineError(
                         f"{at(entry)}: step {shown(step_id)} (op {op.name}) needs {' or '.join(slot.kinds)} input "
                         f"{shown(slot.name)}, and no earlier step makes one; add a step with op "
-                        f"{' or '.join(makers)} before it, or name one with from: {{{slot.name}: STEP_ID}}")
+                        f"{' or '.join(makers)} before it, or name one with from: {{{slot.name}: STEP_ID}}"
+                    )
                 refs[slot.name] = earlier[-1]
         return refs
 
@@ -326,20 +366,26 @@ class Validator:
             self._known_step(given, kinds, context, "from")
             matching = [s for s in slots.values() if kinds[given] in s.kinds]
             if not matching:
-                raise PipelineError(f"{context}: from: {shown(given)} makes {kinds[given]}, which op {op.name} does "
-                                    f"not take; it takes {self._takes(slots)}")
+                raise PipelineError(
+                    f"{context}: from: {shown(given)} makes {kinds[given]}, which op {op.name} does "
+                    f"not take; it takes {self._takes(slots)}"
+                )
             return {matching[0].name: given}
         if not isinstance(given, dict):
             raise PipelineError(f"{context}: from must be a step id or a mapping {{slot: step id}}, got {shown(given)}")
         refs = {}
         for slot, ref in given.items():
             if slot not in slots:
-                raise PipelineError(f"{context}: op {op.name} has no input {shown(slot)}"
-                                    f"{did_you_mean(slot, slots, listing=False)} (it takes {self._takes(slots)})")
+                raise PipelineError(
+                    f"{context}: op {op.name} has no input {shown(slot)}"
+                    f"{did_you_mean(slot, slots, listing=False)} (it takes {self._takes(slots)})"
+                )
             self._known_step(ref, kinds, context, f"from.{slot}")
             if kinds[ref] not in slots[slot].kinds:
-                raise PipelineError(f"{context}: from.{slot}: step {shown(ref)} makes {kinds[ref]}, but {slot} "
-                                    f"needs {' or '.join(slots[slot].kinds)}")
+                raise PipelineError(
+                    f"{context}: from.{slot}: step {shown(ref)} makes {kinds[ref]}, but {slot} "
+                    f"needs {' or '.join(slots[slot].kinds)}"
+                )
             refs[slot] = ref
         return refs
 
@@ -351,29 +397,3 @@ class Validator:
     def _known_step(ref, kinds: dict, context: str, what: str) -> None:
         if not isinstance(ref, str) or ref not in kinds:
             raise PipelineError(f"{context}: {what} refers to unknown step {shown(ref)}{did_you_mean(ref, kinds)}")
-
-
-def _ordered(steps: list[Step], entries) -> tuple[Step, ...]:
-    """Steps in list order, each moved after the steps it uses; a cycle is an error."""
-    by_id = {s.id: s for s in steps}
-    done: dict[str, bool] = {}  # False while on the current path
-    order: list[Step] = []
-
-    def visit(step: Step, path: list[str]) -> None:
-        if done.get(step.id) is False:
-            cycle = path[path.index(step.id):] + [step.id]
-            entry = entries[steps.index(step)]
-            raise PipelineError(f"{at(entry, 'from')}: steps {' -> '.join(map(repr, cycle))} form a cycle (each uses the "
-                                "next); a step can only use results of steps that do not use its own")
-        if step.id in done:
-            return
-        done[step.id] = False
-        for ref in step.refs.values():
-            if ref != FILE:
-                visit(by_id[ref], path + [step.id])
-        done[step.id] = True
-        order.append(step)
-
-    for step in steps:
-        visit(step, [])
-    return tuple(order)

@@ -4,6 +4,7 @@
 quadrature; :func:`smallest_eigenpairs` the paper's truncated basis
 (Eq. 18); :func:`dense_eigenpairs` the exact reference on small surfaces.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -17,8 +18,15 @@ from ..geometry.surface import Surface
 from ..geometry.validation import check_surface
 from .shifts import shift_analysis, shifted_matrix
 
-__all__ = ["spectral_bounds", "smallest_eigenpairs", "dense_eigenpairs", "apply_eigenpairs", "upper_bound",
-           "DENSE_MAX_VERTICES", "SAFETY"]
+__all__ = [
+    "spectral_bounds",
+    "smallest_eigenpairs",
+    "dense_eigenpairs",
+    "apply_eigenpairs",
+    "upper_bound",
+    "DENSE_MAX_VERTICES",
+    "SAFETY",
+]
 
 #: Largest surface the ``"dense"`` method accepts (an n×n float64 eigendecomposition).
 DENSE_MAX_VERTICES = 6000
@@ -64,8 +72,9 @@ def upper_bound(surface: Surface) -> float:
     return surface.cache[key]
 
 
-def _deflated_shift_invert(surface: Surface, shift: float,
-                           symbolic: linalg.SymbolicFactorization) -> spla.LinearOperator:
+def _deflated_shift_invert(
+    surface: Surface, shift: float, symbolic: linalg.SymbolicFactorization
+) -> spla.LinearOperator:
     """``y ↦ P (L + shift·M)⁻¹ y`` with ``P`` the M-orthogonal projector off the kernel.
 
     In ARPACK's generalized shift-invert mode (``sigma = −shift``) the
@@ -74,8 +83,9 @@ def _deflated_shift_invert(surface: Surface, shift: float,
     """
     factor = symbolic.factorize(shifted_matrix(surface, shift))
     n = surface.n_vertices
-    return spla.LinearOperator((n, n), matvec=lambda y: fluctuation(surface, factor.solve(np.ravel(y))),
-                               dtype=np.float64)
+    return spla.LinearOperator(
+        (n, n), matvec=lambda y: fluctuation(surface, factor.solve(np.ravel(y))), dtype=np.float64
+    )
 
 
 def _start_vector(surface: Surface) -> np.ndarray:
@@ -92,8 +102,14 @@ def _tiny_shift(mbar: float) -> float:
     return 1e-9 * mbar
 
 
-def _arpack_smallest(surface: Surface, k: int, symbolic: linalg.SymbolicFactorization, mbar: float,
-                     return_vectors: bool, tol: float = 0.0):
+def _arpack_smallest(
+    surface: Surface,
+    k: int,
+    symbolic: linalg.SymbolicFactorization,
+    mbar: float,
+    return_vectors: bool,
+    tol: float = 0.0,
+):
     """The ``k`` smallest non-zero generalized eigenpairs by shift-invert Lanczos.
 
     Lanczos Ritz values of ``(L + s M)⁻¹M`` never exceed its largest
@@ -101,8 +117,17 @@ def _arpack_smallest(surface: Surface, k: int, symbolic: linalg.SymbolicFactoriz
     """
     shift = _tiny_shift(mbar)
     op = _deflated_shift_invert(surface, shift, symbolic)
-    return spla.eigsh(surface.stiffness, k=k, M=surface.mass, sigma=-shift, OPinv=op, which="LM",
-                      v0=_start_vector(surface), return_eigenvectors=return_vectors, tol=tol)
+    return spla.eigsh(
+        surface.stiffness,
+        k=k,
+        M=surface.mass,
+        sigma=-shift,
+        OPinv=op,
+        which="LM",
+        v0=_start_vector(surface),
+        return_eigenvectors=return_vectors,
+        tol=tol,
+    )
 
 
 def _lobpcg_lambda1(surface: Surface, symbolic: linalg.SymbolicFactorization, mbar: float) -> float:
@@ -111,21 +136,24 @@ def _lobpcg_lambda1(surface: Surface, symbolic: linalg.SymbolicFactorization, mb
     kernel = np.zeros((surface.n_vertices, surface.n_components))
     kernel[np.arange(surface.n_vertices), surface.component_labels] = 1.0
     x = _start_vector(surface)[:, None]
-    values, vectors = spla.lobpcg(surface.stiffness, x, B=surface.mass, M=op, Y=kernel, tol=1e-8,
-                                  maxiter=200, largest=False)
+    values, vectors = spla.lobpcg(
+        surface.stiffness, x, B=surface.mass, M=op, Y=kernel, tol=1e-8, maxiter=200, largest=False
+    )
     lam, v = float(values[0]), vectors[:, 0]
     mass = surface.mass_diagonal
     residual = surface.stiffness @ v - lam * mass * v
     # ‖M^{-1/2} r‖ / ‖v‖_M bounds the distance from lam to the nearest eigenvalue
-    if not np.isfinite(lam) or (np.sqrt(np.sum(residual ** 2 / mass))
-                                > 1e-2 * lam * np.sqrt(np.sum(v * v * mass))):
-        raise NumericalError(f"{surface.name}: could not estimate the smallest non-zero eigenvalue "
-                             "(ARPACK and LOBPCG failed); use method='dense' or 'spectral'")
+    if not np.isfinite(lam) or (np.sqrt(np.sum(residual**2 / mass)) > 1e-2 * lam * np.sqrt(np.sum(v * v * mass))):
+        raise NumericalError(
+            f"{surface.name}: could not estimate the smallest non-zero eigenvalue "
+            "(ARPACK and LOBPCG failed); use method='dense' or 'spectral'"
+        )
     return lam
 
 
-def spectral_bounds(surface: Surface, *, backend: str | None = None,
-                    symbolic: linalg.SymbolicFactorization | None = None) -> tuple[float, float]:
+def spectral_bounds(
+    surface: Surface, *, backend: str | None = None, symbolic: linalg.SymbolicFactorization | None = None
+) -> tuple[float, float]:
     """Bounds ``0 < m ≤ λ_1`` and ``M̄ ≥ λ_max`` of the non-zero spectrum of ``L φ = λ M φ``.
 
     ``λ_1`` (the smallest non-zero eigenvalue) comes from shift-invert
@@ -153,8 +181,10 @@ def spectral_bounds(surface: Surface, *, backend: str | None = None,
     key = "riesz:bounds"
     if key not in surface.cache:
         if surface.n_vertices - surface.n_components < 1:
-            raise InputError(f"{surface.name}: every connected component is a single vertex; "
-                             "the Laplacian has no non-zero eigenvalue")
+            raise InputError(
+                f"{surface.name}: every connected component is a single vertex; "
+                "the Laplacian has no non-zero eigenvalue"
+            )
         symbolic = symbolic or shift_analysis(surface, backend)
         mbar = upper_bound(surface)
         try:
@@ -171,9 +201,11 @@ def dense_eigenpairs(surface: Surface) -> tuple[np.ndarray, np.ndarray]:
     """All non-zero generalized eigenpairs (ascending), eigenvectors M-orthonormal; cached."""
     n = surface.n_vertices
     if n > DENSE_MAX_VERTICES:
-        raise InputError(f"{surface.name} has {n} vertices; the dense eigendecomposition is limited "
-                         f"to {DENSE_MAX_VERTICES} (it needs n² memory and n³ time): use "
-                         "method='quadrature'")
+        raise InputError(
+            f"{surface.name} has {n} vertices; the dense eigendecomposition is limited "
+            f"to {DENSE_MAX_VERTICES} (it needs n² memory and n³ time): use "
+            "method='quadrature'"
+        )
     key = "riesz:dense_eigenpairs"
     if key not in surface.cache:
         scale = 1.0 / np.sqrt(surface.mass_diagonal)
@@ -184,8 +216,7 @@ def dense_eigenpairs(surface: Surface) -> tuple[np.ndarray, np.ndarray]:
     return surface.cache[key]
 
 
-def smallest_eigenpairs(surface: Surface, count: int, *,
-                        backend: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+def smallest_eigenpairs(surface: Surface, count: int, *, backend: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The ``count`` smallest non-zero eigenpairs of ``L φ = λ M φ`` (cached on the surface).
 
     The kernel (per-component constants) is not counted.  ARPACK in
@@ -202,11 +233,14 @@ def smallest_eigenpairs(surface: Surface, count: int, *,
     surface = check_surface(surface)
     available = surface.n_vertices - surface.n_components
     if int(count) != count or not 1 <= count <= available:
-        raise InputError(f"eigenpairs must be an integer in [1, {available}] for {surface.name} "
-                         f"({available} non-zero eigenvalues), got {count!r}")
+        raise InputError(
+            f"eigenpairs must be an integer in [1, {available}] for {surface.name} "
+            f"({available} non-zero eigenvalues), got {count!r}"
+        )
     count = int(count)
-    if count >= DENSE_SHARE * available or (surface.n_vertices <= DENSE_MAX_VERTICES
-                                                 and count >= DENSE_SHARE_SMALL * available):
+    if count >= DENSE_SHARE * available or (
+        surface.n_vertices <= DENSE_MAX_VERTICES and count >= DENSE_SHARE_SMALL * available
+    ):
         values, vectors = dense_eigenpairs(surface)
         return values[:count], vectors[:, :count]
     key = "riesz:eigenpairs"
@@ -221,4 +255,4 @@ def smallest_eigenpairs(surface: Surface, count: int, *,
 
 def apply_eigenpairs(surface: Surface, g: np.ndarray, values, vectors, power: float) -> np.ndarray:
     coefficients = (g * surface.mass_diagonal) @ vectors  # (k, p) = gᵀ M Φ
-    return (coefficients * values ** power) @ vectors.T
+    return (coefficients * values**power) @ vectors.T

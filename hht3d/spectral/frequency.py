@@ -65,6 +65,7 @@ lattice with one sample per ``A_v``, i.e. ``π/h`` on a grid of spacing ``h``
 (about 7 % below the isotropic limit of an equilateral triangulation).
 Frequencies above it are reported (:func:`resolution_report`), never clipped.
 """
+
 from __future__ import annotations
 
 import os
@@ -75,10 +76,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError
+from ..geometry.surface import Surface
 from ..records import renamed_keywords
 from .options import FREQUENCY_METHODS, RieszOptions
 from .riesz_transform import vertex_gradient
-from ..geometry.surface import Surface
 
 __all__ = ["FREQUENCY_METHODS", "instantaneous_frequency"]
 
@@ -99,8 +100,9 @@ _MIN_RESPONSE = 0.05
 _THREAD_EDGES = 4_000_000
 
 
-def instantaneous_frequency(surface: Surface, signals, riesz, options: RieszOptions | dict | None = None,
-                            **overrides) -> np.ndarray:
+def instantaneous_frequency(
+    surface: Surface, signals, riesz, options: RieszOptions | dict | None = None, **overrides
+) -> np.ndarray:
     """Instantaneous frequency ``ω = |∇φ|`` (Eq. 23) of ``k`` signals from their Riesz transforms.
 
     Parameters
@@ -130,18 +132,23 @@ def instantaneous_frequency(surface: Surface, signals, riesz, options: RieszOpti
         Radians per model unit of length, ``>= 0``; 0 where ``f`` and ``Rf``
         vanish (no amplitude) and at vertices without neighbours.
     """
-    options = RieszOptions.of(options, **renamed_keywords(overrides, {"method": "frequency"},
-                                                           "instantaneous_frequency"))
+    options = RieszOptions.of(
+        options, **renamed_keywords(overrides, {"method": "frequency"}, "instantaneous_frequency")
+    )
     f = np.asarray(signals, dtype=np.float64)
     r = np.asarray(riesz, dtype=np.float64)
     if f.ndim != 2 or r.shape != (*f.shape, 3) or f.shape[1] != surface.n_vertices:
-        raise InputError(f"signals must have shape (k, {surface.n_vertices}) and their Riesz transforms "
-                         f"(k, {surface.n_vertices}, 3), got {f.shape} and {r.shape}")
+        raise InputError(
+            f"signals must have shape (k, {surface.n_vertices}) and their Riesz transforms "
+            f"(k, {surface.n_vertices}, 3), got {f.shape} and {r.shape}"
+        )
     f, r = _unit_scale(f, r)
     if options.frequency == "gradient":
         return _gradient_frequency(surface, f, r, options.gradient)
     stencil = _stencil(surface, options.gradient)
-    with ThreadPoolExecutor(_threads(len(f), len(stencil.rows))) as pool:  # NumPy and SciPy's sparse products release the GIL
+    with ThreadPoolExecutor(
+        _threads(len(f), len(stencil.rows))
+    ) as pool:  # NumPy and SciPy's sparse products release the GIL
         rows = list(pool.map(lambda fi, ri: _phase_frequency(stencil, fi, ri), f, r))
     return np.array(rows).reshape(f.shape)
 
@@ -172,10 +179,11 @@ def _threads(count: int, edges: int) -> int:
 
 # -- the paper's route: vertex gradients of the sampled fields --------------------------------
 
+
 def _gradient_frequency(surface: Surface, f: np.ndarray, r: np.ndarray, kind: str) -> np.ndarray:
     """``|f ∇q − q ∇f| / (f² + q²)`` with ``q = |Rf|`` and ``∇q`` by the chain rule."""
     q = np.linalg.norm(r, axis=-1)
-    energy = f ** 2 + q ** 2
+    energy = f**2 + q**2
     grad_f = vertex_gradient(surface, f, kind)
     grad_q = _norm_gradient(surface, r, q, kind)
     numerator = np.linalg.norm(f[..., None] * grad_q - q[..., None] * grad_f, axis=-1)
@@ -199,6 +207,7 @@ def _norm_gradient(surface: Surface, rf: np.ndarray, q: np.ndarray, kind: str) -
 
 
 # -- phase increments along edges --------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class _Stencil:
@@ -232,8 +241,14 @@ def _stencil(surface: Surface, kind: str) -> _Stencil:
 
 def _along(vertices: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> sp.csr_matrix:
     """(E, 3n) map of per-vertex vectors ``g`` to ``g_i · (x_j − x_i)`` per edge (3 entries a row)."""
-    return sp.csr_matrix(((vertices[cols] - vertices[rows]).ravel(), (3 * rows[:, None] + np.arange(3)).ravel(),
-                          np.arange(0, 3 * len(rows) + 1, 3)), shape=(len(rows), 3 * len(vertices)))
+    return sp.csr_matrix(
+        (
+            (vertices[cols] - vertices[rows]).ravel(),
+            (3 * rows[:, None] + np.arange(3)).ravel(),
+            np.arange(0, 3 * len(rows) + 1, 3),
+        ),
+        shape=(len(rows), 3 * len(vertices)),
+    )
 
 
 def _build_stencil(surface: Surface, kind: str) -> _Stencil:
@@ -252,15 +267,25 @@ def _build_stencil(surface: Surface, kind: str) -> _Stencil:
     np.add.at(coef, (index, component[off]), coo.data[off])
     rows, cols = np.divmod(edges, n)
     # column e holds edge e's three coefficients: built as CSC (no sort), then converted
-    fit = sp.csc_matrix((coef.ravel(), (3 * rows[:, None] + np.arange(3)).ravel(),
-                         np.arange(0, 3 * len(edges) + 1, 3)), shape=(3 * n, len(edges))).tocsr()
+    fit = sp.csc_matrix(
+        (coef.ravel(), (3 * rows[:, None] + np.arange(3)).ravel(), np.arange(0, 3 * len(edges) + 1, 3)),
+        shape=(3 * n, len(edges)),
+    ).tocsr()
     lap = surface.stiffness.tocoo()
     keep = (lap.row != lap.col) & (lap.data != 0)
     lap_rows, lap_cols = lap.row[keep], lap.col[keep]
     weights = sp.csr_matrix((-lap.data[keep], (lap_rows, np.arange(len(lap_rows)))), shape=(n, len(lap_rows)))
-    return _Stencil(n, rows, cols, np.searchsorted(rows, np.arange(n + 1)), fit, _along(verts, rows, cols),
-                    sp.csr_matrix((np.ones(len(edges)), (rows, cols)), shape=(n, n)), weights,
-                    _along(verts, lap_rows, lap_cols))
+    return _Stencil(
+        n,
+        rows,
+        cols,
+        np.searchsorted(rows, np.arange(n + 1)),
+        fit,
+        _along(verts, rows, cols),
+        sp.csr_matrix((np.ones(len(edges)), (rows, cols)), shape=(n, n)),
+        weights,
+        _along(verts, lap_rows, lap_cols),
+    )
 
 
 def _phase_frequency(st: _Stencil, f: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -272,7 +297,7 @@ def _phase_frequency(st: _Stencil, f: np.ndarray, r: np.ndarray) -> np.ndarray:
     q_j = sum(r_t[c][st.cols] * o_t[c][st.rows] for c in range(3))
     f_i, f_j = f[st.rows], f[st.cols]
     grad = _unwrapped_fit(st, f_i, f_j, q_i, q_j, None)
-    response = _riesz_response(st, grad, f ** 2 + q ** 2)
+    response = _riesz_response(st, grad, f**2 + q**2)
     grad = _unwrapped_fit(st, f_i, f_j, q_i / response[st.rows], q_j / response[st.cols], grad)
     return np.linalg.norm(grad, axis=1)
 
@@ -335,13 +360,15 @@ def _riesz_response(st: _Stencil, grad: np.ndarray, energy: np.ndarray) -> np.nd
     both = np.column_stack([energy * magnitude, energy])
     weighted, total = (st.ring @ both + both).T
     mean = np.divide(weighted, total, out=np.zeros(st.n), where=total > 0)
-    wave = np.divide(grad * mean[:, None], magnitude[:, None], out=np.zeros_like(grad),
-                     where=magnitude[:, None] > 0).ravel()
+    wave = np.divide(
+        grad * mean[:, None], magnitude[:, None], out=np.zeros_like(grad), where=magnitude[:, None] > 0
+    ).ravel()
     symbol = np.linalg.norm((st.fit @ np.sin(st.along @ wave)).reshape(st.n, 3), axis=1)
     gradient_ratio = np.divide(symbol, mean, out=np.ones(st.n), where=mean > 0)
     lap_phase = st.lap_along @ wave
     dispersion = st.weights @ (1 - np.cos(lap_phase))
-    long_wave = st.weights @ (0.5 * lap_phase ** 2)
-    laplacian_ratio = np.sqrt(np.divide(dispersion, long_wave, out=np.ones(st.n),
-                                        where=(long_wave > 0) & (dispersion > 0)))
+    long_wave = st.weights @ (0.5 * lap_phase**2)
+    laplacian_ratio = np.sqrt(
+        np.divide(dispersion, long_wave, out=np.ones(st.n), where=(long_wave > 0) & (dispersion > 0))
+    )
     return np.clip(gradient_ratio / laplacian_ratio, _MIN_RESPONSE, 1 / _MIN_RESPONSE)

@@ -18,6 +18,7 @@ the monogenic signal ``f + (i, j, k)·R f`` (Eq. 20) has, with ``q = |R f|``,
 Since ``a cos φ = f`` exactly, ``Σ_k a_k cos φ_k + residue`` reproduces the
 signal.  Frequencies are in radians per model unit of length.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -25,12 +26,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from .frequency import instantaneous_frequency
-from .resolution import ResolutionReport, resolution_report, resolvable_from_area
-from .options import RieszOptions
-from .riesz_transform import fractional_laplacian, vertex_gradient
 from ..geometry.surface import Surface
 from ..geometry.validation import as_signals, check_surface
+from .frequency import instantaneous_frequency
+from .options import RieszOptions
+from .resolution import ResolutionReport, resolution_report, resolvable_from_area
+from .riesz_transform import fractional_laplacian, vertex_gradient
 
 __all__ = ["MonogenicSignal", "monogenic", "monogenic_from_potential"]
 
@@ -77,8 +78,9 @@ class MonogenicSignal:
 
     def _area(self) -> np.ndarray:
         if self.area is None:
-            raise InputError("this monogenic signal carries no vertex areas; build it with "
-                             "hht3d.spectral.monogenic or pass area=")
+            raise InputError(
+                "this monogenic signal carries no vertex areas; build it with hht3d.spectral.monogenic or pass area="
+            )
         return self.area
 
     def reconstruct(self) -> np.ndarray:
@@ -91,11 +93,12 @@ class MonogenicSignal:
 
         The same figures as :attr:`hht3d.spectral.spectrum.HilbertSpectrum.resolution`.
         """
-        return resolution_report(self.frequency, self.resolvable, self.amplitude ** 2 * self._area())
+        return resolution_report(self.frequency, self.resolvable, self.amplitude**2 * self._area())
 
 
-def monogenic(surface: Surface, imfs, options: RieszOptions | dict | None = None, *, backend: str | None = None,
-              **overrides) -> MonogenicSignal:
+def monogenic(
+    surface: Surface, imfs, options: RieszOptions | dict | None = None, *, backend: str | None = None, **overrides
+) -> MonogenicSignal:
     """Monogenic signal of every IMF: Algorithm 2, steps 2–5 (Eqs. 20–23).
 
     ``L^{-1/2}`` of all IMFs comes from one multi-signal call of
@@ -152,8 +155,9 @@ def _signals(surface: Surface, imfs) -> np.ndarray:
     return as_signals(check_surface(surface), imfs, "imfs")[0]
 
 
-def monogenic_from_potential(surface: Surface, imfs, potential, options: RieszOptions | dict | None = None,
-                             **overrides) -> MonogenicSignal:
+def monogenic_from_potential(
+    surface: Surface, imfs, potential, options: RieszOptions | dict | None = None, **overrides
+) -> MonogenicSignal:
     """Monogenic signal from precomputed ``L^{-1/2}`` of the IMFs (Eqs. 16, 20–23).
 
     Parameters
@@ -180,5 +184,11 @@ def monogenic_from_potential(surface: Surface, imfs, potential, options: RieszOp
     rf = vertex_gradient(surface, u, options.gradient)
     q = np.hypot(np.hypot(rf[..., 0], rf[..., 1]), rf[..., 2])  # no overflow at 1e200, no underflow at 1e-200
     omega = instantaneous_frequency(surface, f, rf, options)
-    return MonogenicSignal(imfs=f, riesz=rf, amplitude=np.hypot(f, q), phase=np.arctan2(q, f),
-                           frequency=omega, area=surface.mass_diagonal.copy())
+    return MonogenicSignal(
+        imfs=f,
+        riesz=rf,
+        amplitude=np.hypot(f, q),
+        phase=np.arctan2(q, f),
+        frequency=omega,
+        area=surface.mass_diagonal.copy(),
+    )

@@ -16,6 +16,7 @@ Examples
 >>> RieszOptions.of(potential="spectral").as_dict()
 {'gradient': 'lsq', 'frequency': 'phase', 'potential': 'spectral', 'tol': 1e-08, 'eigenpairs': 300}
 """
+
 from __future__ import annotations
 
 import warnings
@@ -23,8 +24,15 @@ from dataclasses import dataclass
 
 from ..records import Record, option
 
-__all__ = ["RieszOptions", "RIESZ_DEFAULTS", "POTENTIALS", "GRADIENTS", "FREQUENCY_METHODS", "MIN_TOL",
-           "MAX_EIGENPAIRS"]
+__all__ = [
+    "RieszOptions",
+    "RIESZ_DEFAULTS",
+    "POTENTIALS",
+    "GRADIENTS",
+    "FREQUENCY_METHODS",
+    "MIN_TOL",
+    "MAX_EIGENPAIRS",
+]
 
 #: Ways to apply ``L^{-α}``, the potential (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`).
 POTENTIALS = ("quadrature", "spectral", "dense")
@@ -57,12 +65,16 @@ class RieszOptions(Record):
     renamed = {"method": "potential"}
 
     gradient: str = option("lsq", "tangent gradient of the monogenic signal", choices=GRADIENTS)
-    frequency: str = option("phase", "frequency method of Eq. 23: edge phase increments (exact for plane waves up "
-                            "to the resolution limit) or the paper's gradients", choices=FREQUENCY_METHODS)
-    potential: str = option("quadrature", "L^{-1/2}: exact quadrature, spectral truncation or dense",
-                            choices=POTENTIALS)
-    tol: float = option(1e-8, "relative tolerance of the quadrature", minimum=MIN_TOL, maximum=1,
-                        open_maximum=True)
+    frequency: str = option(
+        "phase",
+        "frequency method of Eq. 23: edge phase increments (exact for plane waves up "
+        "to the resolution limit) or the paper's gradients",
+        choices=FREQUENCY_METHODS,
+    )
+    potential: str = option(
+        "quadrature", "L^{-1/2}: exact quadrature, spectral truncation or dense", choices=POTENTIALS
+    )
+    tol: float = option(1e-8, "relative tolerance of the quadrature", minimum=MIN_TOL, maximum=1, open_maximum=True)
     eigenpairs: int = option(300, "eigenpairs of potential: spectral", minimum=1, maximum=MAX_EIGENPAIRS)
 
 

@@ -6,6 +6,7 @@
 independent, so a scheduler can split them into groups
 (:func:`quadrature_part`) and sum the parts (:func:`combine_quadrature_parts`).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -21,8 +22,14 @@ from .eigenpairs import spectral_bounds
 from .options import MIN_TOL, RIESZ_DEFAULTS
 from .shifts import shift_analysis, shifted_solve
 
-__all__ = ["quadrature_nodes", "QuadraturePlan", "quadrature_plan", "quadrature_part", "combine_quadrature_parts",
-           "quadrature_sum"]
+__all__ = [
+    "quadrature_nodes",
+    "QuadraturePlan",
+    "quadrature_plan",
+    "quadrature_part",
+    "combine_quadrature_parts",
+    "quadrature_sum",
+]
 
 #: λ sample points per quadrature check (log-spaced over ``[m, M̄]``).
 CHECK_POINTS = 2000
@@ -37,7 +44,7 @@ def _nodes(m: float, mbar: float, count: int) -> tuple[np.ndarray, np.ndarray]:
     u = (np.arange(1, count + 1) - 0.5) * kp / count
     sn, cn, dn, _ = ellipj(u, p)
     sigmas = m * (sn / cn) ** 2
-    weights = 2.0 * kp * np.sqrt(m) / (np.pi * count) * dn / cn ** 2
+    weights = 2.0 * kp * np.sqrt(m) / (np.pi * count) * dn / cn**2
     return sigmas, weights
 
 
@@ -80,8 +87,10 @@ def quadrature_nodes(m: float, mbar: float, tol: float = RIESZ_DEFAULTS.tol) -> 
         sigmas, weights = _nodes(m, mbar, count)
         if _scalar_error(m, mbar, sigmas, weights) <= tol:
             return sigmas, weights
-    raise NumericalError(f"no quadrature with at most {MAX_SHIFTS} shifts reaches tol={tol:g} on "
-                         f"[{m:g}, {mbar:g}] (condition {mbar / m:.3g}); loosen tol")
+    raise NumericalError(
+        f"no quadrature with at most {MAX_SHIFTS} shifts reaches tol={tol:g} on "
+        f"[{m:g}, {mbar:g}] (condition {mbar / m:.3g}); loosen tol"
+    )
 
 
 @dataclass(frozen=True)
@@ -103,16 +112,28 @@ class QuadraturePlan:
     weights: np.ndarray
 
 
-def quadrature_plan(surface: Surface, tol: float = RIESZ_DEFAULTS.tol, backend: str | None = None, *,
-                    symbolic: linalg.SymbolicFactorization | None = None) -> QuadraturePlan:
+def quadrature_plan(
+    surface: Surface,
+    tol: float = RIESZ_DEFAULTS.tol,
+    backend: str | None = None,
+    *,
+    symbolic: linalg.SymbolicFactorization | None = None,
+) -> QuadraturePlan:
     """Bounds and nodes of the ``L^{-1/2}`` quadrature for ``surface`` at ``tol``."""
     bounds = spectral_bounds(surface, backend=backend, symbolic=symbolic)
     return QuadraturePlan(bounds, tol, *quadrature_nodes(*bounds, tol))
 
 
-def quadrature_part(surface: Surface, f, plan: QuadraturePlan, group: int = 0, groups: int = 1,
-                    backend: str | None = None, *,
-                    symbolic: linalg.SymbolicFactorization | None = None) -> np.ndarray:
+def quadrature_part(
+    surface: Surface,
+    f,
+    plan: QuadraturePlan,
+    group: int = 0,
+    groups: int = 1,
+    backend: str | None = None,
+    *,
+    symbolic: linalg.SymbolicFactorization | None = None,
+) -> np.ndarray:
     """Partial sum ``Σ_j w_j (L + σ_j M)⁻¹ M f̃`` over the shifts ``j ≡ group (mod groups)``.
 
     Parameters

@@ -4,6 +4,7 @@ A vertex of area ``A_v`` resolves frequencies up to ``π/√A_v``; instantaneous
 frequencies above it alias.  :func:`resolution_report` says how many
 vertex–IMF pairs, and what share of the energy ``a² A_v``, lie above.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -70,8 +71,10 @@ class ResolutionReport:
         if self.ok:
             return f"all frequencies within the resolution limit (median π/√A = {self.limit:.4g})"
         share = "" if np.isnan(self.energy_share) else f", {100 * self.energy_share:.2g}% of the energy"
-        return (f"{self.pairs} vertex–IMF pairs ({100 * self.fraction:.2g}%{share}) above the resolution "
-                f"limit (median π/√A = {self.limit:.4g}): their frequencies are aliased")
+        return (
+            f"{self.pairs} vertex–IMF pairs ({100 * self.fraction:.2g}%{share}) above the resolution "
+            f"limit (median π/√A = {self.limit:.4g}): their frequencies are aliased"
+        )
 
 
 def resolution_report(frequency, resolvable, weights=None) -> ResolutionReport:
@@ -101,6 +104,10 @@ def resolution_report(frequency, resolvable, weights=None) -> ResolutionReport:
         total = weights.sum()
         share = float(weights[above].sum() / total) if total > 0 else np.nan
     per_signal = above.mean(axis=1) if above.shape[1] else np.zeros(len(above))
-    return ResolutionReport(limit=float(np.median(resolvable)) if resolvable.size else np.nan,
-                            pairs=int(above.sum()), fraction=float(above.mean()) if above.size else 0.0,
-                            per_signal=per_signal, energy_share=share)
+    return ResolutionReport(
+        limit=float(np.median(resolvable)) if resolvable.size else np.nan,
+        pairs=int(above.sum()),
+        fraction=float(above.mean()) if above.size else 0.0,
+        per_signal=per_signal,
+        energy_share=share,
+    )

@@ -57,6 +57,7 @@ Each part factorizes its shifts once (:func:`shifted_solve`) and solves all
 signals as one multi-column right-hand side; factorizations never leave the
 task.  :func:`fractional_laplacian` does the same with one group.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -72,8 +73,15 @@ from .quadrature import quadrature_sum
 __all__ = ["fractional_laplacian", "riesz", "vertex_gradient"]
 
 
-def fractional_laplacian(surface: Surface, f, power: float = -0.5, options: RieszOptions | dict | None = None, *,
-                         backend: str | None = None, **overrides) -> np.ndarray:
+def fractional_laplacian(
+    surface: Surface,
+    f,
+    power: float = -0.5,
+    options: RieszOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    **overrides,
+) -> np.ndarray:
     """Apply ``L^{power}`` of the generalized problem ``L φ = λ M φ`` (Eqs. 13, 15, 18).
 
     Parameters
@@ -126,18 +134,24 @@ def fractional_laplacian(surface: Surface, f, power: float = -0.5, options: Ries
         return g
     if options.potential == "quadrature":
         if power != -0.5:
-            raise InputError(f"potential='quadrature' computes power=-0.5 only, got power={power}; "
-                             "use potential='spectral' or 'dense' for other powers")
+            raise InputError(
+                f"potential='quadrature' computes power=-0.5 only, got power={power}; "
+                "use potential='spectral' or 'dense' for other powers"
+            )
         out = quadrature_sum(surface, g, options.tol, backend)
     else:
-        values, vectors = (dense_eigenpairs(surface) if options.potential == "dense"
-                           else smallest_eigenpairs(surface, options.eigenpairs, backend=backend))
+        values, vectors = (
+            dense_eigenpairs(surface)
+            if options.potential == "dense"
+            else smallest_eigenpairs(surface, options.eigenpairs, backend=backend)
+        )
         out = apply_eigenpairs(surface, g, values, vectors, power)
     return out[0] if single else out
 
 
-def riesz(surface: Surface, f, options: RieszOptions | dict | None = None, *, backend: str | None = None,
-          **overrides) -> np.ndarray:
+def riesz(
+    surface: Surface, f, options: RieszOptions | dict | None = None, *, backend: str | None = None, **overrides
+) -> np.ndarray:
     """Riesz transform ``R f = ∇ L^{-1/2} f`` (Eqs. 14, 16; Eq. 18 with ``potential="spectral"``).
 
     Parameters

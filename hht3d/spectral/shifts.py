@@ -3,6 +3,7 @@
 Every ``L + σM`` has the pattern of ``L`` (the lumped ``M`` is diagonal), so
 one symbolic analysis (:func:`shift_analysis`) serves every shift.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -30,15 +31,17 @@ class _ShiftedSystems:
         coo = lap.tocoo()
         stored = coo.data != 0  # explicit zeros of L may be missing from the pattern
         self.l_data = np.zeros(len(keys))
-        np.add.at(self.l_data, np.searchsorted(keys, coo.row[stored].astype(np.int64) * n + coo.col[stored]),
-                  coo.data[stored])
+        np.add.at(
+            self.l_data, np.searchsorted(keys, coo.row[stored].astype(np.int64) * n + coo.col[stored]), coo.data[stored]
+        )
         self.m_data = np.zeros(len(keys))
         self.m_data[np.searchsorted(keys, np.arange(n, dtype=np.int64) * (n + 1))] = surface.mass_diagonal
         self.indptr, self.indices, self.n = pattern.indptr, pattern.indices, n
 
     def matrix(self, sigma: float) -> sp.csr_matrix:
-        return sp.csr_matrix((self.l_data + sigma * self.m_data, self.indices.copy(), self.indptr.copy()),
-                             shape=(self.n, self.n))
+        return sp.csr_matrix(
+            (self.l_data + sigma * self.m_data, self.indices.copy(), self.indptr.copy()), shape=(self.n, self.n)
+        )
 
 
 def shifted_systems(surface: Surface) -> _ShiftedSystems:
@@ -61,8 +64,14 @@ def shifted_matrix(surface: Surface, sigma: float) -> sp.csr_matrix:
     return shifted_systems(check_surface(surface)).matrix(float(sigma))
 
 
-def shifted_solve(surface: Surface, sigma: float, rhs, *, backend: str | None = None,
-                  symbolic: linalg.SymbolicFactorization | None = None) -> np.ndarray:
+def shifted_solve(
+    surface: Surface,
+    sigma: float,
+    rhs,
+    *,
+    backend: str | None = None,
+    symbolic: linalg.SymbolicFactorization | None = None,
+) -> np.ndarray:
     """Solve ``(L + σM) x = rhs`` with one factorization for all columns.
 
     One term of the quadrature of :func:`~hht3d.spectral.riesz_transform.fractional_laplacian`; independent

@@ -17,6 +17,7 @@ vertex resolves frequencies up to ``π/√A_v``
 limits, and :attr:`HilbertSpectrum.resolution` counts the vertex–IMF pairs
 above them (their frequencies are aliased).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -24,9 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from .resolution import ResolutionReport, resolution_report, resolvable_from_area
-from .monogenic_signal import MonogenicSignal
 from ..geometry.surface import Surface
+from .monogenic_signal import MonogenicSignal
+from .resolution import ResolutionReport, resolution_report, resolvable_from_area
 
 __all__ = ["HilbertSpectrum", "SCALES"]
 
@@ -58,8 +59,9 @@ class HilbertSpectrum:
 
     def __post_init__(self):
         if self.frequency.shape != self.amplitude.shape or self.frequency.ndim != 2:
-            raise InputError(f"frequency {self.frequency.shape} and amplitude {self.amplitude.shape} "
-                             "must both have shape (k, n)")
+            raise InputError(
+                f"frequency {self.frequency.shape} and amplitude {self.amplitude.shape} must both have shape (k, n)"
+            )
         if self.area.shape != self.frequency.shape[1:]:
             raise InputError(f"area has shape {self.area.shape}; expected ({self.frequency.shape[1]},)")
         if self.resolvable is None:
@@ -86,7 +88,7 @@ class HilbertSpectrum:
     @property
     def energy(self) -> np.ndarray:
         """``a_k(v)²`` (k, n)."""
-        return self.amplitude ** 2
+        return self.amplitude**2
 
     def _relative_energy(self) -> np.ndarray:
         """``(a / max a)²``: the energy's proportions, finite for amplitudes of any magnitude."""
@@ -148,8 +150,9 @@ class HilbertSpectrum:
             limits = (0.0 if scale == "linear" else positive.min(), positive.max())
         low, high = (float(x) for x in limits)
         if not (np.isfinite(low) and np.isfinite(high) and high > low >= 0) or (scale == "log" and low <= 0):
-            raise InputError(f"frequency limits must satisfy 0 {'<' if scale == 'log' else '<='} low < high, "
-                             f"got {limits!r}")
+            raise InputError(
+                f"frequency limits must satisfy 0 {'<' if scale == 'log' else '<='} low < high, got {limits!r}"
+            )
         if scale == "log":
             return np.geomspace(low, high, int(bins) + 1)
         return np.linspace(low, high, int(bins) + 1)

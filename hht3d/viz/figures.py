@@ -18,6 +18,7 @@ Figures are Matplotlib ``Figure`` objects drawn with the Agg canvas (no
 ``pyplot``, no global state, no display); the surface images come from
 :mod:`hht3d.viz.render`.  Sizes are in pixels; files are written atomically.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -27,8 +28,16 @@ import numpy as np
 from ..errors import InputError
 from ..spectral.spectrum import SCALES, HilbertSpectrum
 from ..transform import HHTResult
-from .panels import (check_dpi, check_result, draw_colorbar, draw_image, field_figure, font_points, fractions,
-                     save_figure)
+from .panels import (
+    check_dpi,
+    check_result,
+    draw_colorbar,
+    draw_image,
+    field_figure,
+    font_points,
+    fractions,
+    save_figure,
+)
 from .render import PERCENTILES, SEQUENTIAL_CMAP, SYMMETRIC_CMAP, color_scale, model_aspect, renderer
 from .render.image import check_size
 
@@ -61,8 +70,10 @@ class _Grid:
         else:
             self.image_height = int((height - fixed) / 3)
         if self.image_width < 16 or self.image_height < 16:
-            raise InputError(f"figure size {size!r} leaves panels of {self.image_width}×{self.image_height} "
-                             f"pixels for {columns} columns; make it larger")
+            raise InputError(
+                f"figure size {size!r} leaves panels of {self.image_width}×{self.image_height} "
+                f"pixels for {columns} columns; make it larger"
+            )
         self.width, self.height = int(width), int(height)
 
     @property
@@ -75,8 +86,7 @@ class _Grid:
     def image_box(self, row: int, column: int) -> list[float]:
         left = column * self.column_width + (self.column_width - self.image_width) / 2
         bottom = self._row_top(row) - self.title - self.image_height
-        return fractions((round(left), round(bottom), self.image_width, self.image_height),
-                          self.width, self.height)
+        return fractions((round(left), round(bottom), self.image_width, self.image_height), self.width, self.height)
 
     def bar_box(self, row: int, column: int) -> list[float]:
         width = 0.8 * self.image_width
@@ -90,9 +100,19 @@ class _Grid:
         return (column * self.column_width - self.gap) / self.width, middle / self.height
 
 
-def hht_figure(result: HHTResult, *, size=None, dpi: float = 100, panel_width: int = 240, view="front",
-               up="y", backend: str = "auto", supersample: int = 2, signal_name: str = "signal",
-               percentiles=PERCENTILES):
+def hht_figure(
+    result: HHTResult,
+    *,
+    size=None,
+    dpi: float = 100,
+    panel_width: int = 240,
+    view="front",
+    up="y",
+    backend: str = "auto",
+    supersample: int = 2,
+    signal_name: str = "signal",
+    percentiles=PERCENTILES,
+):
     """The composite figure of the paper's Fig. 4 as a Matplotlib ``Figure``.
 
     Row 1: the shaded model, the signal, IMF 1 … k (finest first) and the
@@ -129,20 +149,26 @@ def hht_figure(result: HHTResult, *, size=None, dpi: float = 100, panel_width: i
         raise InputError(f"panel_width must be an integer in [64, 2048] pixels, got {panel_width!r}")
     surface, k = result.surface, result.n_imfs
     grid = _Grid(k + 3, model_aspect(surface, view, up), size, dpi, int(panel_width))
-    drawer = renderer(surface, view=view, up=up, size=grid.image_size, backend=backend,
-                      supersample=supersample)
+    drawer = renderer(surface, view=view, up=up, size=grid.image_size, backend=backend, supersample=supersample)
     fig = Figure(figsize=(grid.width / dpi, grid.height / dpi), dpi=dpi)
-    fig.text(0.5, 1 - 0.5 * grid.heading / grid.height,
-             f"{surface.name}: Hilbert–Huang transform of the {signal_name} "
-             f"({surface.n_vertices:,} vertices, {k} IMF{'' if k == 1 else 's'})", ha="center", va="center",
-             fontsize=grid.font * 1.25)
+    fig.text(
+        0.5,
+        1 - 0.5 * grid.heading / grid.height,
+        f"{surface.name}: Hilbert–Huang transform of the {signal_name} "
+        f"({surface.n_vertices:,} vertices, {k} IMF{'' if k == 1 else 's'})",
+        ha="center",
+        va="center",
+        fontsize=grid.font * 1.25,
+    )
     draw_image(fig, grid.image_box(0, 0), drawer.render(), title="model", font=grid.font)
     mono = result.monogenic
     panels = [(0, 1, result.signal, signal_name, {}), (0, k + 2, result.residue, "residue", {})]
     for i in range(k):
-        panels += [(0, i + 2, result.imfs[i], f"IMF {i + 1}", {"cmap": IMF_CMAP, "symmetric": True}),
-                   (1, i + 2, mono.frequency[i], f"ω, IMF {i + 1}", {"cmap": FREQUENCY_CMAP, "symmetric": False}),
-                   (2, i + 2, mono.amplitude[i], f"a, IMF {i + 1}", {"cmap": AMPLITUDE_CMAP, "symmetric": False})]
+        panels += [
+            (0, i + 2, result.imfs[i], f"IMF {i + 1}", {"cmap": IMF_CMAP, "symmetric": True}),
+            (1, i + 2, mono.frequency[i], f"ω, IMF {i + 1}", {"cmap": FREQUENCY_CMAP, "symmetric": False}),
+            (2, i + 2, mono.amplitude[i], f"a, IMF {i + 1}", {"cmap": AMPLITUDE_CMAP, "symmetric": False}),
+        ]
     for row, column, values, title, options in panels:
         scale = color_scale(values, percentiles=percentiles, **options)
         draw_image(fig, grid.image_box(row, column), drawer.render(values, scale), title=title, font=grid.font)
@@ -154,8 +180,9 @@ def hht_figure(result: HHTResult, *, size=None, dpi: float = 100, panel_width: i
 
 
 # -- Hilbert spectrum plots ------------------------------------------------------------------------
-def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", limits=None,
-                    size=(1400, 520), dpi: float = 100):
+def spectrum_figure(
+    result: HHTResult, *, bins: int = 64, scale: str = "log", limits=None, size=(1400, 520), dpi: float = 100
+):
     """Plots of the Hilbert spectrum as a Matplotlib ``Figure``.
 
     Left: the area-weighted marginal spectrum ``h(ω) = Σ_v A_v H(ω, v)``.
@@ -210,8 +237,9 @@ def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", li
         axes.set_xscale(scale)
         axes.set_xlim(edges[0], right_end)
         if edges[0] < resolution.limit <= right_end:
-            axes.axvline(resolution.limit, color="#8b1a1a", linestyle="-.", linewidth=1.1,
-                         label="resolution limit π/√A")
+            axes.axvline(
+                resolution.limit, color="#8b1a1a", linestyle="-.", linewidth=1.1, label="resolution limit π/√A"
+            )
         axes.set_ylim(bottom=0)
         axes.set_xlabel("instantaneous frequency ω (rad / unit length)", fontsize=font)
         axes.set_ylabel("share of the IMF energy per bin (%)", fontsize=font)
@@ -220,10 +248,13 @@ def spectrum_figure(result: HHTResult, *, bins: int = 64, scale: str = "log", li
     right.set_ylim(top=2.4 * right.get_ylim()[1])  # the legend sits above the curves, not on them
     right.legend(fontsize=font * 0.85, loc="upper right", framealpha=0.9, edgecolor="none")
     shown = 100 * marginal.sum() / total
-    fig.suptitle(f"{result.surface.name}: Hilbert spectrum ({bins} {scale} bins; "
-                 f"{shown:.1f}% of the energy within the plotted range)\nresolution limit π/√A ≈ "
-                 f"{resolution.limit:.3g} (median over vertices); {100 * resolution.energy_share:.2g}% of the "
-                 "energy above the vertices' limits", fontsize=font * 1.15)
+    fig.suptitle(
+        f"{result.surface.name}: Hilbert spectrum ({bins} {scale} bins; "
+        f"{shown:.1f}% of the energy within the plotted range)\nresolution limit π/√A ≈ "
+        f"{resolution.limit:.3g} (median over vertices); {100 * resolution.energy_share:.2g}% of the "
+        "energy above the vertices' limits",
+        fontsize=font * 1.15,
+    )
     return fig
 
 
@@ -241,20 +272,37 @@ def _plot_imfs(axes, spectrum: HilbertSpectrum, edges, scale: str, limits, total
     means = spectrum.mean_frequency()
     shares = 100 * spectrum.imf_energy() / total
     for i in range(k):
-        one = HilbertSpectrum(spectrum.frequency[i:i + 1], spectrum.amplitude[i:i + 1], spectrum.area)
+        one = HilbertSpectrum(spectrum.frequency[i : i + 1], spectrum.amplitude[i : i + 1], spectrum.area)
         _, energy = one.marginal(len(edges) - 1, scale, limits)
-        axes.stairs(100 * energy / total, edges, color=colors[i], linewidth=1.4,
-                    label=f"IMF {i + 1}: {shares[i]:.1f}% of energy, mean ω {means[i]:.3g}")
+        axes.stairs(
+            100 * energy / total,
+            edges,
+            color=colors[i],
+            linewidth=1.4,
+            label=f"IMF {i + 1}: {shares[i]:.1f}% of energy, mean ω {means[i]:.3g}",
+        )
         if np.isfinite(means[i]):
             axes.axvline(means[i], color=colors[i], linestyle="--", linewidth=0.9)
     axes.set_title("frequency–energy distribution of each IMF", fontsize=font)
 
 
 # -- the standard set --------------------------------------------------------------------------------
-def write_figures(result: HHTResult, folder, *, stem: str | None = None, view="front", up="y",
-                  backend: str = "auto", dpi: float = 100, hht_size=None, spectrum_size=(1400, 520),
-                  field_size=(900, 800), bins: int = 64, scale: str = "log",
-                  signal_name: str = "signal") -> dict[str, Path]:
+def write_figures(
+    result: HHTResult,
+    folder,
+    *,
+    stem: str | None = None,
+    view="front",
+    up="y",
+    backend: str = "auto",
+    dpi: float = 100,
+    hht_size=None,
+    spectrum_size=(1400, 520),
+    field_size=(900, 800),
+    bins: int = 64,
+    scale: str = "log",
+    signal_name: str = "signal",
+) -> dict[str, Path]:
     """Write the standard figures of an HHT result as PNGs in ``folder``.
 
     Files (``stem`` defaults to the surface name):
@@ -289,10 +337,19 @@ def write_figures(result: HHTResult, folder, *, stem: str | None = None, view="f
     folder = Path(folder)
     stem = stem or result.surface.name
     figures = {
-        "hht": lambda: hht_figure(result, size=hht_size, dpi=dpi, view=view, up=up, backend=backend,
-                                  signal_name=signal_name),
+        "hht": lambda: hht_figure(
+            result, size=hht_size, dpi=dpi, view=view, up=up, backend=backend, signal_name=signal_name
+        ),
         "spectrum": lambda: spectrum_figure(result, bins=bins, scale=scale, size=spectrum_size, dpi=dpi),
-        "signal": lambda: field_figure(result.surface, result.signal, size=field_size, dpi=dpi, view=view,
-                                       up=up, backend=backend, title=f"{result.surface.name}: {signal_name}"),
+        "signal": lambda: field_figure(
+            result.surface,
+            result.signal,
+            size=field_size,
+            dpi=dpi,
+            view=view,
+            up=up,
+            backend=backend,
+            title=f"{result.surface.name}: {signal_name}",
+        ),
     }
     return {name: save_figure(build(), folder / f"{stem}_{name}.png") for name, build in figures.items()}

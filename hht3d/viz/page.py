@@ -6,6 +6,7 @@ title, a field name or a script that holds ``{{SCRIPT}}`` or ``<script>`` is
 data, never substituted into and never markup (the title is HTML-escaped,
 the data a JSON script block with ``<``, ``>`` and ``&`` escaped).
 """
+
 from __future__ import annotations
 
 import html
@@ -19,8 +20,16 @@ __all__ = ["viewer_page", "fill", "json_script"]
 
 def viewer_page(title: str, data_json: str) -> str:
     """The page: ``title`` (plain text) and the page data ``data_json`` (a JSON text)."""
-    return fill(_asset("viewer.html"), {"VERSION": __version__, "TITLE": html.escape(title), "PLOTLY": _plotly_js(),
-                                        "SCRIPT": _asset("viewer.js"), "DATA": json_script(data_json)})
+    return fill(
+        _asset("viewer.html"),
+        {
+            "VERSION": __version__,
+            "TITLE": html.escape(title),
+            "PLOTLY": _plotly_js(),
+            "SCRIPT": _asset("viewer.js"),
+            "DATA": json_script(data_json),
+        },
+    )
 
 
 def json_script(text: str) -> str:

@@ -1,4 +1,5 @@
 """The data a page embeds: plotly traces and figure, the spectrum bars and the quality table."""
+
 from __future__ import annotations
 
 import base64
@@ -12,8 +13,17 @@ from ..spectral.spectrum import HilbertSpectrum
 from .render import camera
 from .shown import Shown
 
-__all__ = ["typed", "colorscale", "field_title", "order", "figure_json", "spectrum_data", "quality_data", "size_text",
-           "SPECTRUM_BINS"]
+__all__ = [
+    "typed",
+    "colorscale",
+    "field_title",
+    "order",
+    "figure_json",
+    "spectrum_data",
+    "quality_data",
+    "size_text",
+    "SPECTRUM_BINS",
+]
 
 #: Log-spaced frequency bins of the page's marginal spectrum.
 SPECTRUM_BINS = 64
@@ -23,8 +33,12 @@ SMALL_MARKERS_ABOVE = 20_000
 #: to frame the whole model at plotly's default field of view.
 EYE_DISTANCE = 1.75
 _GROUPED = re.compile(r"^(imf|amplitude|phase|frequency)_([1-9][0-9]*)$")
-_GROUPS = {"imf": "decomposition", "amplitude": "local amplitude (Eq. 21)", "phase": "local phase (Eq. 22)",
-           "frequency": "instantaneous frequency (Eq. 23)"}
+_GROUPS = {
+    "imf": "decomposition",
+    "amplitude": "local amplitude (Eq. 21)",
+    "phase": "local phase (Eq. 22)",
+    "frequency": "instantaneous frequency (Eq. 23)",
+}
 
 
 def typed(values) -> dict:
@@ -52,12 +66,14 @@ def field_title(name: str) -> tuple[str, str]:
 
 def order(names) -> list[str]:
     """Signal, IMFs, residue, then amplitude, phase and frequency of each IMF, then the rest."""
+
     def key(name):
         match = _GROUPED.match(name)
         if match is not None:
             kind, k = match.groups()
             return (1 if kind == "imf" else 3 + list(_GROUPS).index(kind), int(k))
         return {"signal": (0, 0), "residue": (2, 0)}.get(name, (7, 0))
+
     return sorted(names, key=key)
 
 
@@ -68,12 +84,23 @@ def _trace(shown: Shown, index: int, label: str) -> dict:
     scene = "scene" if index == 0 else f"scene{index + 1}"
     if shown.faces is None:
         size = 2 if len(shown.source) > SMALL_MARKERS_ABOVE else 3
-        return go.Scatter3d(x=x, y=y, z=z, mode="markers", marker={"size": size}, name=label, scene=scene,
-                            showlegend=False)
+        return go.Scatter3d(
+            x=x, y=y, z=z, mode="markers", marker={"size": size}, name=label, scene=scene, showlegend=False
+        )
     i, j, k = (np.asarray(c, dtype=np.int32) for c in shown.faces.T)
-    return go.Mesh3d(x=x, y=y, z=z, i=i, j=j, k=k, name=label, scene=scene, flatshading=False,
-                     lighting={"ambient": 0.6, "diffuse": 0.7, "specular": 0.1, "roughness": 0.7},
-                     showlegend=False)
+    return go.Mesh3d(
+        x=x,
+        y=y,
+        z=z,
+        i=i,
+        j=j,
+        k=k,
+        name=label,
+        scene=scene,
+        flatshading=False,
+        lighting={"ambient": 0.6, "diffuse": 0.7, "specular": 0.1, "roughness": 0.7},
+        showlegend=False,
+    )
 
 
 def figure_json(shown: list[Shown], labels: list[str], view, up) -> str:
@@ -88,13 +115,27 @@ def figure_json(shown: list[Shown], labels: list[str], view, up) -> str:
     width = 1.0 / len(shown)
     for index, label in enumerate(labels):
         name = "scene" if index == 0 else f"scene{index + 1}"
-        layout[name] = {"domain": {"x": [index * width, (index + 1) * width], "y": [0, 1]},
-                        "aspectmode": "data", "xaxis": hidden, "yaxis": hidden, "zaxis": hidden,
-                        "camera": {"eye": eye, "up": cam_up, "center": {"x": 0, "y": 0, "z": 0}}}
+        layout[name] = {
+            "domain": {"x": [index * width, (index + 1) * width], "y": [0, 1]},
+            "aspectmode": "data",
+            "xaxis": hidden,
+            "yaxis": hidden,
+            "zaxis": hidden,
+            "camera": {"eye": eye, "up": cam_up, "center": {"x": 0, "y": 0, "z": 0}},
+        }
         if len(shown) > 1:
-            layout["annotations"].append({"text": label, "x": (index + 0.5) * width, "y": 1.0, "xref": "paper",
-                                          "yref": "paper", "yanchor": "bottom", "showarrow": False,
-                                          "font": {"size": 14}})
+            layout["annotations"].append(
+                {
+                    "text": label,
+                    "x": (index + 0.5) * width,
+                    "y": 1.0,
+                    "xref": "paper",
+                    "yref": "paper",
+                    "yanchor": "bottom",
+                    "showarrow": False,
+                    "font": {"size": 14},
+                }
+            )
     figure = go.Figure([_trace(s, i, label) for i, (s, label) in enumerate(zip(shown, labels))], layout)
     return pio.to_json(figure, validate=True, pretty=False)
 
@@ -104,28 +145,44 @@ def spectrum_data(spectrum: HilbertSpectrum) -> dict | None:
     if not total > 0 or not np.any(spectrum.frequency > 0):
         return None
     edges, marginal = spectrum.marginal(SPECTRUM_BINS, "log", spectrum.frequency_limits("log"))
-    per_imf = [100 * HilbertSpectrum(spectrum.frequency[k:k + 1], spectrum.amplitude[k:k + 1],
-                                     spectrum.area).marginal(SPECTRUM_BINS, "log", (edges[0], edges[-1]))[1] / total
-               for k in range(len(spectrum.frequency))]
+    per_imf = [
+        100
+        * HilbertSpectrum(spectrum.frequency[k : k + 1], spectrum.amplitude[k : k + 1], spectrum.area).marginal(
+            SPECTRUM_BINS, "log", (edges[0], edges[-1])
+        )[1]
+        / total
+        for k in range(len(spectrum.frequency))
+    ]
     limit = getattr(spectrum, "resolvable_frequency", None)
     limit = limit() if callable(limit) else limit
     within = 100 * marginal.sum() / total
-    caption = (f"Share of the IMF energy ∫a²dA per log-spaced frequency bin ({SPECTRUM_BINS} bins, "
-               f"{within:.1f}% of the energy in the plotted range); the selected frequency field's colour "
-               "range is shaded.")
-    return {"edges": edges.tolist(), "marginal": (100 * marginal / total).tolist(),
-            "imfs": [row.tolist() for row in per_imf], "scale": "log", "caption": caption,
-            "resolvable_frequency": None if limit is None else float(limit)}
+    caption = (
+        f"Share of the IMF energy ∫a²dA per log-spaced frequency bin ({SPECTRUM_BINS} bins, "
+        f"{within:.1f}% of the energy in the plotted range); the selected frequency field's colour "
+        "range is shaded."
+    )
+    return {
+        "edges": edges.tolist(),
+        "marginal": (100 * marginal / total).tolist(),
+        "imfs": [row.tolist() for row in per_imf],
+        "scale": "log",
+        "caption": caption,
+        "resolvable_frequency": None if limit is None else float(limit),
+    }
 
 
 def quality_data(quality: Quality) -> dict:
-    rows = [["energy ratio (1 when orthogonal)", f"{quality.energy_ratio:.3g}",
-             quality.energy_ratio > ENERGY_RATIO_LIMIT],
-            ["index of orthogonality (0 when orthogonal)", f"{quality.orthogonality_index:.3g}",
-             not ORTHOGONALITY_LIMIT <= quality.orthogonality_index <= LEAKAGE_LIMIT],
-            ["  of which leaking (positive cross terms)", f"{quality.io_leaking:.3g}", False],
-            ["  of which cancelling (negative cross terms)", f"{quality.io_cancelling:.3g}", False],
-            ["signal spike max|s̃| / p99|s̃|", f"{quality.signal_spike:.3g}", quality.signal_spike > SPIKE_LIMIT]]
+    rows = [
+        ["energy ratio (1 when orthogonal)", f"{quality.energy_ratio:.3g}", quality.energy_ratio > ENERGY_RATIO_LIMIT],
+        [
+            "index of orthogonality (0 when orthogonal)",
+            f"{quality.orthogonality_index:.3g}",
+            not ORTHOGONALITY_LIMIT <= quality.orthogonality_index <= LEAKAGE_LIMIT,
+        ],
+        ["  of which leaking (positive cross terms)", f"{quality.io_leaking:.3g}", False],
+        ["  of which cancelling (negative cross terms)", f"{quality.io_cancelling:.3g}", False],
+        ["signal spike max|s̃| / p99|s̃|", f"{quality.signal_spike:.3g}", quality.signal_spike > SPIKE_LIMIT],
+    ]
     names = [f"IMF {k + 1}" for k in range(len(quality.energy_share) - 1)] + ["residue"]
     rows += [[f"energy share: {name}", f"{share:.1%}", False] for name, share in zip(names, quality.energy_share)]
     return {"rows": rows, "warnings": list(quality.warnings)}

@@ -5,6 +5,7 @@ Figures are Matplotlib ``Figure`` objects drawn with the Agg canvas (no
 ``pyplot``, no global state, no display); the surface images come from
 :mod:`hht3d.viz.render`.  Sizes are in pixels; files are written atomically.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -17,8 +18,17 @@ from ..io.atomic import atomic_path
 from .render import PERCENTILES, ColorScale, Rendering, color_scale, model_aspect, renderer
 from .render.image import check_field, check_size
 
-__all__ = ["font_points", "draw_colorbar", "draw_image", "field_figure", "save_figure", "render_png",
-           "fractions", "check_dpi", "check_result"]
+__all__ = [
+    "font_points",
+    "draw_colorbar",
+    "draw_image",
+    "field_figure",
+    "save_figure",
+    "render_png",
+    "fractions",
+    "check_dpi",
+    "check_result",
+]
 
 
 # -- one field with a title and a colour bar -----------------------------------------------------
@@ -27,8 +37,9 @@ def font_points(width_pixels: float, dpi: float) -> float:
     return float(np.clip(width_pixels / 20 * 72 / dpi, 7.0, 16.0))
 
 
-def draw_colorbar(fig, box, scale: ColorScale, *, label: str | None = None, orientation: str = "vertical",
-                  font: float = 10.0) -> None:
+def draw_colorbar(
+    fig, box, scale: ColorScale, *, label: str | None = None, orientation: str = "vertical", font: float = 10.0
+) -> None:
     """A colour bar in ``box`` (figure fractions ``[left, bottom, width, height]``) with three
     ticks: the limits and the middle (0 for a symmetric scale)."""
     axes = fig.add_axes(box)
@@ -60,10 +71,24 @@ def draw_image(fig, box, rendering: Rendering, *, title: str | None = None, font
         axes.set_title(title, fontsize=font, pad=2)
 
 
-def field_figure(surface: Surface, values=None, *, title: str | None = None, label: str | None = None,
-                 size=(800, 800), dpi: float = 100, view="front", up="y", cmap: str | None = None,
-                 limits=None, symmetric: bool | None = None, percentiles=PERCENTILES,
-                 backend: str = "auto", supersample: int = 2, point_size: float | None = None):
+def field_figure(
+    surface: Surface,
+    values=None,
+    *,
+    title: str | None = None,
+    label: str | None = None,
+    size=(800, 800),
+    dpi: float = 100,
+    view="front",
+    up="y",
+    cmap: str | None = None,
+    limits=None,
+    symmetric: bool | None = None,
+    percentiles=PERCENTILES,
+    backend: str = "auto",
+    supersample: int = 2,
+    point_size: float | None = None,
+):
     """A Matplotlib ``Figure`` of one field on the model with a title and a colour bar.
 
     Parameters
@@ -93,15 +118,31 @@ def field_figure(surface: Surface, values=None, *, title: str | None = None, lab
     image_width = max(int(min(width - side - 2 * pad, image_height / model_aspect(surface, view, up))), 1)
     left = (width - image_width - side) / 2
     field = None if values is None else check_field(surface, values)
-    scale = None if field is None else color_scale(field, cmap=cmap, limits=limits, symmetric=symmetric,
-                                                   percentiles=percentiles)
-    drawer = renderer(surface, view=view, up=up, size=(image_width, image_height), backend=backend,
-                      supersample=supersample, point_size=point_size)
+    scale = (
+        None
+        if field is None
+        else color_scale(field, cmap=cmap, limits=limits, symmetric=symmetric, percentiles=percentiles)
+    )
+    drawer = renderer(
+        surface,
+        view=view,
+        up=up,
+        size=(image_width, image_height),
+        backend=backend,
+        supersample=supersample,
+        point_size=point_size,
+    )
     fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi)
     box = (round(left), round(pad), image_width, image_height)
     draw_image(fig, fractions(box, width, height), drawer.render(field, scale))
-    fig.text(0.5, 1 - 0.5 * top / height, surface.name if title is None else title, ha="center",
-             va="center", fontsize=font * 1.15)
+    fig.text(
+        0.5,
+        1 - 0.5 * top / height,
+        surface.name if title is None else title,
+        ha="center",
+        va="center",
+        fontsize=font * 1.15,
+    )
     if scale is not None:
         bar = (left + image_width + 0.8 * em, height * 0.15, 0.9 * em, height * 0.7 - top)
         draw_colorbar(fig, fractions(bar, width, height), scale, label=label, font=font)

@@ -1,4 +1,5 @@
 """What a page draws of a surface: the surface itself, or a decimated copy carrying its fields."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -78,8 +79,9 @@ def shown_copy(surface: Surface, max_vertices: int = VERTEX_BUDGET) -> Shown:
     import open3d as o3d
     from scipy.spatial import cKDTree
 
-    mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(surface.vertices),
-                                     o3d.utility.Vector3iVector(surface.faces))
+    mesh = o3d.geometry.TriangleMesh(
+        o3d.utility.Vector3dVector(surface.vertices), o3d.utility.Vector3iVector(surface.faces)
+    )
     if n > CLUSTER_ABOVE * max_vertices:  # a voxel per two kept vertices' worth of area
         mesh = mesh.simplify_vertex_clustering(voxel_size=float(np.sqrt(surface.face_areas.sum() / (2 * max_vertices))))
     target, small = int(len(mesh.triangles) * max_vertices / len(mesh.vertices)), mesh

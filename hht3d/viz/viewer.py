@@ -42,6 +42,7 @@ the spectrum and the quality figures always come from every vertex.
 ``benchmarks/bench_viewer.py`` measures the page size and load time against
 :data:`PAGE_BUDGETS`.
 """
+
 from __future__ import annotations
 
 import json
@@ -49,20 +50,19 @@ from pathlib import Path
 
 import numpy as np
 
+from ..decomposition.quality import Quality, decomposition_quality
 from ..errors import InputError
+from ..geometry.surface import Surface
 from ..io.atomic import atomic_path
 from ..io.read import load as load_surface
 from ..io.read import read_npz
-from ..decomposition.quality import Quality, decomposition_quality
+from ..spectral.spectrum import HilbertSpectrum
 from .page import viewer_page
 from .page_data import colorscale, field_title, figure_json, order, quality_data, size_text, spectrum_data, typed
 from .render import PERCENTILES, SEQUENTIAL_CMAP, SYMMETRIC_CMAP, camera
-from .shown import VERTEX_BUDGET, shown_copy, color_limits
-from ..spectral.spectrum import HilbertSpectrum
-from ..geometry.surface import Surface
+from .shown import VERTEX_BUDGET, color_limits, shown_copy
 
-__all__ = ["PAGE_BUDGETS", "SHAPE",
-           "write_page", "result_html", "surfaces_html", "read_fields", "file_html"]
+__all__ = ["PAGE_BUDGETS", "SHAPE", "write_page", "result_html", "surfaces_html", "read_fields", "file_html"]
 
 #: What a page may cost, by vertices of the surface: (MB on disk, seconds until drawn in
 #: headless Chromium with software WebGL on this project's 2-core machine).
@@ -78,9 +78,21 @@ _STACKED = {"imfs": "imf", "amplitude": "amplitude", "phase": "phase", "frequenc
 # -- the page ------------------------------------------------------------------------------------
 
 
-def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectrum: HilbertSpectrum | None = None,
-               quality: Quality | None = None, field: str | None = None, max_vertices: int = VERTEX_BUDGET,
-               percentiles=PERCENTILES, view="front", up="y") -> Path:
+def write_page(
+    path,
+    surfaces,
+    fields: dict,
+    *,
+    title: str,
+    labels=None,
+    spectrum: HilbertSpectrum | None = None,
+    quality: Quality | None = None,
+    field: str | None = None,
+    max_vertices: int = VERTEX_BUDGET,
+    percentiles=PERCENTILES,
+    view="front",
+    up="y",
+) -> Path:
     """Write the viewer page of one or more surfaces sharing per-vertex fields, atomically.
 
     Parameters
@@ -129,12 +141,14 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
     for name, values in arrays.items():
         for s in surfaces:
             if values.shape != (s.n_vertices,):
-                raise InputError(f"{path.name}: field {name!r} has shape {values.shape}; "
-                                 f"{s.name} has {s.n_vertices} vertices")
+                raise InputError(
+                    f"{path.name}: field {name!r} has shape {values.shape}; {s.name} has {s.n_vertices} vertices"
+                )
     initial = field or ("signal" if "signal" in arrays else next(iter(arrays), SHAPE))
     if initial != SHAPE and initial not in arrays:
-        raise InputError(f"{path.name}: no field {initial!r} to show first; available: "
-                         f"{', '.join([SHAPE, *order(arrays)])}")
+        raise InputError(
+            f"{path.name}: no field {initial!r} to show first; available: {', '.join([SHAPE, *order(arrays)])}"
+        )
     camera(view, up)  # checks view and up before the expensive part
     shown = [shown_copy(s, max_vertices) for s in surfaces]
     copies, copy_of = [], []
@@ -155,24 +169,49 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
             limits = color_limits(arrays[name], percentiles)
         except InputError as exc:
             raise InputError(f"{path.name}: field {name!r}: {exc}") from None
-        entries.append({"name": name, "title": short, "label": label, "group": group, **limits,
-                        "values": [typed(c.carry(arrays[name])) for c in copies]})
-    notices = [f"{label}: {s.n_original:,} vertices, more than {max_vertices:,}: showing "
-               + (f"a random subset of {len(s.source):,} points. " if s.faces is None else
-                  f"a decimated copy with {len(s.source):,} vertices, each carrying the fields of the nearest "
-                  "original vertex. ")
-               + "Colour limits, spectrum and quality figures use every vertex."
-               for s, label in zip(shown, labels) if s.decimated]
-    meta = {"title": title, "size": "; ".join(f"{label}: {size_text(s)}" if len(surfaces) > 1 else size_text(s)
-                                              for s, label in zip(surfaces, labels)),
-            "notices": notices, "fields": entries, "initial": initial, "shape": SHAPE,
-            "shape_color": SHAPE_COLOR, "percentiles": [float(p) for p in percentiles],
-            "colorscales": {scale: colorscale(cmap) for scale, cmap in (("symmetric", SYMMETRIC_CMAP), ("sequential", SEQUENTIAL_CMAP))},
-            "surfaces": [{"label": label, "copy": c, "points": s.faces is None}
-                         for s, label, c in zip(shown, labels, copy_of)],
-            "spectrum": None if spectrum is None else spectrum_data(spectrum),
-            "quality": None if quality is None else quality_data(quality),
-            "config": {"displaylogo": False, "responsive": True}}
+        entries.append(
+            {
+                "name": name,
+                "title": short,
+                "label": label,
+                "group": group,
+                **limits,
+                "values": [typed(c.carry(arrays[name])) for c in copies],
+            }
+        )
+    notices = [
+        f"{label}: {s.n_original:,} vertices, more than {max_vertices:,}: showing "
+        + (
+            f"a random subset of {len(s.source):,} points. "
+            if s.faces is None
+            else f"a decimated copy with {len(s.source):,} vertices, each carrying the fields of the nearest "
+            "original vertex. "
+        )
+        + "Colour limits, spectrum and quality figures use every vertex."
+        for s, label in zip(shown, labels)
+        if s.decimated
+    ]
+    meta = {
+        "title": title,
+        "size": "; ".join(
+            f"{label}: {size_text(s)}" if len(surfaces) > 1 else size_text(s) for s, label in zip(surfaces, labels)
+        ),
+        "notices": notices,
+        "fields": entries,
+        "initial": initial,
+        "shape": SHAPE,
+        "shape_color": SHAPE_COLOR,
+        "percentiles": [float(p) for p in percentiles],
+        "colorscales": {
+            scale: colorscale(cmap) for scale, cmap in (("symmetric", SYMMETRIC_CMAP), ("sequential", SEQUENTIAL_CMAP))
+        },
+        "surfaces": [
+            {"label": label, "copy": c, "points": s.faces is None} for s, label, c in zip(shown, labels, copy_of)
+        ],
+        "spectrum": None if spectrum is None else spectrum_data(spectrum),
+        "quality": None if quality is None else quality_data(quality),
+        "config": {"displaylogo": False, "responsive": True},
+    }
     figure = figure_json(shown, labels, view, up)
     page = viewer_page(title, json.dumps(meta, allow_nan=False)[:-1] + ', "figure": ' + figure + "}")
     with atomic_path(path) as tmp:
@@ -181,8 +220,17 @@ def write_page(path, surfaces, fields: dict, *, title: str, labels=None, spectru
 
 
 # -- entry points ------------------------------------------------------------------------------
-def result_html(result, path, *, beside=None, field: str | None = None, max_vertices: int = VERTEX_BUDGET,
-                percentiles=PERCENTILES, view="front", up="y") -> Path:
+def result_html(
+    result,
+    path,
+    *,
+    beside=None,
+    field: str | None = None,
+    max_vertices: int = VERTEX_BUDGET,
+    percentiles=PERCENTILES,
+    view="front",
+    up="y",
+) -> Path:
     """The page of an HHT result: every field, the marginal spectrum and the quality figures.
 
     Parameters
@@ -199,13 +247,31 @@ def result_html(result, path, *, beside=None, field: str | None = None, max_vert
     if not all(hasattr(result, name) for name in ("surface", "vertex_attributes", "spectrum", "quality")):
         raise InputError(f"expected an HHTResult (from hht3d.hht), got {type(result).__name__}")
     surfaces = [result.surface] if beside is None else [result.surface, beside]
-    return write_page(path, surfaces, result.vertex_attributes(), title=f"{result.surface.name}: HHT",
-                      spectrum=result.spectrum, quality=result.quality, field=field, max_vertices=max_vertices,
-                      percentiles=percentiles, view=view, up=up)
+    return write_page(
+        path,
+        surfaces,
+        result.vertex_attributes(),
+        title=f"{result.surface.name}: HHT",
+        spectrum=result.spectrum,
+        quality=result.quality,
+        field=field,
+        max_vertices=max_vertices,
+        percentiles=percentiles,
+        view=view,
+        up=up,
+    )
 
 
-def surfaces_html(path, original: Surface, changed: Surface, *, max_vertices: int = VERTEX_BUDGET,
-                  percentiles=PERCENTILES, view="front", up="y") -> Path:
+def surfaces_html(
+    path,
+    original: Surface,
+    changed: Surface,
+    *,
+    max_vertices: int = VERTEX_BUDGET,
+    percentiles=PERCENTILES,
+    view="front",
+    up="y",
+) -> Path:
     """The page of a filtered or reconstructed surface beside the original.
 
     With the same vertex count, the selector offers ``displacement``: the
@@ -215,8 +281,17 @@ def surfaces_html(path, original: Surface, changed: Surface, *, max_vertices: in
     fields = {}
     if changed.n_vertices == original.n_vertices:
         fields["displacement"] = np.einsum("ij,ij->i", changed.vertices - original.vertices, original.normals)
-    return write_page(path, [original, changed], fields, title=f"{changed.name} beside {original.name}",
-                      field=SHAPE, max_vertices=max_vertices, percentiles=percentiles, view=view, up=up)
+    return write_page(
+        path,
+        [original, changed],
+        fields,
+        title=f"{changed.name} beside {original.name}",
+        field=SHAPE,
+        max_vertices=max_vertices,
+        percentiles=percentiles,
+        view=view,
+        up=up,
+    )
 
 
 def read_fields(path) -> tuple[Surface, dict, np.ndarray | None]:
@@ -263,17 +338,26 @@ def _decomposition(surface: Surface, fields: dict, area):
         k += 1
     if k == 0:
         return None, None
-    stack = {kind: np.stack([fields[f"{kind}_{i + 1}"] for i in range(k)]) for kind in ("imf", "amplitude", "frequency")}
-    spectrum = HilbertSpectrum(stack["frequency"], stack["amplitude"],
-                               surface.mass_diagonal if area is None else area)
+    stack = {
+        kind: np.stack([fields[f"{kind}_{i + 1}"] for i in range(k)]) for kind in ("imf", "amplitude", "frequency")
+    }
+    spectrum = HilbertSpectrum(stack["frequency"], stack["amplitude"], surface.mass_diagonal if area is None else area)
     quality = None
     if "signal" in fields and "residue" in fields:
         quality = decomposition_quality(surface, fields["signal"], stack["imf"], fields["residue"])
     return spectrum, quality
 
 
-def file_html(source, path=None, *, field: str | None = None, max_vertices: int = VERTEX_BUDGET,
-              percentiles=PERCENTILES, view="front", up="y") -> Path:
+def file_html(
+    source,
+    path=None,
+    *,
+    field: str | None = None,
+    max_vertices: int = VERTEX_BUDGET,
+    percentiles=PERCENTILES,
+    view="front",
+    up="y",
+) -> Path:
     """The page of a saved result or surface file (see :func:`read_fields`).
 
     Parameters
@@ -295,6 +379,16 @@ def file_html(source, path=None, *, field: str | None = None, max_vertices: int 
     source = Path(source)
     surface, fields, area = read_fields(source)
     spectrum, quality = _decomposition(surface, fields, area)
-    return write_page(source.with_suffix(".html") if path is None else path, [surface], fields,
-                      title=surface.name, spectrum=spectrum, quality=quality, field=field,
-                      max_vertices=max_vertices, percentiles=percentiles, view=view, up=up)
+    return write_page(
+        source.with_suffix(".html") if path is None else path,
+        [surface],
+        fields,
+        title=surface.name,
+        spectrum=spectrum,
+        quality=quality,
+        field=field,
+        max_vertices=max_vertices,
+        percentiles=percentiles,
+        view=view,
+        up=up,
+    )

@@ -1,13 +1,14 @@
 """Fixtures of the filtering tests."""
+
 from __future__ import annotations
 
 import pytest
+
 from helpers.bumps import AMPLITUDE, WAVES
 from helpers.meshes import bump_band_sphere
-
 from hht3d import Surface
-from hht3d.transform import hht
 from hht3d.geometry.signals import mean_curvature
+from hht3d.transform import hht
 
 
 @pytest.fixture(scope="module")

@@ -1,18 +1,26 @@
 """The baselines (hht3d.apps.baselines): IMF enhancement and manifold-harmonics filtering on bump spheres, the
 heat kernel signature against its definitions."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 import scipy.linalg
+
 from helpers.bumps import AMPLITUDE, bump_amplitude, sphere_distance
 from helpers.meshes import bump_band_sphere, icosphere
-
 from hht3d import Surface
-from hht3d.apps import BandStop, Constant, heat_kernel_signature, hks_features, imf_enhancement, manifold_harmonics_filter
-
+from hht3d.apps import (
+    BandStop,
+    Constant,
+    heat_kernel_signature,
+    hks_features,
+    imf_enhancement,
+    manifold_harmonics_filter,
+)
 
 # -- baselines -------------------------------------------------------------------------------
+
 
 def test_imf_enhancement(bumps):
     surface, _, pattern, result = bumps
@@ -26,8 +34,7 @@ def test_manifold_harmonics_filter():
     surface = Surface(v, f)
     omega = np.sqrt(72)
     # all eigenpairs and gain 1 synthesise the coordinates exactly (M-orthonormal basis + centroid)
-    full = manifold_harmonics_filter(surface, Constant(1.0), eigenpairs=surface.n_vertices - 1,
-                                     keep_remainder=False)
+    full = manifold_harmonics_filter(surface, Constant(1.0), eigenpairs=surface.n_vertices - 1, keep_remainder=False)
     assert np.abs(full.vertices - v).max() <= 1e-10
     assert np.array_equal(manifold_harmonics_filter(surface, Constant(1.0), eigenpairs=50).vertices, v)
     out = manifold_harmonics_filter(surface, BandStop(low=omega / 1.5, high=1.5 * omega), eigenpairs=150)
@@ -38,6 +45,7 @@ def test_manifold_harmonics_filter():
 
 
 # -- heat kernel signature -----------------------------------------------------------------------
+
 
 def test_hks_equals_heat_kernel_diagonal():
     """With every eigenpair, k_t(x, x) is the diagonal of expm(−t M⁻¹L) M⁻¹."""
@@ -50,8 +58,9 @@ def test_hks_equals_heat_kernel_diagonal():
         kernel = scipy.linalg.expm(-t * operator) / surface.mass_diagonal[None, :]
         assert np.allclose(row, np.diag(kernel), rtol=1e-8)
     # large t: heat spreads evenly, k_t -> 1 / area
-    assert np.allclose(heat_kernel_signature(surface, 100.0, eigenpairs=n - 1),
-                       1 / surface.mass_diagonal.sum(), rtol=1e-8)
+    assert np.allclose(
+        heat_kernel_signature(surface, 100.0, eigenpairs=n - 1), 1 / surface.mass_diagonal.sum(), rtol=1e-8
+    )
 
 
 def sphere_hks_series(t: float) -> float:
@@ -87,8 +96,9 @@ def test_hks_matches_a_truncated_generalized_eigh():
     times = np.array([0.05, 0.3])
     p = 29
     assert values[p + 1] - values[p] > 0.05 * values[p]  # values[0] is the kernel
-    expected = np.exp(-np.outer(times, values[1:p + 1])) @ (vectors[:, 1:p + 1] ** 2).T \
-        + 1 / surface.mass_diagonal.sum()
+    expected = (
+        np.exp(-np.outer(times, values[1 : p + 1])) @ (vectors[:, 1 : p + 1] ** 2).T + 1 / surface.mass_diagonal.sum()
+    )
     hks = heat_kernel_signature(surface, times, eigenpairs=p)
     assert np.max(np.abs(hks / expected - 1)) <= 3e-13
 

@@ -1,16 +1,24 @@
 """Prominent features from IMF extrema (Sec. 5.2) and the heat-kernel-signature baseline."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers.meshes import grid, icosphere
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 import hht3d
+from helpers.meshes import grid, icosphere
 from hht3d import InputError, Surface
-from hht3d.apps import (FEATURE_EMD_OPTIONS, FeatureResult, heat_kernel_signature, hks_features, merge_hits, prominent_features,
-                        repeatability)
+from hht3d.apps import (
+    FEATURE_EMD_OPTIONS,
+    FeatureResult,
+    heat_kernel_signature,
+    hks_features,
+    merge_hits,
+    prominent_features,
+    repeatability,
+)
 from hht3d.cli import demo_model_path
 from hht3d.decomposition import emd, local_extrema
 from hht3d.geometry.signals import mean_curvature
@@ -30,12 +38,17 @@ def spot():
 
 # -- counting and merging -----------------------------------------------------------------------
 
+
 def test_counts_threshold_and_per_imf_extrema():
     surface = Surface(*grid(9, 9, jitter=0.1, seed=2))
     x, y = surface.vertices[:, 0], surface.vertices[:, 1]
-    imfs = np.array([np.cos(2 * np.pi * x) * np.cos(2 * np.pi * y),
-                     np.cos(4 * np.pi * x) * np.cos(4 * np.pi * y),
-                     np.sin(3 * np.pi * x) + 0.1 * y])
+    imfs = np.array(
+        [
+            np.cos(2 * np.pi * x) * np.cos(2 * np.pi * y),
+            np.cos(4 * np.pi * x) * np.cos(4 * np.pi * y),
+            np.sin(3 * np.pi * x) + 0.1 * y,
+        ]
+    )
     result = prominent_features(surface, imfs)
     assert isinstance(result, FeatureResult) and result.n_scales == 3 and result.min_count == 2
     expected = np.zeros(surface.n_vertices, dtype=int)
@@ -79,6 +92,7 @@ def test_repeatability_measure():
 
 
 # -- invariance and noise ----------------------------------------------------------------------
+
 
 def test_features_invariant_to_rotation_and_scale(spot):
     surface, decomposition = spot
@@ -141,10 +155,17 @@ def test_noise_repeatability(spot):
 
 # -- bad parameters --------------------------------------------------------------------------
 
+
 def test_bad_parameters(spot):
     surface, decomposition = spot
-    for options in ({"fraction": 0.0}, {"fraction": 1.5}, {"ratio": 0.3}, {"ring": 0},
-                    {"merge_radius": -1.0}, {"merge_radius": float("nan")}):
+    for options in (
+        {"fraction": 0.0},
+        {"fraction": 1.5},
+        {"ratio": 0.3},
+        {"ring": 0},
+        {"merge_radius": -1.0},
+        {"merge_radius": float("nan")},
+    ):
         with pytest.raises(InputError):
             prominent_features(surface, decomposition, **options)
     with pytest.raises(InputError):

@@ -1,21 +1,31 @@
 """Hilbert-spectrum filtering (Eq. 26, hht3d.apps.filters): the gains, and the filtered signal."""
+
 from __future__ import annotations
 
 import pickle
 
 import numpy as np
 import pytest
+
 from helpers.bumps import OMEGA
 from helpers.meshes import bump_band_sphere
-
 from hht3d import InputError, Surface
-from hht3d.apps import (BandBoost, BandStop, Constant, HighBoost, LowPass, PiecewiseLinear, filter_signal, gains_of,
-                        make_gain)
-from hht3d.transform import hht
+from hht3d.apps import (
+    BandBoost,
+    BandStop,
+    Constant,
+    HighBoost,
+    LowPass,
+    PiecewiseLinear,
+    filter_signal,
+    gains_of,
+    make_gain,
+)
 from hht3d.geometry.signals import mean_curvature
-
+from hht3d.transform import hht
 
 # -- gains ---------------------------------------------------------------------------------
+
 
 def test_gain_shapes():
     omega = np.array([0.0, 5.0, 10.0, 10.5, 20.0, 30.0, 40.0])
@@ -33,13 +43,18 @@ def test_gain_shapes():
     assert smooth(np.array([7.9, 8.0, 10.0, 12.0, 12.1])).tolist() == pytest.approx([1, 1, 0.5, 0, 0])
     assert np.all(np.diff(smooth(np.linspace(7, 13, 50))) <= 0)
     band = BandStop(low=5.0, high=20.0, width=2.0)
-    assert band(np.array([3.9, 5.0, 6.0, 12.0, 19.0, 20.0, 21.0])).tolist() == pytest.approx(
-        [1, 0.5, 0, 0, 0, 0.5, 1])
+    assert band(np.array([3.9, 5.0, 6.0, 12.0, 19.0, 20.0, 21.0])).tolist() == pytest.approx([1, 0.5, 0, 0, 0, 0.5, 1])
 
 
 def test_gains_pickle_and_by_name():
-    gains = [LowPass(cutoff=3.0, width=1.0), HighBoost(cutoff=2.0, factor=2.5), BandStop(low=1.0, high=2.0), BandBoost(low=1.0, high=2.0, factor=3.0),
-             PiecewiseLinear([(0.0, 1.0), (5.0, 0.0)]), Constant(1.0)]
+    gains = [
+        LowPass(cutoff=3.0, width=1.0),
+        HighBoost(cutoff=2.0, factor=2.5),
+        BandStop(low=1.0, high=2.0),
+        BandBoost(low=1.0, high=2.0, factor=3.0),
+        PiecewiseLinear([(0.0, 1.0), (5.0, 0.0)]),
+        Constant(1.0),
+    ]
     omega = np.linspace(0, 10, 11)
     for gain in gains:
         back = pickle.loads(pickle.dumps(gain))
@@ -56,11 +71,14 @@ def test_filter_signal_is_eq26(bumps):
     assert np.allclose(filter_signal(result, gain), expected, rtol=0, atol=1e-12 * np.abs(result.signal).max())
     # tuple input, identity, all-stop, any callable
     parts = (result.imfs, result.residue, mono)
-    assert np.allclose(filter_signal(parts, Constant(1.0)), result.signal, rtol=0,
-                       atol=1e-13 * np.abs(result.signal).max())
+    assert np.allclose(
+        filter_signal(parts, Constant(1.0)), result.signal, rtol=0, atol=1e-13 * np.abs(result.signal).max()
+    )
     assert np.array_equal(filter_signal(parts, Constant(0.0)), result.residue)
-    assert np.array_equal(filter_signal(parts, lambda w: np.where(w > 5, 2.0, 1.0)),
-                          filter_signal(parts, HighBoost(cutoff=5.0, factor=2.0)))
+    assert np.array_equal(
+        filter_signal(parts, lambda w: np.where(w > 5, 2.0, 1.0)),
+        filter_signal(parts, HighBoost(cutoff=5.0, factor=2.0)),
+    )
     assert gains_of(result, gain).shape == result.imfs.shape
 
 
@@ -85,13 +103,25 @@ def test_filtering_does_not_depend_on_the_signal_unit():
 
 # -- bad parameters --------------------------------------------------------------------------
 
-@pytest.mark.parametrize("build", [
-    lambda: LowPass(cutoff=-1.0), lambda: LowPass(cutoff=float("nan")), lambda: LowPass(cutoff=1.0, width=-1),
-    lambda: HighBoost(cutoff=1.0, factor=float("inf")), lambda: BandStop(low=5.0, high=5.0), lambda: BandBoost(low=6.0, high=2.0),
-    lambda: PiecewiseLinear([]), lambda: PiecewiseLinear([(2.0, 1.0), (1.0, 0.0)]),
-    lambda: PiecewiseLinear([(0.0, 1.0, 2.0)]), lambda: PiecewiseLinear([(-1.0, 1.0)]),
-    lambda: LowPass(cutoff="high"), lambda: make_gain("notch", low=1), lambda: make_gain("low_pass", cut=1),
-])
+
+@pytest.mark.parametrize(
+    "build",
+    [
+        lambda: LowPass(cutoff=-1.0),
+        lambda: LowPass(cutoff=float("nan")),
+        lambda: LowPass(cutoff=1.0, width=-1),
+        lambda: HighBoost(cutoff=1.0, factor=float("inf")),
+        lambda: BandStop(low=5.0, high=5.0),
+        lambda: BandBoost(low=6.0, high=2.0),
+        lambda: PiecewiseLinear([]),
+        lambda: PiecewiseLinear([(2.0, 1.0), (1.0, 0.0)]),
+        lambda: PiecewiseLinear([(0.0, 1.0, 2.0)]),
+        lambda: PiecewiseLinear([(-1.0, 1.0)]),
+        lambda: LowPass(cutoff="high"),
+        lambda: make_gain("notch", low=1),
+        lambda: make_gain("low_pass", cut=1),
+    ],
+)
 def test_bad_gains(build):
     with pytest.raises(InputError):
         build()

@@ -1,25 +1,47 @@
 """Reconstruction from a filtered signal (Eq. 27, hht3d.apps.reconstruction): the identity, the least-squares
 problem, bump spheres, Open3D output, bad input."""
+
 from __future__ import annotations
 
 import warnings
 
 import numpy as np
 import pytest
-from helpers.bumps import AMPLITUDE, OMEGA, bump_amplitude, sphere_distance
-from helpers.meshes import (boundary_mask, disjoint_union, fibonacci_sphere, grid, height_field_grid, icosphere,
-                            jittered_height_field, random_bump_sphere, reference_operators)
 from scipy.spatial.transform import Rotation
 
 import hht3d
+from helpers.bumps import AMPLITUDE, OMEGA, bump_amplitude, sphere_distance
+from helpers.meshes import (
+    boundary_mask,
+    disjoint_union,
+    fibonacci_sphere,
+    grid,
+    height_field_grid,
+    icosphere,
+    jittered_height_field,
+    random_bump_sphere,
+    reference_operators,
+)
 from hht3d import InputError, Surface
-from hht3d.apps import (BandBoost, BandStop, Constant, HighBoost, LowPass, automatic_weight, edit_frequency,
-                        filter_geometry, filter_signal, imf_enhancement, manifold_harmonics_filter, reconstruct,
-                        reconstruct_from_change)
+from hht3d.apps import (
+    BandBoost,
+    BandStop,
+    Constant,
+    HighBoost,
+    LowPass,
+    automatic_weight,
+    edit_frequency,
+    filter_geometry,
+    filter_signal,
+    imf_enhancement,
+    manifold_harmonics_filter,
+    reconstruct,
+    reconstruct_from_change,
+)
 from hht3d.apps.reconstruction import DISPLACEMENT_LIMIT
-from hht3d.transform import hht
 from hht3d.decomposition import QualityWarning
 from hht3d.geometry.signals import mean_curvature
+from hht3d.transform import hht
 
 #: Identity: the filtered positions may differ from the input by this fraction of the bounding-box
 #: diagonal (RMS).  With gain 1 the change s' − s is zero or a few ulps, so the solve moves nothing.
@@ -36,6 +58,7 @@ def enclosed_volume(surface: Surface) -> float:
 
 
 # -- identity (Eq. 27 with s' = s) -----------------------------------------------------------
+
 
 def assert_identity(surface: Surface, result) -> None:
     diagonal = surface.bounding_box_diagonal
@@ -74,10 +97,11 @@ def test_identity_point_cloud_and_components():
 
 # -- the least-squares problem -------------------------------------------------------------
 
-@pytest.mark.parametrize("mesh, weights, preserve_scale", [
-    ("open", "default", False), ("open", "default", True), ("closed", "default", True),
-    ("closed", "random", False),
-])
+
+@pytest.mark.parametrize(
+    "mesh, weights, preserve_scale",
+    [("open", "default", False), ("open", "default", True), ("closed", "default", True), ("closed", "random", False)],
+)
 def test_reconstruction_equals_a_dense_solve_written_here(mesh, weights, preserve_scale):
     """Eq. 27 as documented: (L M⁻¹ L + W) D = L diag(Δs) N with w_i = μ_i A_i / Ā², solved densely
     with L, M, N and the boundary built in this file (tests/helpers/meshes.py), not by hht3d.
@@ -138,13 +162,16 @@ def test_preserve_scale_removes_the_mean_change():
 
 # -- bump band sphere --------------------------------------------------------------------------
 
+
 def test_band_stop_removes_bumps(bumps):
     surface, _, pattern, result = bumps
     before = sphere_distance(surface, surface.vertices)
     out = filter_geometry(result, BandStop(low=OMEGA / 2, high=2 * OMEGA, width=OMEGA / 4))
     factor = before / sphere_distance(surface, out.vertices)
-    print(f"band-stop at the bump scale: RMS distance to the clean sphere {before:.3g} -> "
-          f"{before / factor:.3g} ({factor:.2f}x lower)")
+    print(
+        f"band-stop at the bump scale: RMS distance to the clean sphere {before:.3g} -> "
+        f"{before / factor:.3g} ({factor:.2f}x lower)"
+    )
     assert factor >= 3, factor  # measured 4.94
     assert abs(bump_amplitude(surface, out.vertices, pattern)) <= 0.25 * AMPLITUDE  # measured 0.14
     # a band far above the bumps holds no energy: the geometry barely moves
@@ -182,8 +209,13 @@ def test_low_pass_keeps_volume(bumps):
     assert sphere_distance(surface, out.vertices) < sphere_distance(surface, surface.vertices) / 3
 
 
-@pytest.mark.parametrize("gain", [HighBoost(cutoff=OMEGA / 2, factor=2.0, width=OMEGA / 4),
-                                  BandBoost(low=OMEGA / 2, high=2 * OMEGA, factor=2.0, width=OMEGA / 4)])
+@pytest.mark.parametrize(
+    "gain",
+    [
+        HighBoost(cutoff=OMEGA / 2, factor=2.0, width=OMEGA / 4),
+        BandBoost(low=OMEGA / 2, high=2 * OMEGA, factor=2.0, width=OMEGA / 4),
+    ],
+)
 def test_enhancement_raises_bumps(bumps, gain):
     surface, _, pattern, result = bumps
     ratio = bump_amplitude(surface, filter_geometry(result, gain).vertices, pattern) / AMPLITUDE
@@ -191,6 +223,7 @@ def test_enhancement_raises_bumps(bumps, gain):
 
 
 # -- sixty random bumps of two widths: the realistic case -------------------------------------
+
 
 @pytest.fixture(scope="module")
 def mixed_bumps():
@@ -231,14 +264,14 @@ def test_exact_curvature_change_removes_narrow_bumps(mixed_bumps):
     clean = surface.vertices / np.linalg.norm(surface.vertices, axis=1, keepdims=True)
     without = Surface(clean * (1 + wide)[:, None], surface.faces)
     weight = automatic_weight(surface, edit_frequency(result, LowPass(cutoff=6.0, width=2.0)))
-    out = reconstruct_from_change(surface, mean_curvature(without) - mean_curvature(surface),
-                                  interior_weight=weight)
+    out = reconstruct_from_change(surface, mean_curvature(without) - mean_curvature(surface), interior_weight=weight)
     kept_narrow, kept_wide = bump_classes(surface, out.vertices, narrow, wide)
     print(f"exact curvature change on 60 mixed bumps: narrow {kept_narrow:.3f}, wide {kept_wide:.3f}")
     assert kept_narrow <= 0.3 and abs(kept_wide - 1) <= 0.15
 
 
 # -- output ----------------------------------------------------------------------------------
+
 
 def test_output_is_an_open3d_mesh(bumps, tmp_path):
     import open3d as o3d
@@ -267,8 +300,13 @@ def test_bad_filter_and_reconstruction_inputs(bumps):
         filter_signal(result.imfs, Constant(1.0))
     with pytest.raises(InputError):
         reconstruct(surface, np.zeros(n - 1))
-    for bad in ({"interior_weight": 0.0}, {"boundary_weight": -1.0}, {"interior_weight": float("nan")},
-                {"weights": np.zeros(n)}, {"weights": np.ones(3)}):
+    for bad in (
+        {"interior_weight": 0.0},
+        {"boundary_weight": -1.0},
+        {"interior_weight": float("nan")},
+        {"weights": np.zeros(n)},
+        {"weights": np.ones(3)},
+    ):
         with pytest.raises(InputError):
             reconstruct(surface, mean_curvature(surface), **bad)
     # an HHT of another signal cannot drive the geometry

@@ -3,6 +3,7 @@ meshes as found in the wild (odd encodings, huge or tiny coordinates, non-manifo
 
 One table row each, run by :func:`helpers.bad_inputs.run_case` (what a row holds and checks is told there).
 """
+
 from __future__ import annotations
 
 import json
@@ -87,6 +88,7 @@ def _int8(ran: Ran) -> None:
 
 def _strict_json(ran: Ran) -> None:
     """``info --json`` of a mesh near the coordinate limit: strict JSON (no NaN, no Infinity), finite area."""
+
     def refuse(constant):
         raise AssertionError(f"{constant} is not JSON")
 
@@ -103,8 +105,9 @@ CASES = {
     # 2. flat point clouds: a result, and no Qhull output
     "exactly flat point cloud (z = 0)": accepted("flat_cloud.ply", check=_flat_cloud, issue=True),
     "tilted flat point cloud": accepted("tilted_cloud.ply", check=_nearly_flat("tilted_cloud"), issue=True),
-    "nearly flat point cloud (1e-12)": accepted("nearly_flat_cloud.ply", check=_nearly_flat("nearly_flat_cloud"),
-                                                issue=True),
+    "nearly flat point cloud (1e-12)": accepted(
+        "nearly_flat_cloud.ply", check=_nearly_flat("nearly_flat_cloud"), issue=True
+    ),
     "points on a line": refused("line_cloud.ply", "50 points lie on a line"),
     # beyond the issue: meshes and point clouds as found in the wild
     "non-manifold edge": accepted("non_manifold.ply", check=_non_manifold),
@@ -117,23 +120,29 @@ CASES = {
     "vertex_indices as uint32": accepted("good.ply", "uint32.ply", check=_same_as_good("uint32")),
     "vertex_indices as int8": accepted("int8.ply", check=_int8),
     "disconnected components": accepted("two_parts.ply", check=_two_parts),
-    "constant signal": Case(run("inputs=<in>/plane_at_2.ply", "steps.curvature.params.kind=z"), "", 0, (),
-                            check=_constant),
+    "constant signal": Case(
+        run("inputs=<in>/plane_at_2.ply", "steps.curvature.params.kind=z"), "", 0, (), check=_constant
+    ),
     "NaN coordinates": refused("nan.ply", "1 vertices have NaN or infinite coordinates (first: vertex 5)"),
     "infinite coordinates": refused("infinite.ply", "NaN or infinite coordinates (first: vertex 7)"),
     "too few vertices": refused("three.ply", "3 vertices; a surface needs at least 4"),
     "every point the same": refused("same_point.ply", "1 vertices; a surface needs at least 4"),
     "every face degenerate": refused("all_degenerate.ply", "0 vertices; a surface needs at least 4"),
     "face index out of range": refused("bad_index.ply", "face indices must lie in [0, 162), got [0, 500]"),
-    "point cloud smaller than n_neighbors": refused("ten.xyz",
-                                                    "a point cloud of 10 points cannot give each point n_neighbors=30"),
-    "stored attribute that is not there": Case(run("steps.curvature.params={kind: stored, attribute: height}"),
-                                               "no stored vertex attribute 'height'"),
+    "point cloud smaller than n_neighbors": refused(
+        "ten.xyz", "a point cloud of 10 points cannot give each point n_neighbors=30"
+    ),
+    "stored attribute that is not there": Case(
+        run("steps.curvature.params={kind: stored, attribute: height}"), "no stored vertex attribute 'height'"
+    ),
     "luminance without colours": Case(run("steps.curvature.params.kind=luminance"), "has no vertex colours"),
-    "PLY property 0bad": Case(run("inputs=<in>/0bad.ply", "outputs.files=[{path: '{stem}_hht.ply'}]"), "", 0, (),
-                              check=_renamed_property),
-    "info --json of a mesh x1e300": Case(("info", "--json", "<in>/huge300.ply"), "huge300.ply: huge300: coordinates "
-                                         "reach 1.06e+300; beyond 1e+75 areas and curvatures overflow float64"),
+    "PLY property 0bad": Case(
+        run("inputs=<in>/0bad.ply", "outputs.files=[{path: '{stem}_hht.ply'}]"), "", 0, (), check=_renamed_property
+    ),
+    "info --json of a mesh x1e300": Case(
+        ("info", "--json", "<in>/huge300.ply"),
+        "huge300.ply: huge300: coordinates reach 1.06e+300; beyond 1e+75 areas and curvatures overflow float64",
+    ),
     "run on a mesh x1e300": Case(run("inputs=<in>/huge300.ply"), "coordinates reach 1.06e+300; beyond 1e+75"),
     "info --json of a mesh x1e70": Case(("info", "--json", "<in>/huge70.ply"), "", 0, (), check=_strict_json),
 }

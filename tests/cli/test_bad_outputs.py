@@ -3,6 +3,7 @@ the way, names that leave the output folder, the summary, resumed and partly fai
 
 One table row each, run by :func:`helpers.bad_inputs.run_case` (what a row holds and checks is told there).
 """
+
 from __future__ import annotations
 
 import errno
@@ -14,8 +15,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from helpers.bad_inputs import (PIPELINE, SCANS, Case, Ran, _only_inputs, _scans, _substitute, _written, run, run_case,
-                                validate)
+from helpers.bad_inputs import (
+    PIPELINE,
+    SCANS,
+    Case,
+    Ran,
+    _only_inputs,
+    _scans,
+    _substitute,
+    _written,
+    run,
+    run_case,
+    validate,
+)
 from hht3d.cli import main
 
 
@@ -72,33 +84,39 @@ SUMMARY = "outputs.summary=true"
 # -- issue 23: nothing read or written outside where it belongs ------------------------------------------------
 def _user_file(relative: str, content: bytes = b"mine"):
     """A setup: the user's own file at ``<tmp>/relative``."""
+
     def setup(tmp: Path, inputs: Path) -> None:
         (tmp / relative).parent.mkdir(parents=True, exist_ok=True)
         (tmp / relative).write_bytes(content)
+
     return setup
 
 
 def _kept(relative: str, content: bytes = b"mine"):
     def check(ran: Ran) -> None:
         assert (ran.out.parent / relative).read_bytes() == content
+
     return check
 
 
 def _replaced(relative: str):
     def check(ran: Ran) -> None:
         assert set(np.load(ran.out.parent / relative)) >= {"imfs", "residue"}
+
     return check
 
 
 def _noted(fragment: str):
     def check(ran: Ran) -> None:
         assert any(line.startswith("note: ") and fragment in line for line in ran.stdout.splitlines()), ran.stdout
+
     return check
 
 
 def _truncate(relative: str):
     def setup(tmp: Path, inputs: Path) -> None:
         (tmp / relative).write_bytes(b"")
+
     return setup
 
 
@@ -114,6 +132,7 @@ def _summary_rows(*names: str):
     def check(ran: Ran) -> None:
         rows = json.loads((ran.out / "summary.json").read_text())
         assert sorted(Path(r["source"]).name for r in rows) == sorted(names)
+
     return check
 
 
@@ -129,24 +148,29 @@ def _manifest(files, *, user: str | None = None):
         mine = {"size": 4, "sha256": hashlib.sha256(b"mine").hexdigest(), "run": "planted"}
         (tmp / "out").mkdir(exist_ok=True)
         (tmp / "out" / ".hht3d-manifest.json").write_text(text.replace('"<mine>"', json.dumps(mine)))
+
     return setup
 
 
 def _recorded(*names: str):
     """A check: the manifest of ``out`` is valid and records ``names``."""
+
     def check(ran: Ran) -> None:
         from hht3d.io.manifest import entries
 
         files = json.loads((ran.out / ".hht3d-manifest.json").read_text())["files"]
         assert set(entries(ran.out)) >= set(names) and all(isinstance(entry, dict) for entry in files.values())
+
     return check
 
 
 def _lock_file(make):
     """A setup: ``out/.hht3d.lock`` made by ``make(lock, tmp)``."""
+
     def setup(tmp: Path, inputs: Path) -> None:
         (tmp / "out").mkdir(exist_ok=True)
         make(tmp / "out" / ".hht3d.lock", tmp)
+
     return setup
 
 
@@ -178,122 +202,243 @@ def _folder_and_user_file(tmp: Path, inputs: Path) -> None:
 
 
 FILE_URL = "outputs.folder=file://<tmp>/out"
-MALFORMED = {"a list": "[]", "not JSON": "{files",
-             "an entry a list": '{"files": {"good_hht.npz": [1]}}',
-             "an entry a string": '{"files": {"good_hht.npz": "x"}}',
-             "a size that is a string": '{"files": {"good_hht.npz": {"size": "4", "sha256": "00"}}}',
-             "a size that is null": '{"files": {"good_hht.npz": {"size": null, "sha256": null}}}'}
+MALFORMED = {
+    "a list": "[]",
+    "not JSON": "{files",
+    "an entry a list": '{"files": {"good_hht.npz": [1]}}',
+    "an entry a string": '{"files": {"good_hht.npz": "x"}}',
+    "a size that is a string": '{"files": {"good_hht.npz": {"size": "4", "sha256": "00"}}}',
+    "a size that is null": '{"files": {"good_hht.npz": {"size": null, "sha256": null}}}',
+}
 LONG = "n" * 240  # + "_hht.npz" (8): 248 bytes, legal; its temporary name would not be without cutting
 PLY_OUTPUT = "outputs.files=[{path: '{stem}_hht.ply'}]"
 
 CASES = {
     # 1. output locations that cannot be written: refused by validate and before run computes anything
-    "read-only output folder": Case(run("outputs.folder=<tmp>/read-only/out"), "Permission denied",
-                                    absent=("read-only/out",), unprivileged=True, issue=True),
-    "output folder under /proc, validate": Case(validate("outputs.folder=/proc/hht3d-out"),
-                                                "creating anything in /proc fails", issue=True),
-    "output folder under /proc, run": Case(run("outputs.folder=/proc/hht3d-out"),
-                                           "creating anything in /proc fails", issue=True),
-    "output folder is a file, validate": Case(validate("outputs.folder=<in>/good.ply"),
-                                              "good.ply is not a folder; choose another output folder", issue=True),
-    "output folder under a file, run": Case(run("outputs.folder=<in>/good.ply/out"), "good.ply is not a folder",
-                                            issue=True),
+    "read-only output folder": Case(
+        run("outputs.folder=<tmp>/read-only/out"),
+        "Permission denied",
+        absent=("read-only/out",),
+        unprivileged=True,
+        issue=True,
+    ),
+    "output folder under /proc, validate": Case(
+        validate("outputs.folder=/proc/hht3d-out"), "creating anything in /proc fails", issue=True
+    ),
+    "output folder under /proc, run": Case(
+        run("outputs.folder=/proc/hht3d-out"), "creating anything in /proc fails", issue=True
+    ),
+    "output folder is a file, validate": Case(
+        validate("outputs.folder=<in>/good.ply"), "good.ply is not a folder; choose another output folder", issue=True
+    ),
+    "output folder under a file, run": Case(
+        run("outputs.folder=<in>/good.ply/out"), "good.ply is not a folder", issue=True
+    ),
     "demo --out /dev/full": Case(("demo", "--out", "/dev/full", "--quiet"), "/dev/full is not a folder", issue=True),
-    "output file is a folder": Case(run("outputs.folder=<tmp>", "outputs.files=[{path: taken.npz}]"),
-                                    "taken.npz: cannot write: a folder of that name is in the way",
-                                    absent=("taken.npz/good_hht.npz",)),
+    "output file is a folder": Case(
+        run("outputs.folder=<tmp>", "outputs.files=[{path: taken.npz}]"),
+        "taken.npz: cannot write: a folder of that name is in the way",
+        absent=("taken.npz/good_hht.npz",),
+    ),
     "full disk while writing summary.json": Case(
-        run(TWO_GOOD, SUMMARY), "summary.json: cannot write (No space left", absent=("out/summary.json",),
-        fault=_failing_write("summary.json", errno.ENOSPC), check=_every_line_printed, issue=True),
+        run(TWO_GOOD, SUMMARY),
+        "summary.json: cannot write (No space left",
+        absent=("out/summary.json",),
+        fault=_failing_write("summary.json", errno.ENOSPC),
+        check=_every_line_printed,
+        issue=True,
+    ),
     "summary.csv not permitted": Case(
-        run(TWO_GOOD, SUMMARY), "summary.csv: cannot write (Permission denied)", absent=("out/summary.csv",),
-        fault=_failing_write("summary.csv", errno.EACCES), check=_every_line_printed, issue=True),
+        run(TWO_GOOD, SUMMARY),
+        "summary.csv: cannot write (Permission denied)",
+        absent=("out/summary.csv",),
+        fault=_failing_write("summary.csv", errno.EACCES),
+        check=_every_line_printed,
+        issue=True,
+    ),
     # runs and their summaries
-    "--resume fills the skipped row": Case((*run(SUMMARY), "--resume"), "", 0, (), before=(run(SUMMARY),),
-                                           check=_resumed, issue=True),
+    "--resume fills the skipped row": Case(
+        (*run(SUMMARY), "--resume"), "", 0, (), before=(run(SUMMARY),), check=_resumed, issue=True
+    ),
     "failed later step lists the earlier output": Case(
-        run(SUMMARY, "steps.hht.params.max_imfs=5", "outputs.files=[{from: curvature, path: '{stem}_signal.npz'}, "
-                                                    "{path: '{stem}_imf_5.ply', field: imf_5}]"),
-        "step write good_imf_5.ply failed", absent=("out/good_imf_5.ply",), check=_partial, issue=True),
+        run(
+            SUMMARY,
+            "steps.hht.params.max_imfs=5",
+            "outputs.files=[{from: curvature, path: '{stem}_signal.npz'}, {path: '{stem}_imf_5.ply', field: imf_5}]",
+        ),
+        "step write good_imf_5.ply failed",
+        absent=("out/good_imf_5.ply",),
+        check=_partial,
+        issue=True,
+    ),
     "progress into a log": Case(run("execution.progress=true"), "", 0, (), issue=True),
     "quality in the row and the summary": Case(run(SUMMARY), "", 0, (), check=_quality_columns, issue=True),
-    "a warning exits 0 and is printed": Case(run(SUMMARY, "steps.curvature.params={kind: file, path: <in>/spike.npy}"),
-                                             "", 0, (), check=_warned, issue=True),
+    "a warning exits 0 and is printed": Case(
+        run(SUMMARY, "steps.curvature.params={kind: file, path: <in>/spike.npy}"), "", 0, (), check=_warned, issue=True
+    ),
     # issue 23: nothing written outside where it belongs
-    "output replaces the input": Case(run("outputs.folder=<in>", "outputs.files=[{path: '{stem}.ply'}]"),
-                                      "is the input", absent=()),
-    "output path ../../": Case(validate("outputs.files=[{path: '../../x_{stem}.npz'}]"),
-                               "outside the output folder"),
-    "absolute output path": Case(validate("outputs.files=[{path: '<tmp>/elsewhere/{stem}.npz'}]"),
-                                 "outside the output folder", absent=("out", "elsewhere")),
-    "{parent} that is ..": Case(validate("inputs=<in>/no_meshes/../good.ply",
-                                         "outputs.files=[{path: '{parent}/{stem}.npz'}]"),
-                                "output '{parent}/{stem}.npz' of step 'hht': "),
-    "{name} that escapes": Case(validate("name=../../n", "outputs.files=[{path: '{name}_{stem}.npz'}]"),
-                                "outside the output folder"),
-    "allow_outside opts in": Case(run("outputs.allow_outside=true", "outputs.files=[{path: '../side/{stem}.npz'}]"),
-                                  "", 0, (), check=_written("good.npz", "side")),
-    "user's file under an output name": Case(run(), "exists and hht3d did not write it", absent=(),
-                                            setup=_user_file("out/good_hht.npz"), check=_kept("out/good_hht.npz")),
-    "validate notes a user's file under an output name": Case(validate(), "", 0, (),
-                                                              setup=_user_file("out/good_hht.npz"),
-                                                              check=_noted("good_hht.npz: exists and hht3d did not")),
-    "--overwrite replaces it": Case((*run(), "--overwrite"), "", 0, (), setup=_user_file("out/good_hht.npz"),
-                                    check=_replaced("out/good_hht.npz")),
-    "--resume does not trust a 0-byte output": Case((*run(), "--resume"), "exists and hht3d did not write it",
-                                                   absent=(), before=(run(),), setup=_truncate("out/good_hht.npz")),
-    "--resume --overwrite redoes it": Case((*run(), "--resume", "--overwrite"), "", 0, (), before=(run(),),
-                                           setup=_truncate("out/good_hht.npz"), check=_written("good_hht.npz")),
-    "outputs are never inputs": Case(run("inputs=<tmp>/scans", SCANS, PLY_OUTPUT), "", 0, (), setup=_scans_run_once,
-                                     check=_only_inputs("good.ply", "scan[1].ply")),
-    "two pipelines share a summary": Case(run(SUMMARY, "inputs=<in>/huge.ply"), "", 0, (), before=(run(SUMMARY),),
-                                          check=_summary_rows("good.ply", "huge.ply")),
-    "format spec in a placeholder": Case(validate("outputs.files=[{path: '{stem:>9999999999}.npz'}]"),
-                                         "has a format spec or conversion"),
-    "conversion in a placeholder": Case(validate("outputs.files=[{path: '{stem!r}.npz'}]"),
-                                        "has a format spec or conversion"),
-    "248-byte output name": Case(run(f"outputs.files=[{{path: '{LONG}_hht.npz'}}]"), "", 0, (),
-                                 check=_written(f"{LONG}_hht.npz")),
-    "300-byte output name": Case(run(f"outputs.files=[{{path: '{'n' * 296}.npz'}}]"),
-                                 "is 300 bytes long; the limit is 255"),
+    "output replaces the input": Case(
+        run("outputs.folder=<in>", "outputs.files=[{path: '{stem}.ply'}]"), "is the input", absent=()
+    ),
+    "output path ../../": Case(validate("outputs.files=[{path: '../../x_{stem}.npz'}]"), "outside the output folder"),
+    "absolute output path": Case(
+        validate("outputs.files=[{path: '<tmp>/elsewhere/{stem}.npz'}]"),
+        "outside the output folder",
+        absent=("out", "elsewhere"),
+    ),
+    "{parent} that is ..": Case(
+        validate("inputs=<in>/no_meshes/../good.ply", "outputs.files=[{path: '{parent}/{stem}.npz'}]"),
+        "output '{parent}/{stem}.npz' of step 'hht': ",
+    ),
+    "{name} that escapes": Case(
+        validate("name=../../n", "outputs.files=[{path: '{name}_{stem}.npz'}]"), "outside the output folder"
+    ),
+    "allow_outside opts in": Case(
+        run("outputs.allow_outside=true", "outputs.files=[{path: '../side/{stem}.npz'}]"),
+        "",
+        0,
+        (),
+        check=_written("good.npz", "side"),
+    ),
+    "user's file under an output name": Case(
+        run(),
+        "exists and hht3d did not write it",
+        absent=(),
+        setup=_user_file("out/good_hht.npz"),
+        check=_kept("out/good_hht.npz"),
+    ),
+    "validate notes a user's file under an output name": Case(
+        validate(),
+        "",
+        0,
+        (),
+        setup=_user_file("out/good_hht.npz"),
+        check=_noted("good_hht.npz: exists and hht3d did not"),
+    ),
+    "--overwrite replaces it": Case(
+        (*run(), "--overwrite"), "", 0, (), setup=_user_file("out/good_hht.npz"), check=_replaced("out/good_hht.npz")
+    ),
+    "--resume does not trust a 0-byte output": Case(
+        (*run(), "--resume"),
+        "exists and hht3d did not write it",
+        absent=(),
+        before=(run(),),
+        setup=_truncate("out/good_hht.npz"),
+    ),
+    "--resume --overwrite redoes it": Case(
+        (*run(), "--resume", "--overwrite"),
+        "",
+        0,
+        (),
+        before=(run(),),
+        setup=_truncate("out/good_hht.npz"),
+        check=_written("good_hht.npz"),
+    ),
+    "outputs are never inputs": Case(
+        run("inputs=<tmp>/scans", SCANS, PLY_OUTPUT),
+        "",
+        0,
+        (),
+        setup=_scans_run_once,
+        check=_only_inputs("good.ply", "scan[1].ply"),
+    ),
+    "two pipelines share a summary": Case(
+        run(SUMMARY, "inputs=<in>/huge.ply"),
+        "",
+        0,
+        (),
+        before=(run(SUMMARY),),
+        check=_summary_rows("good.ply", "huge.ply"),
+    ),
+    "format spec in a placeholder": Case(
+        validate("outputs.files=[{path: '{stem:>9999999999}.npz'}]"), "has a format spec or conversion"
+    ),
+    "conversion in a placeholder": Case(
+        validate("outputs.files=[{path: '{stem!r}.npz'}]"), "has a format spec or conversion"
+    ),
+    "248-byte output name": Case(
+        run(f"outputs.files=[{{path: '{LONG}_hht.npz'}}]"), "", 0, (), check=_written(f"{LONG}_hht.npz")
+    ),
+    "300-byte output name": Case(
+        run(f"outputs.files=[{{path: '{'n' * 296}.npz'}}]"), "is 300 bytes long; the limit is 255"
+    ),
     "NUL in an output name": Case(run('outputs.files=[{path: "a\\0{stem}.npz"}]'), "holds a control character"),
     # file:// output folders and inputs are local paths, with every local rule
-    "file:// folder, path leaving it": Case(validate(FILE_URL, "outputs.files=[{path: '../sentinel/{stem}_hht.npz'}]"),
-                                            "outside the output folder", absent=("out", "sentinel")),
+    "file:// folder, path leaving it": Case(
+        validate(FILE_URL, "outputs.files=[{path: '../sentinel/{stem}_hht.npz'}]"),
+        "outside the output folder",
+        absent=("out", "sentinel"),
+    ),
     "file:// folder, {name} leaving it": Case(
-        validate(FILE_URL, "name=../../n", "outputs.files=[{path: '{name}.npz'}]"), "outside the output folder"),
-    "file:// folder, user's file kept": Case(run(FILE_URL), "exists and hht3d did not write it", absent=(),
-                                             setup=_user_file("out/good_hht.npz"), check=_kept("out/good_hht.npz")),
+        validate(FILE_URL, "name=../../n", "outputs.files=[{path: '{name}.npz'}]"), "outside the output folder"
+    ),
+    "file:// folder, user's file kept": Case(
+        run(FILE_URL),
+        "exists and hht3d did not write it",
+        absent=(),
+        setup=_user_file("out/good_hht.npz"),
+        check=_kept("out/good_hht.npz"),
+    ),
     "file:// folder and input, manifest and stale parts": Case(
-        run(FILE_URL, "inputs=file://<in>/good.ply"), "", 0, (), setup=_dead_part, check=_recorded("good_hht.npz")),
+        run(FILE_URL, "inputs=file://<in>/good.ply"), "", 0, (), setup=_dead_part, check=_recorded("good_hht.npz")
+    ),
     # the manifest is untrusted input
     "planted manifest naming a file outside": Case(
         run("outputs.allow_outside=true", "outputs.files=[{path: '../sentinel/{stem}_hht.npz'}]"),
-        "exists and hht3d did not write it", absent=(), check=_kept("sentinel/good_hht.npz"),
-        setup=_manifest('{"files": {"../sentinel/good_hht.npz": "<mine>"}}', user="sentinel/good_hht.npz")),
+        "exists and hht3d did not write it",
+        absent=(),
+        check=_kept("sentinel/good_hht.npz"),
+        setup=_manifest('{"files": {"../sentinel/good_hht.npz": "<mine>"}}', user="sentinel/good_hht.npz"),
+    ),
     "allow_outside into a missing folder keeps a user's file": Case(
         run("outputs.allow_outside=true", "outputs.files=[{path: '../side/{stem}_hht.npz'}]"),
-        "exists and hht3d did not write it", absent=("out",), setup=_user_file("side/good_hht.npz"),
-        check=_kept("side/good_hht.npz")),
+        "exists and hht3d did not write it",
+        absent=("out",),
+        setup=_user_file("side/good_hht.npz"),
+        check=_kept("side/good_hht.npz"),
+    ),
     "path through a missing subfolder keeps a user's file": Case(
-        run("outputs.files=[{path: 'sub/../{stem}_hht.npz'}]"), "exists and hht3d did not write it", absent=(),
-        setup=_user_file("out/good_hht.npz"), check=_kept("out/good_hht.npz")),
-    **{f"manifest {what}, user's file kept": Case(run(), "exists and hht3d did not write it", absent=(),
-                                                  setup=_manifest(text, user="out/good_hht.npz"),
-                                                  check=_kept("out/good_hht.npz"))
-       for what, text in MALFORMED.items()},
-    "manifest with a malformed entry, replaced": Case(run(), "", 0, (), setup=_manifest('{"files": {"x.npz": [1]}}'),
-                                                      check=_recorded("good_hht.npz")),
+        run("outputs.files=[{path: 'sub/../{stem}_hht.npz'}]"),
+        "exists and hht3d did not write it",
+        absent=(),
+        setup=_user_file("out/good_hht.npz"),
+        check=_kept("out/good_hht.npz"),
+    ),
+    **{
+        f"manifest {what}, user's file kept": Case(
+            run(),
+            "exists and hht3d did not write it",
+            absent=(),
+            setup=_manifest(text, user="out/good_hht.npz"),
+            check=_kept("out/good_hht.npz"),
+        )
+        for what, text in MALFORMED.items()
+    },
+    "manifest with a malformed entry, replaced": Case(
+        run(), "", 0, (), setup=_manifest('{"files": {"x.npz": [1]}}'), check=_recorded("good_hht.npz")
+    ),
     # the lock file
     "lock file a link to a file outside": Case(
-        run(), "lock file is a link or not a regular file", absent=("victim",),
-        setup=_lock_file(lambda lock, tmp: lock.symlink_to(tmp / "victim"))),
-    "lock file a FIFO": Case(run(), "lock file is a link or not a regular file", absent=(),
-                             setup=_lock_file(lambda lock, tmp: os.mkfifo(lock))),
+        run(),
+        "lock file is a link or not a regular file",
+        absent=("victim",),
+        setup=_lock_file(lambda lock, tmp: lock.symlink_to(tmp / "victim")),
+    ),
+    "lock file a FIFO": Case(
+        run(),
+        "lock file is a link or not a regular file",
+        absent=(),
+        setup=_lock_file(lambda lock, tmp: os.mkfifo(lock)),
+    ),
     # a folder swapped for a link between the checks and the write
     "subfolder swapped for a link after the checks": Case(
-        run("outputs.files=[{path: 'sub/{stem}_hht.npz'}]"), "outside the output folder", absent=(),
-        setup=_folder_and_user_file, fault=_swapped_after_checks, check=_kept("elsewhere/good_hht.npz")),
+        run("outputs.files=[{path: 'sub/{stem}_hht.npz'}]"),
+        "outside the output folder",
+        absent=(),
+        setup=_folder_and_user_file,
+        fault=_swapped_after_checks,
+        check=_kept("elsewhere/good_hht.npz"),
+    ),
 }
 
 
@@ -320,10 +465,16 @@ def _checksums(root: Path, skip: Path) -> dict:
     return listing
 
 
-@pytest.mark.parametrize("sets", [
-    (), ("outputs.files=[{path: '../../x_{stem}.npz'}]",), ("outputs.files=[{path: '{name}.npz'}]", "name=../n"),
-    ("outputs.folder=<in>", "outputs.files=[{path: '{stem}.ply'}]"),
-], ids=["a run", "escaping path", "escaping name", "over its input"])
+@pytest.mark.parametrize(
+    "sets",
+    [
+        (),
+        ("outputs.files=[{path: '../../x_{stem}.npz'}]",),
+        ("outputs.files=[{path: '{name}.npz'}]", "name=../n"),
+        ("outputs.folder=<in>", "outputs.files=[{path: '{stem}.ply'}]"),
+    ],
+    ids=["a run", "escaping path", "escaping name", "over its input"],
+)
 def test_nothing_around_a_run_changes_but_its_output_folder(sets, inputs, tmp_path):
     """A checksum listing of the folders around a run (its inputs, their parent, the working folder's
     neighbours) is the same after it, whether it ran or was refused; only the output folder changed."""

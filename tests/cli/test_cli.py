@@ -1,4 +1,5 @@
 """The ``hht3d`` command: subcommands, output and exit codes."""
+
 import json
 import subprocess
 import sys
@@ -6,16 +7,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers.meshes import icosphere
 
-from helpers.results import assert_same_hht
 from helpers.folders import produced_names
+from helpers.meshes import icosphere
+from helpers.results import assert_same_hht
 from hht3d import Surface
 from hht3d.cli import demo_model_path, demo_pipeline_path, main
-from hht3d.transform import hht
-from hht3d.io import load, write_ply
 from hht3d.geometry.signals import mean_curvature
+from hht3d.io import load, write_ply
 from hht3d.pipeline import OPERATIONS
+from hht3d.transform import hht
 
 PIPELINE = """\
 version: 1
@@ -117,8 +118,13 @@ def test_info_describes_a_file(mesh_file, tmp_path, capsys):
     assert main(["info", str(mesh_file)]) == 0
     info = dict(line.split(maxsplit=1) for line in capsys.readouterr().out.splitlines())
     # a subdivided icosahedron: 162 vertices, 320 faces, 480 edges, closed, χ = 2
-    assert {k: info[k] for k in ("vertices", "faces", "edges", "euler_characteristic", "closed")} == \
-        {"vertices": "162", "faces": "320", "edges": "480", "euler_characteristic": "2", "closed": "True"}
+    assert {k: info[k] for k in ("vertices", "faces", "edges", "euler_characteristic", "closed")} == {
+        "vertices": "162",
+        "faces": "320",
+        "edges": "480",
+        "euler_characteristic": "2",
+        "closed": "True",
+    }
     surface = load(mesh_file)
     corners = surface.vertices[surface.faces]
     area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
@@ -134,8 +140,19 @@ def test_demo_runs_the_shipped_pipeline_into_out(tmp_path, capsys):
 
     out = tmp_path / "demo"
     assert main(["demo", "--out", str(out), "--scheduler", "synchronous", "--quiet"]) == 0
-    expected = {f"spot_{name}" for name in ("hht.ply", "hht.npz", "signal.ply", "imf_1.ply", "frequency_1.ply",
-                                            "hht.png", "spectrum.png", "hht.html")}
+    expected = {
+        f"spot_{name}"
+        for name in (
+            "hht.ply",
+            "hht.npz",
+            "signal.ply",
+            "imf_1.ply",
+            "frequency_1.ply",
+            "hht.png",
+            "spectrum.png",
+            "hht.html",
+        )
+    }
     assert set(produced_names(out)) == expected
     assert "spot.ply: ok, 2930 vertices" in capsys.readouterr().out
     # contents: the signal is the mean curvature of the shipped model, computed here; the PLY files
@@ -143,16 +160,20 @@ def test_demo_runs_the_shipped_pipeline_into_out(tmp_path, capsys):
     # them with matplotlib's viridis over the 1st-99th percentiles (8-bit: half a step)
     surface = load(demo_model_path())
     saved = dict(np.load(out / "spot_hht.npz"))
-    np.testing.assert_allclose(saved["signal"], mean_curvature(surface), rtol=0,
-                               atol=1e-12 * np.abs(saved["signal"]).max())
+    np.testing.assert_allclose(
+        saved["signal"], mean_curvature(surface), rtol=0, atol=1e-12 * np.abs(saved["signal"]).max()
+    )
     assert 2 <= len(saved["imfs"]) <= 6 and saved["imfs"].shape[1] == 2930
     fields = load(out / "spot_hht.ply", clean=False).attributes
     for k in range(len(saved["imfs"])):
         for name in ("imfs", "amplitude", "phase", "frequency"):
             np.testing.assert_array_equal(fields[f"{name.rstrip('s')}_{k + 1}"], saved[name][k])
     np.testing.assert_array_equal(fields["residue"], saved["residue"])
-    for name, values in (("signal", saved["signal"]), ("imf_1", saved["imfs"][0]),
-                         ("frequency_1", saved["frequency"][0])):
+    for name, values in (
+        ("signal", saved["signal"]),
+        ("imf_1", saved["imfs"][0]),
+        ("frequency_1", saved["frequency"][0]),
+    ):
         coloured = load(out / f"spot_{name}.ply", clean=False)
         np.testing.assert_array_equal(coloured.attributes[name], values)
         lo, hi = np.percentile(values, [1, 99])
@@ -166,8 +187,9 @@ def test_pipelines_demo_is_the_shipped_demo():
 
 
 def test_module_entry_point():
-    done = subprocess.run([sys.executable, "-m", "hht3d", "ops", "load"], capture_output=True, text=True, check=False,
-                          timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-m", "hht3d", "ops", "load"], capture_output=True, text=True, check=False, timeout=120
+    )
     assert done.returncode == 0 and done.stdout.startswith("load(file: file) -> surface")
 
 

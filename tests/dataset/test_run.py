@@ -1,26 +1,26 @@
 """Dataset runs: a corrupt file is reported, the others finish, nothing is half-written."""
+
 import json
 import re
 import shutil
 
 import numpy as np
 import pytest
-from helpers.results import assert_same_hht, hht_arrays_from_ply
-from helpers.folders import dead_writers_part, produced_names
 
+from helpers.datasets import _make_inputs
+from helpers.folders import dead_writers_part, produced_names
+from helpers.results import assert_same_hht, hht_arrays_from_ply
 from hht3d import load
 from hht3d.dataset import run_dataset
 from hht3d.errors import OutputError
-from hht3d.transform import hht
 from hht3d.geometry.signals import mean_curvature
-from helpers.datasets import _make_inputs
+from hht3d.transform import hht
 
 
 def test_corrupt_file_is_reported_and_others_finish(tmp_path):
     inputs = _make_inputs(tmp_path / "in")
     out = tmp_path / "out"
-    rows = run_dataset(inputs, out, scheduler="synchronous", progress=False,
-                       emd={"max_imfs": 2}, riesz_tasks=2)
+    rows = run_dataset(inputs, out, scheduler="synchronous", progress=False, emd={"max_imfs": 2}, riesz_tasks=2)
     status = {r.source.rsplit("/", 1)[-1]: r for r in rows}
     assert status["good0.ply"].status == status["good1.ply"].status == "ok"
     assert status["good0.ply"].imfs == 2 and status["good0.ply"].vertices == 642
@@ -29,11 +29,18 @@ def test_corrupt_file_is_reported_and_others_finish(tmp_path):
     tiny = status["three_points.xyz"]
     assert tiny.status == "failed" and "at least 4" in tiny.error
     produced = produced_names(out)
-    assert produced == ["good0_hht.npz", "good0_hht.ply", "good1_hht.npz", "good1_hht.ply",
-                        "summary.csv", "summary.json"]  # nothing for the failures, no temp files
+    assert produced == [
+        "good0_hht.npz",
+        "good0_hht.ply",
+        "good1_hht.npz",
+        "good1_hht.ply",
+        "summary.csv",
+        "summary.json",
+    ]  # nothing for the failures, no temp files
     summary = json.loads((out / "summary.json").read_text())
-    assert [r["status"] for r in summary] == [status[k].status for k in
-                                              [r["source"].rsplit("/", 1)[-1] for r in summary]]
+    assert [r["status"] for r in summary] == [
+        status[k].status for k in [r["source"].rsplit("/", 1)[-1] for r in summary]
+    ]
     # each file holds its own input's HHT, as the Python API computes it in memory
     for name in ("good0", "good1"):
         surface = load(inputs / f"{name}.ply")
@@ -50,8 +57,7 @@ def test_resume_skips_complete_items(tmp_path):
     out = tmp_path / "out"
     run_dataset(inputs, out, scheduler="synchronous", progress=False, emd={"max_imfs": 1})
     (out / "good1_hht.npz").unlink()
-    rows = run_dataset(inputs, out, scheduler="synchronous", progress=False, resume=True,
-                       emd={"max_imfs": 1})
+    rows = run_dataset(inputs, out, scheduler="synchronous", progress=False, resume=True, emd={"max_imfs": 1})
     assert [r.status for r in rows] == ["skipped", "ok"]
     shutil.rmtree(out)
 
@@ -68,8 +74,7 @@ def test_a_worker_killed_mid_write_leaves_no_temporary_file(tmp_path, monkeypatc
         return real(*args, **kwargs)
 
     monkeypatch.setattr(dataset, "compute", compute)
-    run_dataset(inputs / "good0.ply", tmp_path / "out", scheduler="synchronous", progress=False,
-                emd={"max_imfs": 1})
+    run_dataset(inputs / "good0.ply", tmp_path / "out", scheduler="synchronous", progress=False, emd={"max_imfs": 1})
     assert not parts[0].exists() and (tmp_path / "out" / "good0_hht.npz").is_file()
 
 
@@ -80,13 +85,13 @@ def test_unwritable_output_folder_fails_before_computing(tmp_path, monkeypatch):
         run_dataset(inputs, inputs / "good0.ply", scheduler="synchronous", progress=False)
 
 
-@pytest.mark.parametrize("options, message", [
-    ({"formats": (".obj",)}, "unknown output format '.obj'"),
-    ({"signal": "bogus"}, "unknown signal 'bogus'"),
-])
+@pytest.mark.parametrize(
+    "options, message",
+    [({"formats": (".obj",)}, "unknown output format '.obj'"), ({"signal": "bogus"}, "unknown signal 'bogus'")],
+)
 def test_run_dataset_refuses_bad_options_before_building_the_graph(options, message, inputs, tmp_path, monkeypatch):
-    from hht3d.errors import InputError
     from hht3d.dataset import run_dataset
+    from hht3d.errors import InputError
 
     monkeypatch.setattr("hht3d.graph.stages.transform_file", lambda *a, **k: pytest.fail("built the graph"))
     with pytest.raises(InputError, match=re.escape(message)):

@@ -1,22 +1,23 @@
 """EMD on surfaces (hht3d.decomposition.decompose): oracles from 1-D EMD and spherical harmonics; trends and
 boundaries that make no extrema stay in the residue."""
+
 from __future__ import annotations
 
 import warnings
 
 import numpy as np
 import pytest
+
+import hht3d
 from helpers.emd import assert_sums_to_signal, real_sph_harm
 from helpers.meshes import fibonacci_sphere, grid, icosphere, open_cylinder
 from helpers.models import shipped_model_path
-
-import hht3d
 from hht3d import InputError, Surface
 from hht3d.decomposition import LEAKAGE_LIMIT, PAPER_OPTIONS, QualityWarning, emd, local_extrema
 from hht3d.geometry.signals import fluctuation, mean_curvature
 
-
 # -- EMD -----------------------------------------------------------------------------------
+
 
 def single_harmonic(degree: int, order: int, vertices: np.ndarray) -> np.ndarray:
     coefficients = np.zeros(2 * degree + 1)
@@ -51,13 +52,14 @@ def test_sphere_harmonics_separate(sphere, fine_order, coarse_order):
     per_imf = result.info["imfs"]
     assert result.info["factorizations"] >= sum(d["factorizations"] for d in per_imf)
     # two envelopes per sift, plus one for the local-mean correction
-    assert all(d["factorizations"] == 2 * d["sifts"] + 1 for d in per_imf if d["attempts"] == 1 and d["stop"] != "guard")
+    assert all(
+        d["factorizations"] == 2 * d["sifts"] + 1 for d in per_imf if d["attempts"] == 1 and d["stop"] != "guard"
+    )
 
 
 def axial_signal(z):
     """Three tones along the cylinder axis (periods 0.48, 2.1 and 11 length units)."""
-    return (np.sin(2 * np.pi * 2.1 * z) + 0.8 * np.sin(2 * np.pi * 0.47 * z + 0.3)
-            + 0.5 * np.sin(2 * np.pi * 0.09 * z))
+    return np.sin(2 * np.pi * 2.1 * z) + 0.8 * np.sin(2 * np.pi * 0.47 * z + 0.3) + 0.5 * np.sin(2 * np.pi * 0.09 * z)
 
 
 def test_cylinder_reduces_to_1d_emd():
@@ -106,9 +108,15 @@ def test_open_scan_mean_curvature(shared_model):
     assert result.quality.energy_ratio <= 1.5 and result.quality.orthogonality_index >= -0.25
 
 
-@pytest.mark.parametrize("options", [dict(stopping="s_number"), dict(stopping="fixed", fixed_sifts=3,
-                                                                    cancellation_tolerance=None),
-                                     dict(envelope="harmonic"), dict(extrema="relaxed")])
+@pytest.mark.parametrize(
+    "options",
+    [
+        dict(stopping="s_number"),
+        dict(stopping="fixed", fixed_sifts=3, cancellation_tolerance=None),
+        dict(envelope="harmonic"),
+        dict(extrema="relaxed"),
+    ],
+)
 def test_options_sum_to_signal(small_sphere, options):
     rng = np.random.default_rng(3)
     f = real_sph_harm(9, rng.standard_normal(19), small_sphere.vertices) + 1e3
@@ -121,10 +129,11 @@ def test_options_sum_to_signal(small_sphere, options):
 
 def test_scale_equivariance(small_sphere):
     rng = np.random.default_rng(4)
-    f = real_sph_harm(10, rng.standard_normal(21), small_sphere.vertices) \
-        + real_sph_harm(2, rng.standard_normal(5), small_sphere.vertices)
+    f = real_sph_harm(10, rng.standard_normal(21), small_sphere.vertices) + real_sph_harm(
+        2, rng.standard_normal(5), small_sphere.vertices
+    )
     base = emd(small_sphere, f)
-    for c in (-3.7, 2.0 ** 40, 1e-9, 1e200, 1e-200):  # the signal is normalised before sifting
+    for c in (-3.7, 2.0**40, 1e-9, 1e200, 1e-200):  # the signal is normalised before sifting
         scaled = emd(small_sphere, c * f)
         assert scaled.n_imfs == base.n_imfs
         np.testing.assert_allclose(scaled.imfs, c * base.imfs, rtol=0, atol=1e-9 * abs(c))
@@ -162,22 +171,30 @@ def test_max_imfs_and_energy_stop(small_sphere):
     assert emd(small_sphere, f, max_imfs=1).n_imfs == 1
     zero = emd(small_sphere, f, max_imfs=0)
     assert zero.n_imfs == 0 and zero.info["stop_reason"] == "max_imfs"
-    assert emd(small_sphere, f, energy_threshold=1.0).info["stop_reason"] == "energy"  # the residue keeps all of the energy
+    assert (
+        emd(small_sphere, f, energy_threshold=1.0).info["stop_reason"] == "energy"
+    )  # the residue keeps all of the energy
 
 
-@pytest.mark.parametrize("signal, message", [
-    (np.full(10, 1.0), "shape"),
-    (np.r_[np.nan, np.zeros(641)], "NaN"),
-])
+@pytest.mark.parametrize("signal, message", [(np.full(10, 1.0), "shape"), (np.r_[np.nan, np.zeros(641)], "NaN")])
 def test_bad_signal_is_input_error(small_sphere, signal, message):
     with pytest.raises(InputError, match=message):
         emd(small_sphere, signal)
 
 
-@pytest.mark.parametrize("options", [
-    dict(stopping="bogus"), dict(envelope="cubic"), dict(extrema="any"), dict(max_sifts=0),
-    dict(sd_threshold=-1), dict(extrema="relaxed", ratio=0.3), dict(backend="nonexistent"), dict(max_imfs=2.5),
-])
+@pytest.mark.parametrize(
+    "options",
+    [
+        dict(stopping="bogus"),
+        dict(envelope="cubic"),
+        dict(extrema="any"),
+        dict(max_sifts=0),
+        dict(sd_threshold=-1),
+        dict(extrema="relaxed", ratio=0.3),
+        dict(backend="nonexistent"),
+        dict(max_imfs=2.5),
+    ],
+)
 def test_bad_options_are_input_errors(small_sphere, options):
     with pytest.raises(InputError):
         emd(small_sphere, small_sphere.vertices[:, 0], **options)
@@ -192,7 +209,7 @@ def test_a_trend_on_an_open_grid_stays_in_the_residue():
     s = Surface(*grid(30, 30), name="grid")
     x = s.vertices[:, 0]
     ramp = emd(s, x)
-    energy = (ramp.imfs ** 2 * s.mass_diagonal).sum() / (fluctuation(s, x) ** 2 * s.mass_diagonal).sum()
+    energy = (ramp.imfs**2 * s.mass_diagonal).sum() / (fluctuation(s, x) ** 2 * s.mass_diagonal).sum()
     assert energy <= 0.01  # measured 0: no IMF
     with_wave = emd(s, x + 0.3 * np.sin(TAU * 4 * x))
     assert with_wave.n_imfs >= 1

@@ -1,14 +1,15 @@
 """EEMD (hht3d.decomposition.ensemble): seeded, the noise each member carries, their average."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers.emd import assert_sums_to_signal, real_sph_harm
 
+from helpers.emd import assert_sums_to_signal, real_sph_harm
 from hht3d.decomposition import EMDOptions, EnsembleOptions, combine_eemd, eemd, eemd_member, emd
 
-
 # -- EEMD ----------------------------------------------------------------------------------
+
 
 def test_eemd_seeded(small_sphere):
     f = real_sph_harm(7, np.arange(15.0), small_sphere.vertices)

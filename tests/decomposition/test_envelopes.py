@@ -1,5 +1,6 @@
 """Envelopes of EMD (hht3d.decomposition.envelopes): splines on a cylinder, the eliminated system, energies
 shared while in use."""
+
 from __future__ import annotations
 
 import gc
@@ -8,15 +9,15 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from helpers.meshes import icosphere, open_cylinder
 from scipy.interpolate import CubicSpline
 
+from helpers.meshes import icosphere, open_cylinder
 from hht3d import InputError, Surface, linalg
 from hht3d.decomposition import emd, envelope_interpolation, envelope_operator
 from hht3d.decomposition.envelopes import EnvelopeSolver, envelope_energies
 
-
 # -- envelopes -----------------------------------------------------------------------------
+
 
 def cylinder_knots(n_axial: int):
     """Open cylinder of length 4 with constraints on 9 whole rings (both ends included)."""
@@ -60,7 +61,7 @@ def tension_spline(knots: np.ndarray, values: np.ndarray, k: float, x: np.ndarra
     def basis(i, t, order):  # the derivative of each of interval i's four functions at t
         p, q = np.exp(-k * t), np.exp(-k * (h[i] - t))
         row = np.zeros(4 * m)
-        row[4 * i:4 * i + 4] = [(1, t, p, q), (0, 1, -k * p, k * q), (0, 0, k * k * p, k * k * q)][order]
+        row[4 * i : 4 * i + 4] = [(1, t, p, q), (0, 1, -k * p, k * q), (0, 0, k * k * p, k * k * q)][order]
         return row
 
     for i in range(m):
@@ -91,8 +92,10 @@ def test_tension_envelope_is_the_spline_in_tension():
         exact = tension_spline(z[rings], values, k, z)
         errors.append(np.max(np.abs(g[:, 0] - exact)))
     cubic = CubicSpline(z[rings], values, bc_type="clamped")(z)
-    print(f"tension envelope: errors {errors[0]:.2e}, {errors[1]:.2e}; from the cubic spline "
-          f"{np.max(np.abs(exact - cubic)):.2f}")
+    print(
+        f"tension envelope: errors {errors[0]:.2e}, {errors[1]:.2e}; from the cubic spline "
+        f"{np.max(np.abs(exact - cubic)):.2f}"
+    )
     assert errors[1] < 1e-2 * np.max(np.abs(exact - cubic))
     assert 3.5 < errors[0] / errors[1] < 4.5
 

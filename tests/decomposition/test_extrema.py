@@ -1,22 +1,22 @@
 """Local extrema on surfaces (hht3d.decomposition.extrema): a hand-made grid, and the paper's ring rule by
 brute force."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from helpers.meshes import grid
 from hht3d import Surface
 from hht3d.decomposition import local_extrema
-from helpers.meshes import grid
-
 
 # -- extrema -------------------------------------------------------------------------------
+
 
 def square_3x3():
     """Hand-made 3x3 grid: vertex 4 is the centre, neighbours of every vertex known."""
     v = np.array([[x, y, 0.0] for y in range(3) for x in range(3)])
-    f = np.array([[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4],
-                  [3, 4, 7], [3, 7, 6], [4, 5, 8], [4, 8, 7]])
+    f = np.array([[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [3, 4, 7], [3, 7, 6], [4, 5, 8], [4, 8, 7]])
     return Surface(v, f, name="square")
 
 
@@ -52,8 +52,11 @@ def test_ring_rule_relaxes_strict_rule():
     assert one[0].tolist() == strict_max.tolist() and one[1].tolist() == strict_min.tolist()
     # the paper's rule (Sec. 5.2) by brute force on the 2-ring
     ring2 = s.ring(2).toarray()
-    expected = [i for i in range(s.n_vertices)
-                if np.sum(f[i] >= f[ring2[i]]) >= 0.8 * ring2[i].sum() and np.any(f[i] > f[ring2[i]])]
+    expected = [
+        i
+        for i in range(s.n_vertices)
+        if np.sum(f[i] >= f[ring2[i]]) >= 0.8 * ring2[i].sum() and np.any(f[i] > f[ring2[i]])
+    ]
     assert local_extrema(s, f, rule="relaxed")[0].tolist() == expected
 
 

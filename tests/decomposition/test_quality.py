@@ -1,4 +1,5 @@
 """Decomposition quality (hht3d.decomposition.quality) and the EMD defaults held to it on realistic input."""
+
 from __future__ import annotations
 
 import threading
@@ -7,16 +8,22 @@ import warnings
 import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
-from helpers.models import shipped_model_path
-from helpers.meshes import grid, icosphere, random_bump_sphere
 
 import hht3d
+from helpers.meshes import grid, icosphere, random_bump_sphere
+from helpers.models import shipped_model_path
 from hht3d import InputError, Surface, emd, hht
-from hht3d.decomposition import GUARD_TENSIONS, PAPER_OPTIONS, local_extrema
-from hht3d.decomposition import ENERGY_RATIO_LIMIT, LEAKAGE_LIMIT, ORTHOGONALITY_LIMIT, QualityWarning
+from hht3d.decomposition import (
+    ENERGY_RATIO_LIMIT,
+    GUARD_TENSIONS,
+    LEAKAGE_LIMIT,
+    ORTHOGONALITY_LIMIT,
+    PAPER_OPTIONS,
+    QualityWarning,
+    local_extrema,
+)
 from hht3d.decomposition.quality import decomposition_quality, quality_warnings_muted, warn_quality
-from hht3d.geometry.signals import fluctuation
-from hht3d.geometry.signals import mean_curvature
+from hht3d.geometry.signals import fluctuation, mean_curvature
 
 
 @pytest.fixture(scope="module")
@@ -131,8 +138,7 @@ def test_two_eigenfunctions_on_a_real_mesh(spot):
     IMF 1 is φ_100.  Measured correlation 0.979 and 0.974 (paper options: 0.940).  The start
     vector is fixed, since eigsh's random one flips the eigenfunctions' signs from run to run."""
     surface, _ = spot
-    values, vectors = spla.eigsh(surface.stiffness, k=101, M=surface.mass, sigma=-1e-8,
-                                 v0=np.ones(surface.n_vertices))
+    values, vectors = spla.eigsh(surface.stiffness, k=101, M=surface.mass, sigma=-1e-8, v0=np.ones(surface.n_vertices))
     fine = vectors[:, 100] / np.abs(vectors[:, 100]).max()
     assert 10 <= values[100] / values[5] <= 30
     for sign in (1, -1):
@@ -168,8 +174,15 @@ def test_hht_result_reports_the_same_quality(spot):
     q = result.quality
     reference = decomposition_quality(surface, signal, result.imfs, result.residue)
     assert q.energy_ratio == reference.energy_ratio and q.warnings == reference.warnings
-    assert set(q.as_dict()) == {"energy_ratio", "orthogonality_index", "io_leaking", "io_cancelling", "energy_share",
-                                "signal_spike", "warnings"}
+    assert set(q.as_dict()) == {
+        "energy_ratio",
+        "orthogonality_index",
+        "io_leaking",
+        "io_cancelling",
+        "energy_share",
+        "signal_spike",
+        "warnings",
+    }
     with pytest.raises(InputError, match="did you mean 'max_imfs'"):
         hht(surface, signal, emd={"max_imf": 3})
 

@@ -1,12 +1,13 @@
 """The SD stopping rule of EMD's sifting (hht3d.decomposition.sifting), checked from outside: the sifts are
 replayed with ``stopping="fixed"``."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers.meshes import icosphere
 from scipy.special import sph_harm_y
 
+from helpers.meshes import icosphere
 from hht3d import Surface
 from hht3d.decomposition import emd
 
@@ -29,7 +30,7 @@ def test_sd_rule_stops_at_the_first_sift_below_the_threshold(threshold):
     mass = surface.mass_diagonal
 
     def sd(before, after):
-        return np.sum(mass * (before - after) ** 2) / np.sum(mass * before ** 2)
+        return np.sum(mass * (before - after) ** 2) / np.sum(mass * before**2)
 
     options = dict(cancellation_tolerance=None, mean_correction=None)  # the SD rule alone
     result = emd(surface, f, max_imfs=3, sd_threshold=threshold, max_sifts=50, **options)
@@ -40,8 +41,11 @@ def test_sd_rule_stops_at_the_first_sift_below_the_threshold(threshold):
         assert 1 <= count < 50  # stopped by the rule, not by the cap
 
         def replay(sifts):
-            return start if sifts == 0 else emd(surface, start, max_imfs=1, stopping="fixed",
-                                                fixed_sifts=sifts, **options).imfs[0]
+            return (
+                start
+                if sifts == 0
+                else emd(surface, start, max_imfs=1, stopping="fixed", fixed_sifts=sifts, **options).imfs[0]
+            )
 
         history = [replay(n) for n in range(max(count - 2, 0), count + 1)]
         np.testing.assert_allclose(history[-1], imf, rtol=0, atol=1e-12 * np.max(np.abs(imf)))

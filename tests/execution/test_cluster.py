@@ -3,6 +3,7 @@
 Every case asserts the exit code, the one line on stderr (no traceback from any process) and that no temporary
 ``.part`` file is left; a lost cluster is reported within a bounded time, and each wait is bounded.
 """
+
 from __future__ import annotations
 
 import json
@@ -27,14 +28,31 @@ class Cluster:
     def __init__(self, folder: Path):
         self.folder, self.workers = folder, []
         self.file = folder / "scheduler.json"
-        self.scheduler = self._spawn(["dask", "scheduler", "--scheduler-file", str(self.file), "--port", "0",
-                                      "--dashboard-address", ":0", "--no-show"])
+        self.scheduler = self._spawn(
+            [
+                "dask",
+                "scheduler",
+                "--scheduler-file",
+                str(self.file),
+                "--port",
+                "0",
+                "--dashboard-address",
+                ":0",
+                "--no-show",
+            ]
+        )
         _wait_for(self.file.exists, 60, "the Dask scheduler")
         self.address = json.loads(self.file.read_text())["address"]
 
     def _spawn(self, argv) -> subprocess.Popen:
-        return subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=_env(),
-                                cwd=self.folder, start_new_session=True)
+        return subprocess.Popen(
+            argv,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            env=_env(),
+            cwd=self.folder,
+            start_new_session=True,
+        )
 
     def worker(self, nanny: bool) -> subprocess.Popen:
         argv = ["dask", "worker", "--scheduler-file", str(self.file), "--nthreads", "1", "--dashboard-address", ":0"]

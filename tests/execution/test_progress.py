@@ -1,4 +1,5 @@
 """Progress of a computation (hht3d.execution): into a log, a few plain lines."""
+
 from __future__ import annotations
 
 import re

@@ -1,18 +1,21 @@
 """The schedulers (hht3d.execution): identical numbers on the synchronous scheduler and a local cluster, and
 as many Riesz tasks as the cluster has workers."""
+
 import numpy as np
 import pytest
 
-from hht3d import graph
 from helpers.graphs import OPTIONS, _prefix, _surfaces
+from hht3d import graph
 
 
 @pytest.fixture(scope="module")
 def cluster_client():
     from distributed import Client, LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, \
-            Client(cluster) as client:
+    with (
+        LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster,
+        Client(cluster) as client,
+    ):
         yield client
 
 

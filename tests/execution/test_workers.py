@@ -1,12 +1,12 @@
 """Workers of a local process pool (hht3d.execution.workers): they end with their parent."""
+
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import textwrap
 import time
-
-import os
 from pathlib import Path
 
 import psutil
@@ -73,9 +73,10 @@ def test_a_run_at_a_scripts_top_level_fails_naming_the_fix(scheduler, tmp_path):
     script = tmp_path / "run.py"
     script.write_text(UNGUARDED.format(scheduler=scheduler))
     env = {**os.environ, "PYTHONPATH": str(Path(hht3d.__file__).parents[1])}
-    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=60,
-                          env=env)
+    done = subprocess.run(
+        [sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=60, env=env
+    )
     assert done.returncode == 1
-    assert f'run.py:5: the {scheduler} scheduler starts worker processes' in done.stderr
+    assert f"run.py:5: the {scheduler} scheduler starts worker processes" in done.stderr
     assert 'put the call under `if __name__ == "__main__":`' in done.stderr
     assert not (tmp_path / "out").exists()

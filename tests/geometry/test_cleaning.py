@@ -1,9 +1,10 @@
 """Mesh cleaning (hht3d.geometry.cleaning): what it reports and how attributes follow, on a made-up mesh and
 a real scan."""
+
 import numpy as np
 
-from hht3d import Surface, load
 from helpers.meshes import icosphere
+from hht3d import Surface, load
 
 
 def test_cleaning_reports_and_maps_attributes():

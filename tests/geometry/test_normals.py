@@ -1,4 +1,5 @@
 """Normals of point clouds (hht3d.geometry.normals): planar clouds get the plane's normal, without Qhull output."""
+
 import numpy as np
 import pytest
 

@@ -1,10 +1,11 @@
 """Operators against analytic values: sphere spectrum, exact gradients, FEM identity."""
+
 import numpy as np
 import pytest
 import scipy.sparse.linalg as sla
 
-from hht3d import Surface
 from helpers.meshes import fibonacci_sphere, grid, jittered_height_field, reference_operators
+from hht3d import Surface
 
 # Unit-sphere Laplace–Beltrami eigenvalues l(l+1) with multiplicity 2l+1, l = 1..3.
 SPHERE_EIGENVALUES = np.repeat([2.0, 6.0, 12.0], [3, 5, 7])

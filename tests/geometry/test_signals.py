@@ -1,10 +1,11 @@
 """Signals against differential geometry: mean and Gaussian curvature on spheres."""
+
 import numpy as np
 import pytest
 
+from helpers.meshes import fibonacci_sphere, grid, icosphere, sliver_sphere
 from hht3d import InputError, Surface, emd, load
 from hht3d.geometry import signals
-from helpers.meshes import fibonacci_sphere, grid, icosphere, sliver_sphere
 
 
 def test_mean_curvature_on_unit_sphere_is_two():

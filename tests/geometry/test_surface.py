@@ -1,10 +1,11 @@
 """Surfaces built from arrays (hht3d.geometry.surface): clear errors, the checks that files get too, and
 pickling without the cached operators."""
+
 import numpy as np
 import pytest
 
-from hht3d import InputError, Surface
 from helpers.meshes import icosphere
+from hht3d import InputError, Surface
 
 
 def test_bad_arrays_give_clear_errors():

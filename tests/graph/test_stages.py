@@ -1,14 +1,15 @@
 """The lazy graph's stages (hht3d.graph.stages): the shape of the graph, the same numbers as the eager functions,
 the eager signatures, settings checked while the graph is built."""
+
 import numpy as np
 import pytest
 from dask.core import get_dependencies
 
+from helpers.graphs import OPTIONS, _prefix, _surfaces
 from hht3d import InputError, graph
-from hht3d.transform import hht as eager_hht
 from hht3d.geometry.signals import mean_curvature
 from hht3d.io import load
-from helpers.graphs import OPTIONS, _prefix, _surfaces
+from hht3d.transform import hht as eager_hht
 
 
 def test_riesz_stage_is_independent_shift_group_tasks():
@@ -36,13 +37,15 @@ def test_riesz_stage_is_independent_shift_group_tasks():
 def test_graph_equals_eager_hht():
     surface = _surfaces()[0]
     s = graph.from_surface(surface)
-    (lazy,) = graph.compute(graph.hht(s, graph.signal(s, "mean_curvature"), **OPTIONS),
-                            scheduler="synchronous", progress=False)
+    (lazy,) = graph.compute(
+        graph.hht(s, graph.signal(s, "mean_curvature"), **OPTIONS), scheduler="synchronous", progress=False
+    )
     eager = eager_hht(surface, mean_curvature(surface), emd=OPTIONS["emd"])
     np.testing.assert_array_equal(lazy.imfs, eager.imfs)
     # shifts summed in groups instead of one loop: only the summation order differs
-    np.testing.assert_allclose(lazy.monogenic.riesz, eager.monogenic.riesz, rtol=0,
-                               atol=1e-12 * np.abs(eager.monogenic.riesz).max())
+    np.testing.assert_allclose(
+        lazy.monogenic.riesz, eager.monogenic.riesz, rtol=0, atol=1e-12 * np.abs(eager.monogenic.riesz).max()
+    )
 
 
 def test_eemd_members_are_tasks():
@@ -60,13 +63,24 @@ def test_lazy_twins_have_the_eager_signatures_and_docstrings():
 
     from hht3d import apps
     from hht3d.decomposition import eemd, emd
+    from hht3d.geometry.signals import signal
     from hht3d.io import load
     from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
-    from hht3d.geometry.signals import signal
 
-    mirrored = [load, signal, emd, eemd, monogenic_from_potential, apps.filter_signal, apps.filter_geometry,
-                apps.reconstruct, apps.prominent_features, apps.hks_features, apps.imf_enhancement,
-                apps.manifold_harmonics_filter]
+    mirrored = [
+        load,
+        signal,
+        emd,
+        eemd,
+        monogenic_from_potential,
+        apps.filter_signal,
+        apps.filter_geometry,
+        apps.reconstruct,
+        apps.prominent_features,
+        apps.hks_features,
+        apps.imf_enhancement,
+        apps.manifold_harmonics_filter,
+    ]
     for func in mirrored:
         twin = getattr(graph, func.__name__)
         assert inspect.signature(twin).parameters == inspect.signature(func).parameters, func.__name__
@@ -78,13 +92,16 @@ def test_lazy_twins_have_the_eager_signatures_and_docstrings():
         assert lazy["riesz_tasks"].kind is inspect.Parameter.KEYWORD_ONLY
 
 
-@pytest.mark.parametrize("build", [
-    lambda s, f: graph.emd(s, f, max_imf=2),
-    lambda s, f: graph.eemd(s, f, ensemble_sise=3),
-    lambda s, f: graph.hht(s, f, emd={"max_imf": 2}),
-    lambda s, f: graph.hht(s, f, riesz={"method": "quadratur"}),
-    lambda s, f: graph.monogenic(s, f, tol=0),
-])
+@pytest.mark.parametrize(
+    "build",
+    [
+        lambda s, f: graph.emd(s, f, max_imf=2),
+        lambda s, f: graph.eemd(s, f, ensemble_sise=3),
+        lambda s, f: graph.hht(s, f, emd={"max_imf": 2}),
+        lambda s, f: graph.hht(s, f, riesz={"method": "quadratur"}),
+        lambda s, f: graph.monogenic(s, f, tol=0),
+    ],
+)
 def test_wrong_settings_raise_while_the_graph_is_built(build):
     """A misspelled or out-of-range setting is the caller's error before any task exists, with a hint."""
     surface = _surfaces()[0]
@@ -97,8 +114,11 @@ def test_lazy_monogenic_takes_the_eager_arguments():
 
     surface = _surfaces()[0]
     imfs = np.stack([mean_curvature(surface), surface.vertices[:, 0]])
-    (lazy,) = graph.compute(graph.monogenic(graph.from_surface(surface), imfs, gradient="fem", riesz_tasks=2),
-                            scheduler="synchronous", progress=False)
+    (lazy,) = graph.compute(
+        graph.monogenic(graph.from_surface(surface), imfs, gradient="fem", riesz_tasks=2),
+        scheduler="synchronous",
+        progress=False,
+    )
     eager = monogenic(surface, imfs, gradient="fem")
     np.testing.assert_allclose(lazy.riesz, eager.riesz, rtol=0, atol=1e-12 * np.abs(eager.riesz).max())
 

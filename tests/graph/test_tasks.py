@@ -1,10 +1,11 @@
 """The lazy graph's tasks (hht3d.graph.tasks): surfaces resident on a worker, one analysis shared by the shift
 groups of a process."""
+
 import numpy as np
 
+from helpers.graphs import _surfaces
 from hht3d import Surface, graph
 from hht3d.geometry.signals import mean_curvature
-from helpers.graphs import _surfaces
 
 
 def test_resident_surfaces_share_operators_across_copies():

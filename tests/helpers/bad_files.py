@@ -1,5 +1,6 @@
 """The input folder of the bad-input tests (tests/cli/test_bad_*.py): good, odd and broken meshes and point
 clouds, signal files, a pipeline that is not UTF-8, files that refer to others."""
+
 from __future__ import annotations
 
 import json
@@ -69,8 +70,11 @@ def _write_inputs(folder: Path) -> None:
     _ply(folder / "int8.ply", small_v * (1 + 0.05 * np.sin(4 * small_v[:, [0]])), small_f, index="i1")
     _ply(folder / "mixed.ply", *_quads())
     _ply(folder / "non_manifold.ply", np.vstack([v, [[3.0, 3.0, 3.0]]]), np.vstack([f, [[f[0, 0], f[0, 1], n]]]))
-    _ply(folder / "zero_area.ply", np.vstack([v, [[5.0, 0, 0], [6, 0, 0], [7, 0, 0], [8, 0, 0]]]),
-         np.vstack([f, [[n, n + 1, n + 2], [n + 1, n + 2, n + 3]]]))
+    _ply(
+        folder / "zero_area.ply",
+        np.vstack([v, [[5.0, 0, 0], [6, 0, 0], [7, 0, 0], [8, 0, 0]]]),
+        np.vstack([f, [[n, n + 1, n + 2], [n + 1, n + 2, n + 3]]]),
+    )
     _ply(folder / "two_parts.ply", np.vstack([v, v + [3.0, 0, 0]]), np.vstack([f, f + n]))
     nan = v.copy()
     nan[5, 1] = np.nan
@@ -90,7 +94,7 @@ def _write_inputs(folder: Path) -> None:
     (folder / "empty.ply").write_bytes(b"")
     (folder / "empty.xyz").write_text("")
     good = (folder / "good.ply").read_bytes()
-    (folder / "truncated.ply").write_bytes(good[:len(good) // 2])
+    (folder / "truncated.ply").write_bytes(good[: len(good) // 2])
     (folder / "garbage.obj").write_text("hello world\nv 1 2\nf 1 2 3\n")
     np.savetxt(folder / "ten.xyz", np.random.default_rng(1).normal(size=(10, 3)))
     (folder / "notes.txt").write_text("not a mesh\n")
@@ -122,15 +126,22 @@ def _gltf(vertices, faces, buffer_uri: str | None = None) -> dict:
     data = positions + indices
     uri = buffer_uri or "data:application/octet-stream;base64," + base64.b64encode(data).decode()
     lo, hi = np.min(vertices, axis=0).tolist(), np.max(vertices, axis=0).tolist()
-    return {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
-            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]}],
-            "buffers": [{"uri": uri, "byteLength": len(data)}],
-            "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": len(positions), "target": 34962},
-                            {"buffer": 0, "byteOffset": len(positions), "byteLength": len(indices),
-                             "target": 34963}],
-            "accessors": [{"bufferView": 0, "componentType": 5126, "count": len(vertices), "type": "VEC3",
-                           "min": lo, "max": hi},
-                          {"bufferView": 1, "componentType": 5125, "count": 3 * len(faces), "type": "SCALAR"}]}
+    return {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]}],
+        "buffers": [{"uri": uri, "byteLength": len(data)}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": len(positions), "target": 34962},
+            {"buffer": 0, "byteOffset": len(positions), "byteLength": len(indices), "target": 34963},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": len(vertices), "type": "VEC3", "min": lo, "max": hi},
+            {"bufferView": 1, "componentType": 5125, "count": 3 * len(faces), "type": "SCALAR"},
+        ],
+    }
 
 
 def _write_references(folder: Path, v, f) -> None:

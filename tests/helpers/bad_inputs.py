@@ -8,6 +8,7 @@ Qhull or Open3D chatter, no progress bar in a log) and, where the input is
 odd but valid, its row checks the numbers of the result.  After every row no
 temporary (``.part``) or probe file is left anywhere.
 """
+
 from __future__ import annotations
 
 import os
@@ -116,14 +117,17 @@ def _only_inputs(*names: str):
     def check(ran: Ran) -> None:
         reported = re.findall(r"^(\S.*?): ok", ran.stdout, flags=re.M)
         assert [Path(r).name for r in reported] == list(names), ran.stdout
+
     return check
 
 
 def _written(name: str, folder: str = "out"):
     """A check: ``<tmp>/folder/name`` was written."""
+
     def check(ran: Ran) -> None:
         path = ran.out.parent / folder / name
         assert path.is_file() and path.stat().st_size > 0
+
     return check
 
 
@@ -145,8 +149,14 @@ def _unprivileged(argv: list[str]) -> subprocess.CompletedProcess:
         if setpriv is None:
             pytest.skip("root ignores read-only folders and setpriv is not installed to drop that")
         prefix = [setpriv, "--bounding-set=-dac_override,-dac_read_search"]
-    done = subprocess.run([*prefix, sys.executable, "-m", "hht3d", *argv], capture_output=True, text=True,
-                          cwd=ROOT, timeout=300, check=False)
+    done = subprocess.run(
+        [*prefix, sys.executable, "-m", "hht3d", *argv],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=300,
+        check=False,
+    )
     if "setpriv" in done.stderr:
         pytest.skip(f"cannot drop root's permission override here: {done.stderr.strip()}")
     return done

@@ -1,4 +1,5 @@
 """The bump-band sphere of the filtering tests (tests/apps/): its scale, and how much of it a surface keeps."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -20,4 +21,4 @@ def bump_amplitude(surface: Surface, vertices: np.ndarray, pattern: np.ndarray) 
     """Least-squares amplitude of the bump pattern in the radial deviation."""
     area = surface.mass_diagonal
     deviation = np.linalg.norm(vertices, axis=1) - 1
-    return float(np.sum(area * deviation * pattern) / np.sum(area * pattern ** 2))
+    return float(np.sum(area * deviation * pattern) / np.sum(area * pattern**2))

@@ -1,9 +1,10 @@
 """The input folder of the dataset-run tests: two good meshes, a corrupt PLY, three points."""
+
 import numpy as np
 
+from helpers.meshes import icosphere
 from hht3d import Surface
 from hht3d.io import write_ply
-from helpers.meshes import icosphere
 
 
 def _make_inputs(folder):

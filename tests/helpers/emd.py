@@ -1,4 +1,5 @@
 """Signals of the EMD tests (tests/decomposition/): real spherical harmonics, and the sum of the parts."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -16,7 +17,7 @@ def real_sph_harm(degree: int, coefficients: np.ndarray, vertices: np.ndarray) -
     for m in range(1, degree + 1):
         y = sph_harm_y(degree, m, polar, azimuth)
         total = total + coefficients[degree + m] * y.real + coefficients[degree - m] * y.imag
-    return total / np.sqrt(np.mean(total ** 2))
+    return total / np.sqrt(np.mean(total**2))
 
 
 def assert_sums_to_signal(result, signal):

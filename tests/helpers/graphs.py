@@ -1,8 +1,9 @@
 """Surfaces and settings of the lazy-graph tests, and the task-name prefix of a graph key."""
+
 import numpy as np
 
-from hht3d import Surface
 from helpers.meshes import fibonacci_sphere, icosphere
+from hht3d import Surface
 
 OPTIONS = dict(emd={"max_imfs": 3}, riesz_tasks=3)
 

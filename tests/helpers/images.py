@@ -1,4 +1,5 @@
 """Checks on rendered images."""
+
 from __future__ import annotations
 
 import numpy as np

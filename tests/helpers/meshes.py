@@ -1,4 +1,5 @@
 """Analytic test surfaces shared by the tests (built here, no data files needed)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -9,12 +10,48 @@ def icosphere(subdivisions: int = 5, radius: float = 1.0):
 
     Returns ``(vertices, faces)``; 5 subdivisions give 10,242 vertices.
     """
-    t = (1 + 5 ** 0.5) / 2
-    v = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
-                  [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
-    f = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
-                  [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
-                  [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]])
+    t = (1 + 5**0.5) / 2
+    v = np.array(
+        [
+            [-1, t, 0],
+            [1, t, 0],
+            [-1, -t, 0],
+            [1, -t, 0],
+            [0, -1, t],
+            [0, 1, t],
+            [0, -1, -t],
+            [0, 1, -t],
+            [t, 0, -1],
+            [t, 0, 1],
+            [-t, 0, -1],
+            [-t, 0, 1],
+        ],
+        float,
+    )
+    f = np.array(
+        [
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ]
+    )
     v /= np.linalg.norm(v, axis=1, keepdims=True)
     for _ in range(subdivisions):
         edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
@@ -39,8 +76,8 @@ def fibonacci_sphere(n: int, radius: float = 1.0):
     """``n`` nearly uniform points on a sphere (Fibonacci lattice)."""
     i = np.arange(n) + 0.5
     z = 1 - 2 * i / n
-    phi = np.pi * (1 + 5 ** 0.5) * i
-    r = np.sqrt(1 - z ** 2)
+    phi = np.pi * (1 + 5**0.5) * i
+    r = np.sqrt(1 - z**2)
     return radius * np.c_[r * np.cos(phi), r * np.sin(phi), z]
 
 
@@ -119,7 +156,7 @@ def bump_band_sphere(subdivisions: int = 5, waves: int = 20, amplitude: float = 
     """
     clean, faces = icosphere(subdivisions)
     x, y, z = clean.T
-    bumps = np.cos(waves * np.arctan2(y, x)) * np.clip(1 - z ** 2, 0, None) ** (waves / 2)
+    bumps = np.cos(waves * np.arctan2(y, x)) * np.clip(1 - z**2, 0, None) ** (waves / 2)
     return clean * (1 + amplitude * bumps)[:, None], faces, clean, bumps
 
 
@@ -215,7 +252,7 @@ def random_bump_sphere(subdivisions: int = 5, count: int = 60, seed: int = 7):
     sigma = np.where(is_narrow, 0.08, 0.25) * rng.uniform(0.8, 1.25, count)
     peak = 0.01 * rng.uniform(0.5, 1.0, count) * np.where(is_narrow, 1.0, 2.0) * rng.choice([-1, 1], count)
     angle = np.arccos(np.clip(clean @ centres.T, -1, 1))
-    bumps = np.exp(-angle ** 2 / (2 * sigma ** 2)) * peak
+    bumps = np.exp(-(angle**2) / (2 * sigma**2)) * peak
     narrow, wide = bumps[:, is_narrow].sum(axis=1), bumps[:, ~is_narrow].sum(axis=1)
     return clean * (1 + narrow + wide)[:, None], faces, narrow, wide
 

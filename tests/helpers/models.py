@@ -1,4 +1,5 @@
 """Paths of the test models: those shipped in the package and the public ones in ../shared/data."""
+
 from __future__ import annotations
 
 import os

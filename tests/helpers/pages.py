@@ -1,4 +1,5 @@
 """What a viewer page embeds: its JSON data and the float32 arrays of its fields."""
+
 from __future__ import annotations
 
 import base64
@@ -7,9 +8,9 @@ import re
 
 import numpy as np
 
+from helpers.meshes import fibonacci_sphere
 from hht3d import HilbertSpectrum, Surface
 from hht3d.viz.viewer import write_page
-from helpers.meshes import fibonacci_sphere
 
 
 def page_data(path) -> dict:

@@ -1,5 +1,6 @@
 """The pipeline and output-format tests' shared parts: the shipped examples, a bumpy sphere file, a good
 pipeline to break, a run through the CLI, and what an output file must hold."""
+
 from pathlib import Path
 
 import numpy as np
@@ -28,8 +29,14 @@ def assert_output_fits(path: Path, n_vertices: int) -> None:
     assert path.is_file(), path
     if path.suffix == ".npz":
         with np.load(path) as data:
-            per_vertex = [k for k in data.files if data[k].ndim >= 1 and data[k].shape[-1] == n_vertices
-                          or data[k].ndim >= 1 and len(data[k]) == n_vertices]
+            per_vertex = [
+                k
+                for k in data.files
+                if data[k].ndim >= 1
+                and data[k].shape[-1] == n_vertices
+                or data[k].ndim >= 1
+                and len(data[k]) == n_vertices
+            ]
             assert per_vertex, (path, data.files)
             for key in data.files:  # numbers are finite (a result also names its Laplacian)
                 assert not np.issubdtype(data[key].dtype, np.number) or np.all(np.isfinite(data[key])), (path, key)

@@ -1,5 +1,6 @@
 """Real ``hht3d run`` processes for the tests of stops and losses (issue 23): the pipeline they run, their
 environment (this checkout on ``PYTHONPATH``), what they recorded, bounded waits."""
+
 from __future__ import annotations
 
 import json
@@ -36,9 +37,15 @@ def _env(**extra) -> dict:
 
 def _start(job: Path, *args: str, env=None) -> subprocess.Popen:
     """``hht3d run`` in its own session (so that a signal to its group is what a terminal's Ctrl-C does)."""
-    return subprocess.Popen([sys.executable, "-m", "hht3d", "run", str(job / "p.yaml"), "--quiet", *args],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=job,
-                            env=env or _env(), start_new_session=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "hht3d", "run", str(job / "p.yaml"), "--quiet", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=job,
+        env=env or _env(),
+        start_new_session=True,
+    )
 
 
 def _recorded(out: Path) -> dict:

@@ -1,4 +1,5 @@
 """Comparisons of saved HHT results with in-memory ones."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -3,6 +3,7 @@
 Independent of :mod:`hht3d.redaction`: the forms are computed here, from the standard library,
 so that a test using :func:`forms_found` would catch a form the package forgot.
 """
+
 from __future__ import annotations
 
 import base64
@@ -12,9 +13,14 @@ from urllib.parse import quote, quote_plus
 def secret_forms(secret: str) -> dict[str, str]:
     """The forms of ``secret``, by name, all lower-cased (searches ignore letter case)."""
     raw = secret.encode()
-    forms = {"as given": secret, "url-encoded": quote(secret, safe=""), "form-encoded": quote_plus(secret),
-             "base64": base64.b64encode(raw).decode(), "base64 url-safe": base64.urlsafe_b64encode(raw).decode(),
-             "base64 unpadded": base64.b64encode(raw).decode().rstrip("=")}
+    forms = {
+        "as given": secret,
+        "url-encoded": quote(secret, safe=""),
+        "form-encoded": quote_plus(secret),
+        "base64": base64.b64encode(raw).decode(),
+        "base64 url-safe": base64.urlsafe_b64encode(raw).decode(),
+        "base64 unpadded": base64.b64encode(raw).decode().rstrip("="),
+    }
     return {name: form.lower() for name, form in forms.items()}
 
 

@@ -10,6 +10,7 @@
 
 Both are torn down on exit, and every wait is bounded.
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -48,7 +49,7 @@ def s3_server(kind: str = "moto"):
     saved = {k: os.environ.get(k) for k in FAKE_CREDENTIALS}
     os.environ.update(FAKE_CREDENTIALS)
     try:
-        with (_moto() if kind == "moto" else _s3rver()) as endpoint:
+        with _moto() if kind == "moto" else _s3rver() as endpoint:
             yield endpoint
     finally:
         for key, value in saved.items():
@@ -80,13 +81,31 @@ def _s3rver():
     script = S3RVER_HOME / "node_modules" / "s3rver" / "bin" / "s3rver.js"
     if not script.is_file():
         S3RVER_HOME.mkdir(parents=True, exist_ok=True)
-        subprocess.run(["npm", "install", "--no-audit", "--no-fund", "--silent", "--prefix", str(S3RVER_HOME),
-                        S3RVER], check=True, timeout=300, capture_output=True)
+        subprocess.run(
+            ["npm", "install", "--no-audit", "--no-fund", "--silent", "--prefix", str(S3RVER_HOME), S3RVER],
+            check=True,
+            timeout=300,
+            capture_output=True,
+        )
     port = free_port()
     with tempfile.TemporaryDirectory(prefix="hht3d-s3rver-") as data:
-        server = subprocess.Popen(["node", str(script), "--directory", data, "--address", "127.0.0.1", "--port",
-                                   str(port), "--silent", "--allow-mismatched-signatures", "--no-vhost-buckets"],
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        server = subprocess.Popen(
+            [
+                "node",
+                str(script),
+                "--directory",
+                data,
+                "--address",
+                "127.0.0.1",
+                "--port",
+                str(port),
+                "--silent",
+                "--allow-mismatched-signatures",
+                "--no-vhost-buckets",
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         try:
             _wait_for(lambda: _listening(port), [server])
             yield f"http://127.0.0.1:{port}"
@@ -119,20 +138,62 @@ def dask_cluster(workers: int = 2, *, env: dict | None = None, memory_limit: str
     for folder in folders:
         folder.mkdir()
     scheduler_file = folders[-1] / "scheduler.json"
-    common = {**os.environ, **FAKE_CREDENTIALS, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1",
-              "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", **(env or {})}
+    common = {
+        **os.environ,
+        **FAKE_CREDENTIALS,
+        "PYTHONPATH": str(ROOT),
+        "OMP_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
+        "OPENBLAS_NUM_THREADS": "1",
+        **(env or {}),
+    }
     processes = []
     try:
-        processes.append(_start([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
-                                 "--port", "0", "--no-dashboard", "--scheduler-file", str(scheduler_file)],
-                                folders[-1], {**common, "HOME": str(folders[-1]), "TMPDIR": str(folders[-1])},
-                                "scheduler.log"))
+        processes.append(
+            _start(
+                [
+                    sys.executable,
+                    "-m",
+                    "distributed.cli.dask_scheduler",
+                    "--host",
+                    "127.0.0.1",
+                    "--port",
+                    "0",
+                    "--no-dashboard",
+                    "--scheduler-file",
+                    str(scheduler_file),
+                ],
+                folders[-1],
+                {**common, "HOME": str(folders[-1]), "TMPDIR": str(folders[-1])},
+                "scheduler.log",
+            )
+        )
         address = _wait_for(lambda: json.loads(scheduler_file.read_text())["address"], processes)
         for folder in folders[:-1]:
-            processes.append(_start([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
-                                     "--nworkers", "1", "--no-nanny", "--memory-limit", memory_limit,
-                                     "--local-directory", str(folder / "dask"), "--death-timeout", "60"],
-                                    folder, {**common, "HOME": str(folder), "TMPDIR": str(folder)}, "worker.log"))
+            processes.append(
+                _start(
+                    [
+                        sys.executable,
+                        "-m",
+                        "distributed.cli.dask_worker",
+                        address,
+                        "--nthreads",
+                        "1",
+                        "--nworkers",
+                        "1",
+                        "--no-nanny",
+                        "--memory-limit",
+                        memory_limit,
+                        "--local-directory",
+                        str(folder / "dask"),
+                        "--death-timeout",
+                        "60",
+                    ],
+                    folder,
+                    {**common, "HOME": str(folder), "TMPDIR": str(folder)},
+                    "worker.log",
+                )
+            )
         _wait_for(lambda: _workers_connected(address, workers), processes)
         yield address, folders
     finally:

@@ -1,5 +1,6 @@
 """References of the spectral tests (tests/spectral/): the M-norm error, test signals, the generalized
 eigendecomposition written with SciPy, and the cylinder of the monogenic-signal tests."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -13,15 +14,18 @@ WAVENUMBERS = (4, 8)
 def m_error(surface, approx, exact):
     """Relative M-norm error, per row."""
     mass = surface.mass_diagonal
-    return np.sqrt(((approx - exact) ** 2 * mass).sum(-1) / (exact ** 2 * mass).sum(-1))
+    return np.sqrt(((approx - exact) ** 2 * mass).sum(-1) / (exact**2 * mass).sum(-1))
 
 
 def mixed_signals(surface, count=3, seed=0):
     """A smooth, a rough (white noise) and an off-centre distance signal."""
     v = surface.vertices
     rng = np.random.default_rng(seed)
-    rows = [np.sin(3 * v[:, 0]) + v[:, 1] * v[:, 2], rng.standard_normal(len(v)),
-            np.linalg.norm(v - v.mean(axis=0) - 0.1 * np.ptp(v, axis=0), axis=1)]
+    rows = [
+        np.sin(3 * v[:, 0]) + v[:, 1] * v[:, 2],
+        rng.standard_normal(len(v)),
+        np.linalg.norm(v - v.mean(axis=0) - 0.1 * np.ptp(v, axis=0), axis=1),
+    ]
     return np.stack(rows[:count])
 
 
@@ -44,4 +48,4 @@ def eigen_reference(surface, f, count=None, power=-0.5):
     """``Σ_k λ_k^power φ_k φ_kᵀ M f`` over the ``count`` smallest non-zero modes (all by default)."""
     values, vectors = generalized_eigh(surface)
     values, vectors = values[:count], vectors[:, :count]
-    return ((f * surface.mass_diagonal) @ vectors * values ** power) @ vectors.T
+    return ((f * surface.mass_diagonal) @ vectors * values**power) @ vectors.T

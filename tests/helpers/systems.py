@@ -4,6 +4,7 @@ Built on a surface: the constrained biharmonic envelope system of EMD and
 the shifted systems ``L + σM`` of the ``L^{-1/2}`` quadrature at its smallest
 and largest shift; and a small singular matrix.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -34,10 +35,12 @@ def systems(surface):
     """(name, SPD matrix) pairs: two envelope systems and the extreme quadrature shifts."""
     rng = np.random.default_rng(0)
     plan = quadrature_plan(surface, 1e-8, "superlu")
-    return [("envelope 5%", envelope_system(surface, rng.random(surface.n_vertices) < 0.05)),
-            ("envelope 30%", envelope_system(surface, rng.random(surface.n_vertices) < 0.3)),
-            ("smallest shift", shifted_matrix(surface, plan.sigmas[0])),
-            ("largest shift", shifted_matrix(surface, plan.sigmas[-1]))]
+    return [
+        ("envelope 5%", envelope_system(surface, rng.random(surface.n_vertices) < 0.05)),
+        ("envelope 30%", envelope_system(surface, rng.random(surface.n_vertices) < 0.3)),
+        ("smallest shift", shifted_matrix(surface, plan.sigmas[0])),
+        ("largest shift", shifted_matrix(surface, plan.sigmas[-1])),
+    ]
 
 
 def relative_error(x, reference):

@@ -1,8 +1,9 @@
 """Fixtures of the io tests."""
+
 import pytest
 
-from hht3d import Surface
 from helpers.meshes import icosphere
+from hht3d import Surface
 
 
 @pytest.fixture

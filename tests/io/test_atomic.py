@@ -1,5 +1,6 @@
 """Atomic writes (hht3d.io.atomic): nothing left by a failed write, output paths probed without a trace, stale
 temporaries of a killed run removed at the start of the next."""
+
 import os
 import subprocess
 import sys
@@ -7,9 +8,9 @@ import sys
 import numpy as np
 import pytest
 
+from helpers.processes import PIPELINE, _env
 from hht3d.errors import OutputError
 from hht3d.io import atomic_path, check_output_paths, write_npz
-from helpers.processes import PIPELINE, _env
 
 
 def _current_umask() -> int:
@@ -37,9 +38,11 @@ def test_output_paths_are_probed_without_leaving_anything(tmp_path):
     (tmp_path / "dir.npz").mkdir()
     check_output_paths([tmp_path / "new" / "deeper" / "a.npz", tmp_path / "b.npz"])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["dir.npz", "file"]
-    for path, message in [(tmp_path / "file" / "a.npz", "file is not a folder"),
-                          (tmp_path / "dir.npz", "a folder of that name is in the way"),
-                          (tmp_path / ("x" * 300) / "a.npz", "File name too long")]:
+    for path, message in [
+        (tmp_path / "file" / "a.npz", "file is not a folder"),
+        (tmp_path / "dir.npz", "a folder of that name is in the way"),
+        (tmp_path / ("x" * 300) / "a.npz", "File name too long"),
+    ]:
         with pytest.raises(OutputError, match=message):
             check_output_paths([path])
 
@@ -54,11 +57,17 @@ def test_stale_temporaries_of_a_killed_run_are_removed_at_start(job):
     live = out / f".s0_hht.npz.{os.getpid()}-abcdefgh.part"
     stale.write_bytes(b"half")
     live.write_bytes(b"being written")
-    (job / "p.yaml").write_text(PIPELINE.format(inputs=job / "scans" / "s0.ply", out=out)
-                                .replace("max_imfs: 2", "max_imfs: 1"))
-    done = subprocess.run([sys.executable, "-m", "hht3d", "run", str(job / "p.yaml"), "--quiet",
-                           "--scheduler", "synchronous"], capture_output=True, text=True, cwd=job, env=_env(),
-                          timeout=120)
+    (job / "p.yaml").write_text(
+        PIPELINE.format(inputs=job / "scans" / "s0.ply", out=out).replace("max_imfs: 2", "max_imfs: 1")
+    )
+    done = subprocess.run(
+        [sys.executable, "-m", "hht3d", "run", str(job / "p.yaml"), "--quiet", "--scheduler", "synchronous"],
+        capture_output=True,
+        text=True,
+        cwd=job,
+        env=_env(),
+        timeout=120,
+    )
     assert done.returncode == 0, done.stderr
     assert not stale.exists() and live.read_bytes() == b"being written"
 
@@ -81,8 +90,11 @@ def test_a_folder_swapped_for_a_link_before_the_write_is_refused_at_the_rename(t
         _swap_for_link(tmp_path / "out" / "sub", tmp_path / "elsewhere")
         write_npz(path, {"x": np.arange(3.0)})
 
-    with pytest.raises(OutputError, match=r"a.npz: not written: its folder now resolves to .*elsewhere, outside the "
-                                          r"output folder .*out \(swapped for a link after the check\?\)"):
+    with pytest.raises(
+        OutputError,
+        match=r"a.npz: not written: its folder now resolves to .*elsewhere, outside the "
+        r"output folder .*out \(swapped for a link after the check\?\)",
+    ):
         Recorded(write, tmp_path / "out", "R")(tmp_path / "out" / "sub" / "a.npz")
     assert sorted(os.listdir(tmp_path / "elsewhere")) == ["a.npz"]
     assert (tmp_path / "elsewhere" / "a.npz").read_bytes() == b"mine" and entries(tmp_path / "out") == {}
@@ -94,8 +106,11 @@ def test_a_folder_swapped_while_the_file_is_written_is_not_renamed_into(tmp_path
     (tmp_path / "out").mkdir()
     (tmp_path / "elsewhere").mkdir()
     (tmp_path / "elsewhere" / "a.bin").write_bytes(b"mine")
-    with pytest.raises(OutputError, match=r"a.bin: not written: its folder .*out was replaced while the file was "
-                                          "written"):
+    with pytest.raises(
+        OutputError,
+        match=r"a.bin: not written: its folder .*out was replaced while the file was "
+        "written",
+    ):
         with atomic_path(tmp_path / "out" / "a.bin") as tmp:
             os.rename(tmp_path / "out", tmp_path / "moved")
             (tmp_path / "out").symlink_to(tmp_path / "elsewhere")

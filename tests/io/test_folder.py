@@ -1,5 +1,6 @@
 """Output folders (hht3d.io.folder): a ``file://`` URL is the local path it names at every entry, and a URL
 folder keeps its outputs under its prefix (the CLI's cases are rows of tests/cli/test_bad_outputs.py)."""
+
 from __future__ import annotations
 
 import numpy as np

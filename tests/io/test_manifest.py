@@ -1,5 +1,6 @@
 """The output folder's lock and manifest as untrusted, shared things: who holds the lock, how long a run waits
 for it, and a lock file that is not hht3d's (the CLI's cases are rows of tests/cli/test_bad_outputs.py)."""
+
 from __future__ import annotations
 
 import json
@@ -14,17 +15,25 @@ import pytest
 from helpers.bad_inputs import PIPELINE, ROOT, _substitute
 from hht3d.cli import main
 from hht3d.errors import OutputError
-from hht3d.io.manifest import LOCK, entries, folder_lock, lock_timeout, valid_entries
+from hht3d.io.lock import LOCK, folder_lock, lock_timeout
+from hht3d.io.manifest import entries, valid_entries
 
-HOLD = "import sys, time\nfrom hht3d.io.manifest import folder_lock\n" \
-       "with folder_lock(sys.argv[1], 'R-holder'):\n    print('held', flush=True)\n    time.sleep(120)\n"
+HOLD = (
+    "import sys, time\nfrom hht3d.io.lock import folder_lock\n"
+    "with folder_lock(sys.argv[1], 'R-holder'):\n    print('held', flush=True)\n    time.sleep(120)\n"
+)
 
 
 @pytest.fixture
 def held(tmp_path):
     """``(folder, pid)``: ``<tmp>/out`` locked by another live process (ended afterwards)."""
-    holder = subprocess.Popen([sys.executable, "-c", HOLD, str(tmp_path / "out")], stdout=subprocess.PIPE,
-                              text=True, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLD, str(tmp_path / "out")],
+        stdout=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
     try:
         assert holder.stdout.readline().strip() == "held"
         yield tmp_path / "out", holder.pid
@@ -43,7 +52,8 @@ def test_a_held_lock_names_its_holder_and_times_out(held, monkeypatch, caplog):
             with folder_lock(folder):
                 pass
     assert [r.getMessage() for r in caplog.records] == [
-        f"{folder}: waiting for {holder}, which holds the output folder's lock (at most 0.5 s)"]
+        f"{folder}: waiting for {holder}, which holds the output folder's lock (at most 0.5 s)"
+    ]
 
 
 def test_a_run_into_a_locked_folder_says_who_holds_it_and_stops(held, inputs, tmp_path, capfd, monkeypatch):
@@ -83,9 +93,18 @@ def test_a_lock_file_linking_outside_is_neither_created_nor_locked(tmp_path):
 
 def test_only_well_formed_entries_inside_the_folder_count(tmp_path):
     good = {"size": 3, "sha256": "a" * 64}
-    data = {"files": {"a.npz": good, "sub/../b.npz": good, "../c.npz": good, "/d.npz": good,
-                      "e.npz": {**good, "size": True},
-                      "f.npz": {**good, "sha256": "x"}, "g.npz": [good], 7: good}}
+    data = {
+        "files": {
+            "a.npz": good,
+            "sub/../b.npz": good,
+            "../c.npz": good,
+            "/d.npz": good,
+            "e.npz": {**good, "size": True},
+            "f.npz": {**good, "sha256": "x"},
+            "g.npz": [good],
+            7: good,
+        }
+    }
     assert sorted(valid_entries(data)) == ["a.npz", "b.npz"]
     (tmp_path / "out").mkdir()
     (tmp_path / "outside").mkdir()

@@ -1,4 +1,5 @@
 """Open3D geometries to and from surfaces (hht3d.io.open3d)."""
+
 import numpy as np
 import open3d as o3d
 
@@ -6,8 +7,9 @@ from hht3d.io import surface_from_open3d, surface_to_open3d
 
 
 def test_open3d_geometries(sphere):
-    legacy = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(sphere.vertices),
-                                       o3d.utility.Vector3iVector(sphere.faces))
+    legacy = o3d.geometry.TriangleMesh(
+        o3d.utility.Vector3dVector(sphere.vertices), o3d.utility.Vector3iVector(sphere.faces)
+    )
     from_legacy = surface_from_open3d(legacy)
     np.testing.assert_array_equal(from_legacy.vertices, sphere.vertices)  # float64 in memory: exact
     np.testing.assert_array_equal(from_legacy.faces, sphere.faces)

@@ -1,13 +1,14 @@
 """Loading files (hht3d.io.read): every format Open3D writes, one clear error per bad file, headers read
 without the data."""
+
 import numpy as np
 import open3d as o3d
 import pytest
 from scipy.spatial import cKDTree
 
+from helpers.meshes import gltf_to_glb, icosphere
 from hht3d import InputError, load
 from hht3d.io import read_npz_shapes, read_ply_header, write_npz, write_ply
-from helpers.meshes import gltf_to_glb, icosphere
 
 
 def canonical_faces(faces) -> set:
@@ -20,8 +21,17 @@ def canonical_faces(faces) -> set:
 #: Largest position error each format allows for coordinates in [-1, 1]: text with 6 decimals
 #: (half a unit of 1e-6 per coordinate, times √3), float32 (2^-24 relative per coordinate, times
 #: √3), or Open3D's 10-decimal text.
-POSITION_ATOL = {".obj": 8.7e-7, ".off": 8.7e-7, ".stl": 1.1e-7, ".gltf": 1.1e-7, ".glb": 1.1e-7,
-                 ".pcd": 1.1e-7, ".xyz": 1e-9, ".xyzn": 1e-9, ".pts": 1e-9}
+POSITION_ATOL = {
+    ".obj": 8.7e-7,
+    ".off": 8.7e-7,
+    ".stl": 1.1e-7,
+    ".gltf": 1.1e-7,
+    ".glb": 1.1e-7,
+    ".pcd": 1.1e-7,
+    ".xyz": 1e-9,
+    ".xyzn": 1e-9,
+    ".pts": 1e-9,
+}
 
 
 @pytest.mark.parametrize("ext", [".obj", ".off", ".stl", ".gltf", ".glb"])
@@ -58,12 +68,15 @@ def test_open3d_point_formats(tmp_path, ext):
         np.testing.assert_allclose(surface.normals, pts, rtol=0, atol=POSITION_ATOL[ext])
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda p: p / "missing.ply", "no such file"),
-    (lambda p: (p / "m.dae").write_text("x") and p / "m.dae", "unknown extension"),
-    (lambda p: (p / "bad.ply").write_bytes(b"ply\nformat nonsense\n") and p / "bad.ply", "not a readable PLY"),
-    (lambda p: (p / "e.xyz").write_text("") or p / "e.xyz", "no vertices"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda p: p / "missing.ply", "no such file"),
+        (lambda p: (p / "m.dae").write_text("x") and p / "m.dae", "unknown extension"),
+        (lambda p: (p / "bad.ply").write_bytes(b"ply\nformat nonsense\n") and p / "bad.ply", "not a readable PLY"),
+        (lambda p: (p / "e.xyz").write_text("") or p / "e.xyz", "no vertices"),
+    ],
+)
 def test_bad_files_give_one_clear_error(tmp_path, make, message):
     path = make(tmp_path)
     with pytest.raises(InputError, match=message) as info:
@@ -89,14 +102,32 @@ def _ply(path, header_lines, body=b""):
     return path
 
 
-@pytest.mark.parametrize("name, header, message", [
-    ("many properties", ["format ascii 1.0", "element vertex 1", *(f"property float p{i}" for i in range(20_000))],
-     "declares 20,000 properties; at most 10,000"),
-    ("a billion vertices", ["format binary_little_endian 1.0", "element vertex 1000000000", "property float x",
-                            "property float y", "property float z"], "more than its"),
-    ("a header over 1 MiB", ["format ascii 1.0", "element vertex 1",
-                             *(f"property float p{i}" for i in range(100_000))], "no end_header"),
-])
+@pytest.mark.parametrize(
+    "name, header, message",
+    [
+        (
+            "many properties",
+            ["format ascii 1.0", "element vertex 1", *(f"property float p{i}" for i in range(20_000))],
+            "declares 20,000 properties; at most 10,000",
+        ),
+        (
+            "a billion vertices",
+            [
+                "format binary_little_endian 1.0",
+                "element vertex 1000000000",
+                "property float x",
+                "property float y",
+                "property float z",
+            ],
+            "more than its",
+        ),
+        (
+            "a header over 1 MiB",
+            ["format ascii 1.0", "element vertex 1", *(f"property float p{i}" for i in range(100_000))],
+            "no end_header",
+        ),
+    ],
+)
 def test_a_ply_header_is_bounded_before_the_data_is_read(tmp_path, name, header, message):
     """Refused in one line from the header alone (the reader would build a dtype of every property,
     or allocate every declared vertex); a header longer than 1 MiB is not read to its end."""
@@ -106,8 +137,10 @@ def test_a_ply_header_is_bounded_before_the_data_is_read(tmp_path, name, header,
 
 def test_a_pcd_declaring_a_trillion_points_is_refused(tmp_path):
     path = tmp_path / "bomb.pcd"
-    path.write_text("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-                    "WIDTH 1000000000000\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1000000000000\nDATA ascii\n0 0 0\n")
+    path.write_text(
+        "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+        "WIDTH 1000000000000\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1000000000000\nDATA ascii\n0 0 0\n"
+    )
     with pytest.raises(InputError, match="declares 1,000,000,000,000 vertices"):
         load(path)
 

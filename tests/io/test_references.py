@@ -5,6 +5,7 @@ that Open3D's readers (tinygltf, tinyobjloader) follow outside the scan's folder
 fragment, backslashes, a file name with a space.  A FIFO waits outside, which a reader opening
 it would hang on; the check must refuse without opening it.
 """
+
 from __future__ import annotations
 
 import base64
@@ -35,8 +36,15 @@ def _gltf(folder, uri):
     return path
 
 
-@pytest.mark.parametrize("uri", ["inside.bin?/../../../outside/x.bin", "inside.bin#/../../../outside/x.bin",
-                                 "..%2F..%2Foutside%2Fx.bin", "..\\..\\outside\\x.bin"])
+@pytest.mark.parametrize(
+    "uri",
+    [
+        "inside.bin?/../../../outside/x.bin",
+        "inside.bin#/../../../outside/x.bin",
+        "..%2F..%2Foutside%2Fx.bin",
+        "..\\..\\outside\\x.bin",
+    ],
+)
 def test_a_gltf_uri_that_readers_follow_outside_is_refused(folders, uri):
     inside, _ = folders
     with pytest.raises(InputError, match="refers to"):
@@ -49,11 +57,14 @@ def test_plain_and_embedded_gltf_uris_stay_accepted(folders):
     check_references(_gltf(inside, "data:application/octet-stream;base64," + base64.b64encode(b"\0" * 12).decode()))
 
 
-@pytest.mark.parametrize("obj, mtl", [
-    ("mtllib ..\\..\\outside\\evil.mtl\n", None),
-    ("mtllib local.mtl\n", "newmtl m\nmap_Kd ../../outside/a b.png\n"),
-    ("mtllib local.mtl\n", "newmtl m\nmap_Kd -s 1 1 1 ../../outside/x.bin\n"),
-])
+@pytest.mark.parametrize(
+    "obj, mtl",
+    [
+        ("mtllib ..\\..\\outside\\evil.mtl\n", None),
+        ("mtllib local.mtl\n", "newmtl m\nmap_Kd ../../outside/a b.png\n"),
+        ("mtllib local.mtl\n", "newmtl m\nmap_Kd -s 1 1 1 ../../outside/x.bin\n"),
+    ],
+)
 def test_obj_and_mtl_names_are_checked_as_every_reading(folders, obj, mtl):
     """Backslashes are a path on Windows; a texture name may hold spaces, after options."""
     inside, outside = folders

@@ -8,6 +8,7 @@ URLs and storage_options, never the client's files, and must leave no
 temporary copy behind.  Oracles: the same run on local files (to 1e-12), the
 objects in the bucket, exit codes and the lines printed.
 """
+
 from __future__ import annotations
 
 import json
@@ -27,11 +28,10 @@ from plyfile import PlyData  # noqa: E402
 
 from helpers.models import shipped_model_path  # noqa: E402
 from helpers.secrets import forms_found  # noqa: E402
+from helpers.servers import FAKE_CREDENTIALS, ROOT, S3_SERVERS, dask_cluster, s3_server, worker_leftovers  # noqa: E402
 from hht3d.cli import main  # noqa: E402
-from hht3d.errors import InputError, OutputError  # noqa: E402
 from hht3d.dataset import run_dataset  # noqa: E402
-from helpers.servers import (FAKE_CREDENTIALS, ROOT, S3_SERVERS, dask_cluster, s3_server,  # noqa: E402
-                             worker_leftovers)
+from hht3d.errors import InputError, OutputError  # noqa: E402
 
 BUCKET = "hht"
 MODELS = {"spot.ply": "spot.ply", "sphere.ply": "sphere_oct4098.ply"}
@@ -75,8 +75,14 @@ def local_scans(tmp_path_factory):
 def remote_run(store, cluster):
     """The dataset of the two scans and the corrupt object, from s3:// to s3:// on the cluster."""
     _, options, _ = store
-    rows = run_dataset([f"s3://{BUCKET}/scans/*.ply", f"s3://{BUCKET}/mixed/bad.ply"], f"s3://{BUCKET}/out",
-                       address=cluster[0], storage_options=options, progress=False, emd=EMD)
+    rows = run_dataset(
+        [f"s3://{BUCKET}/scans/*.ply", f"s3://{BUCKET}/mixed/bad.ply"],
+        f"s3://{BUCKET}/out",
+        address=cluster[0],
+        storage_options=options,
+        progress=False,
+        emd=EMD,
+    )
     return {Path(r.source).name: r for r in rows}
 
 
@@ -102,27 +108,41 @@ def assert_same_outputs(remote: bytes, local: bytes, suffix: str) -> None:
         np.testing.assert_allclose(a[key], b[key], rtol=0, atol=1e-12 * scale, err_msg=key)
 
 
-def test_dataset_from_s3_to_s3_equals_the_local_run_and_isolates_a_corrupt_object(store, cluster, remote_run,
-                                                                                 local_scans, tmp_path):
+def test_dataset_from_s3_to_s3_equals_the_local_run_and_isolates_a_corrupt_object(
+    store, cluster, remote_run, local_scans, tmp_path
+):
     _, _, fs = store
     assert {k: r.status for k, r in remote_run.items()} == {"spot.ply": "ok", "sphere.ply": "ok", "bad.ply": "failed"}
     bad = remote_run["bad.ply"]
     assert bad.step == "load" and "s3://hht/mixed/bad.ply" in bad.error and bad.outputs == ()
-    local = {Path(r.source).name: r for r in run_dataset(local_scans, tmp_path, scheduler="synchronous",
-                                                             progress=False, emd=EMD)}
+    local = {
+        Path(r.source).name: r
+        for r in run_dataset(local_scans, tmp_path, scheduler="synchronous", progress=False, emd=EMD)
+    }
     fs.invalidate_cache()
     written = sorted(Path(p).name for p in fs.ls(f"{BUCKET}/out"))
-    assert written == [".hht3d-manifest.json", "sphere_hht.npz", "sphere_hht.ply", "spot_hht.npz", "spot_hht.ply",
-                       "summary.csv", "summary.json"]
+    assert written == [
+        ".hht3d-manifest.json",
+        "sphere_hht.npz",
+        "sphere_hht.ply",
+        "spot_hht.npz",
+        "spot_hht.ply",
+        "summary.csv",
+        "summary.json",
+    ]
     for key in MODELS:
         assert remote_run[key].vertices == local[key].vertices
         for suffix in (".npz", ".ply"):
             stem = Path(key).stem
-            assert_same_outputs(fs.cat_file(f"{BUCKET}/out/{stem}_hht{suffix}"),
-                                (tmp_path / f"{stem}_hht{suffix}").read_bytes(), suffix)
+            assert_same_outputs(
+                fs.cat_file(f"{BUCKET}/out/{stem}_hht{suffix}"), (tmp_path / f"{stem}_hht{suffix}").read_bytes(), suffix
+            )
     summary = json.loads(fs.cat_file(f"{BUCKET}/out/summary.json"))
-    assert {Path(r["source"]).name: r["status"] for r in summary} == {"spot.ply": "ok", "sphere.ply": "ok",
-                                                                      "bad.ply": "failed"}
+    assert {Path(r["source"]).name: r["status"] for r in summary} == {
+        "spot.ply": "ok",
+        "sphere.ply": "ok",
+        "bad.ply": "failed",
+    }
     assert worker_leftovers(cluster[1]) == [], "the workers' temporary copies must be removed"
 
 
@@ -130,8 +150,15 @@ def test_a_resumed_run_skips_the_outputs_that_exist_remotely(store, cluster, rem
     _, options, fs = store
     fs.invalidate_cache()
     before = {p: fs.info(p)["LastModified"] for p in fs.ls(f"{BUCKET}/out") if p.endswith((".ply", ".npz"))}
-    rows = run_dataset([f"s3://{BUCKET}/scans/*.ply", f"s3://{BUCKET}/mixed/bad.ply"], f"s3://{BUCKET}/out",
-                       address=cluster[0], storage_options=options, progress=False, resume=True, emd=EMD)
+    rows = run_dataset(
+        [f"s3://{BUCKET}/scans/*.ply", f"s3://{BUCKET}/mixed/bad.ply"],
+        f"s3://{BUCKET}/out",
+        address=cluster[0],
+        storage_options=options,
+        progress=False,
+        resume=True,
+        emd=EMD,
+    )
     by_name = {Path(r.source).name: r for r in rows}
     assert [by_name[k].status for k in ("spot.ply", "sphere.ply", "bad.ply")] == ["skipped", "skipped", "failed"]
     assert (by_name["spot.ply"].vertices, by_name["spot.ply"].imfs) == (2930, 2)
@@ -160,15 +187,21 @@ outputs:
 
 def _cli(*args, env=None) -> subprocess.CompletedProcess:
     """``hht3d ARGS`` in a subprocess with this checkout on PYTHONPATH."""
-    return subprocess.run([sys.executable, "-m", "hht3d", *args], capture_output=True, text=True, timeout=TIMEOUT,
-                          env={**os.environ, "PYTHONPATH": str(ROOT), **(env or {})})
+    return subprocess.run(
+        [sys.executable, "-m", "hht3d", *args],
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT,
+        env={**os.environ, "PYTHONPATH": str(ROOT), **(env or {})},
+    )
 
 
 def test_a_yaml_pipeline_from_s3_to_s3_equals_the_local_run(store, cluster, local_scans, tmp_path):
     endpoint, _, fs = store
     remote = tmp_path / "remote.yaml"
-    remote.write_text(PIPELINE.format(endpoint=endpoint, inputs=f"s3://{BUCKET}/scans/",
-                                      folder=f"s3://{BUCKET}/yaml-out"))
+    remote.write_text(
+        PIPELINE.format(endpoint=endpoint, inputs=f"s3://{BUCKET}/scans/", folder=f"s3://{BUCKET}/yaml-out")
+    )
     run = _cli("run", str(remote), "--address", cluster[0], "--quiet")
     assert run.returncode == 0, run.stderr
     assert "s3://hht/scans/spot.ply: ok" in run.stdout
@@ -178,22 +211,29 @@ def test_a_yaml_pipeline_from_s3_to_s3_equals_the_local_run(store, cluster, loca
     for key in MODELS:
         stem = Path(key).stem
         for name in (f"{stem}_hht.npz", f"{stem}_frequency_1.ply"):
-            assert_same_outputs(fs.cat_file(f"{BUCKET}/yaml-out/{name}"), (tmp_path / "out" / name).read_bytes(),
-                                Path(name).suffix)
+            assert_same_outputs(
+                fs.cat_file(f"{BUCKET}/yaml-out/{name}"), (tmp_path / "out" / name).read_bytes(), Path(name).suffix
+            )
     assert json.loads(fs.cat_file(f"{BUCKET}/yaml-out/summary.json"))[0]["status"] == "ok"
 
 
 def test_a_missing_bucket_is_one_line_at_validate_and_before_computing(store, tmp_path):
     endpoint, options, _ = store
     pipeline = tmp_path / "p.yaml"
-    pipeline.write_text(PIPELINE.format(endpoint=endpoint, inputs=f"s3://{BUCKET}/scans/spot.ply",
-                                        folder="s3://no-such-bucket/out"))
+    pipeline.write_text(
+        PIPELINE.format(endpoint=endpoint, inputs=f"s3://{BUCKET}/scans/spot.ply", folder="s3://no-such-bucket/out")
+    )
     check = _cli("validate", str(pipeline))
     assert check.returncode == 1 and check.stdout == ""
     assert check.stderr.count("\n") == 1 and "bucket 'no-such-bucket' does not exist" in check.stderr
     with pytest.raises(OutputError, match="no-such-bucket"):
-        run_dataset(f"s3://{BUCKET}/scans/spot.ply", "s3://no-such-bucket/out", storage_options=options,
-                    scheduler="synchronous", progress=False)
+        run_dataset(
+            f"s3://{BUCKET}/scans/spot.ply",
+            "s3://no-such-bucket/out",
+            storage_options=options,
+            scheduler="synchronous",
+            progress=False,
+        )
 
 
 def test_a_missing_back_end_names_the_pip_command():
@@ -212,20 +252,29 @@ def _importable(module: str) -> bool:
 def test_a_secret_never_appears_in_what_runs_print_or_write(store, cluster, tmp_path, capfd):
     endpoint, options, fs = store
     secret_options = {**options, "key": FAKE_CREDENTIALS["AWS_ACCESS_KEY_ID"], "secret": SECRET}  # a key both know
-    rows = run_dataset([f"s3://{BUCKET}/scans/spot.ply", f"s3://{BUCKET}/mixed/bad.ply"], f"s3://{BUCKET}/secret-out",
-                       address=cluster[0], storage_options=secret_options, progress=True, emd=EMD)
+    rows = run_dataset(
+        [f"s3://{BUCKET}/scans/spot.ply", f"s3://{BUCKET}/mixed/bad.ply"],
+        f"s3://{BUCKET}/secret-out",
+        address=cluster[0],
+        storage_options=secret_options,
+        progress=True,
+        emd=EMD,
+    )
     assert [r.status for r in rows] == ["ok", "failed"]
     signed = f"{endpoint}/{BUCKET}/missing.ply?X-Amz-Credential=id&X-Amz-Signature={SECRET}"
     with pytest.raises(InputError) as raised:
         run_dataset(signed, tmp_path / "signed", scheduler="synchronous", progress=False)
     assert "X-Amz-Signature=***" in str(raised.value)
     pipeline = tmp_path / "p.yaml"
-    pipeline.write_text(PIPELINE.format(endpoint=endpoint, inputs=f"s3://{BUCKET}/mixed/bad.ply",
-                                        folder=f"s3://{BUCKET}/secret-yaml"))
+    pipeline.write_text(
+        PIPELINE.format(endpoint=endpoint, inputs=f"s3://{BUCKET}/mixed/bad.ply", folder=f"s3://{BUCKET}/secret-yaml")
+    )
     env = {"AWS_SECRET_ACCESS_KEY": SECRET}  # credentials from the usual place
-    runs = [_cli("run", str(pipeline), "--address", cluster[0], env=env),
-            _cli("validate", str(pipeline), "--set", f"inputs={signed}", env=env),
-            _cli("validate", str(pipeline), "--set", f"storage_options.secret={SECRET}")]
+    runs = [
+        _cli("run", str(pipeline), "--address", cluster[0], env=env),
+        _cli("validate", str(pipeline), "--set", f"inputs={signed}", env=env),
+        _cli("validate", str(pipeline), "--set", f"storage_options.secret={SECRET}"),
+    ]
     assert [r.returncode for r in runs] == [1, 1, 1]
     assert "credentials do not belong in a pipeline file" in runs[2].stderr
     captured = capfd.readouterr()
@@ -282,15 +331,18 @@ def test_url_inputs_into_a_local_folder_keep_the_local_rules(store, tmp_path):
     spot, out = f"s3://{BUCKET}/scans/spot.ply", tmp_path / "out"
 
     def run(**flags):
-        return run_dataset(spot, out, storage_options=options, scheduler="synchronous", progress=False, emd=EMD,
-                           **flags)
+        return run_dataset(
+            spot, out, storage_options=options, scheduler="synchronous", progress=False, emd=EMD, **flags
+        )
 
     assert [r.status for r in run()] == ["ok"]
     recorded = entries(out)
     assert set(recorded) == {"spot_hht.npz", "spot_hht.ply", "summary.json", "summary.csv"}
     npz = (out / "spot_hht.npz").read_bytes()
     assert (recorded["spot_hht.npz"]["size"], recorded["spot_hht.npz"]["sha256"]) == (
-        len(npz), hashlib.sha256(npz).hexdigest())
+        len(npz),
+        hashlib.sha256(npz).hexdigest(),
+    )
     assert [r.status for r in run(resume=True)] == ["skipped"]
     (out / "spot_hht.ply").write_bytes(b"")  # changed since it was recorded
     with pytest.raises(OutputError, match="hht3d did not write it"):
@@ -308,8 +360,9 @@ def test_a_url_output_folder_resumes_only_what_its_manifest_object_records(store
 
     endpoint, _, fs = store
     pipeline = tmp_path / "p.yaml"
-    pipeline.write_text(PIPELINE.format(endpoint=endpoint, inputs=str(shipped_model_path("spot.ply")),
-                                        folder=f"s3://{BUCKET}/resumed"))
+    pipeline.write_text(
+        PIPELINE.format(endpoint=endpoint, inputs=str(shipped_model_path("spot.ply")), folder=f"s3://{BUCKET}/resumed")
+    )
 
     def run(*flags) -> str:
         assert main(["run", str(pipeline), "--scheduler", "synchronous", "--quiet", *flags]) == 0
@@ -318,7 +371,12 @@ def test_a_url_output_folder_resumes_only_what_its_manifest_object_records(store
     run()
     fs.invalidate_cache()
     assert sorted(Path(p).name for p in fs.ls(f"{BUCKET}/resumed")) == [
-        ".hht3d-manifest.json", "spot_frequency_1.ply", "spot_hht.npz", "summary.csv", "summary.json"]
+        ".hht3d-manifest.json",
+        "spot_frequency_1.ply",
+        "spot_hht.npz",
+        "summary.csv",
+        "summary.json",
+    ]
     files = json.loads(fs.cat_file(f"{BUCKET}/resumed/.hht3d-manifest.json"))["files"]
     for name in ("spot_hht.npz", "spot_frequency_1.ply", "summary.json", "summary.csv"):
         data = fs.cat_file(f"{BUCKET}/resumed/{name}")
@@ -334,10 +392,24 @@ def test_a_url_output_folder_resumes_only_what_its_manifest_object_records(store
 def test_url_output_keys_leaving_the_folder_are_refused(store, tmp_path, capsys):
     endpoint, _, fs = store
     pipeline = tmp_path / "p.yaml"
-    pipeline.write_text(PIPELINE.format(endpoint=endpoint, inputs=str(shipped_model_path("spot.ply")),
-                                        folder=f"s3://{BUCKET}/confined/U05"))
-    assert main(["validate", str(pipeline), "--set", "name=../../victim",
-                 "--set", "outputs.files=[{path: '{name}/{stem}.npz'}]"]) == 1
+    pipeline.write_text(
+        PIPELINE.format(
+            endpoint=endpoint, inputs=str(shipped_model_path("spot.ply")), folder=f"s3://{BUCKET}/confined/U05"
+        )
+    )
+    assert (
+        main(
+            [
+                "validate",
+                str(pipeline),
+                "--set",
+                "name=../../victim",
+                "--set",
+                "outputs.files=[{path: '{name}/{stem}.npz'}]",
+            ]
+        )
+        == 1
+    )
     message = f"s3://{BUCKET}/victim/spot.npz leaves the output folder s3://{BUCKET}/confined/U05"
     assert message in capsys.readouterr().err
     fs.invalidate_cache()
@@ -366,8 +438,10 @@ def test_a_conditional_summary_write_keeps_the_rows_of_a_run_that_came_first(sto
     from hht3d.io.uploads import update_object
 
     if request.node.callspec.params["store"] == "s3rver":
-        pytest.skip("s3rver 3.7 ignores If-Match and If-None-Match: there the last of two runs wins, as on "
-                    "stores without conditional writes (README, Safety)")
+        pytest.skip(
+            "s3rver 3.7 ignores If-Match and If-None-Match: there the last of two runs wins, as on "
+            "stores without conditional writes (README, Safety)"
+        )
 
     _, options, fs = store
     url = f"s3://{BUCKET}/raced/summary.json"

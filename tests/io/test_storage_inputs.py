@@ -4,6 +4,7 @@ results read back from a bucket (hht3d.io.storage, hht3d.results).
 Oracles: an S3 server (moto, on 127.0.0.1) that signs URLs itself (``s3fs.S3FileSystem.sign``),
 the shipped model's vertex count, and tests/helpers/secrets.py for what a message may not hold.
 """
+
 from __future__ import annotations
 
 import fsspec
@@ -41,9 +42,11 @@ def signed():
 
 def _pipeline(tmp_path) -> str:
     path = tmp_path / "p.yaml"
-    path.write_text("version: 1\ninputs: x.ply\nsteps:\n  - {op: signal, params: {kind: mean_curvature}}\n"
-                    f"  - {{op: emd, params: {{max_imfs: 1}}}}\noutputs:\n  folder: {tmp_path / 'out'}\n"
-                    "  files: [{path: '{stem}_emd.npz'}]\n")
+    path.write_text(
+        "version: 1\ninputs: x.ply\nsteps:\n  - {op: signal, params: {kind: mean_curvature}}\n"
+        f"  - {{op: emd, params: {{max_imfs: 1}}}}\noutputs:\n  folder: {tmp_path / 'out'}\n"
+        "  files: [{path: '{stem}_emd.npz'}]\n"
+    )
     return str(path)
 
 
@@ -99,7 +102,7 @@ class _Aliased(MemoryFileSystem):
     def _strip_protocol(cls, path):
         for name in cls.protocol:
             if path.startswith(f"{name}://"):
-                path = "memory://" + path[len(name) + 3:]
+                path = "memory://" + path[len(name) + 3 :]
         return super()._strip_protocol(path)
 
 

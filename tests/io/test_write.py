@@ -1,9 +1,10 @@
 """Writing surfaces and their fields (hht3d.io.write): PLY round trips, colour-mapped PLYs."""
+
 import numpy as np
 
+from helpers.meshes import icosphere
 from hht3d import Surface, load
 from hht3d.io import write_colored_ply, write_ply
-from helpers.meshes import icosphere
 
 
 def test_ply_attributes_round_trip(tmp_path, sphere):

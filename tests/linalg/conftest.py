@@ -1,4 +1,5 @@
 """Fixtures of the solver-backend tests."""
+
 from pathlib import Path
 
 import pytest

@@ -13,6 +13,7 @@ computed from the extreme eigenvalues (ARPACK), and the bound used is
 ``20·κ₂·ε`` (a factor 10 per solver for the dimension-dependent constant,
 which is small in practice for sparse factors).
 """
+
 from __future__ import annotations
 
 import threading
@@ -23,13 +24,12 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from helpers.systems import BACKENDS, SINGLE_FACTOR, relative_error, singular, systems
 from hht3d import linalg
-from hht3d.linalg import backends
 from hht3d.errors import InputError, NumericalError
-
+from hht3d.linalg import backends
 from hht3d.spectral import spectral_bounds
 from hht3d.spectral.shifts import shifted_matrix
-from helpers.systems import BACKENDS, SINGLE_FACTOR, relative_error, singular, systems
 
 
 @pytest.fixture(scope="module")
@@ -130,10 +130,13 @@ class _DenseCholesky:
 def test_a_new_backend_is_one_registry_entry(monkeypatch):
     monkeypatch.setattr(backends, "SOLVER_BACKENDS", dict(backends.SOLVER_BACKENDS))
     monkeypatch.delenv(linalg.BACKEND_VARIABLE, raising=False)
-    linalg.register_backend(linalg.Backend("dense", "scipy", ("scipy.linalg",), "dense Cholesky",
-                                           "never missing", _DenseCholesky), before="superlu")
-    linalg.register_backend(linalg.Backend("absent", "absent", ("hht3d_no_such_module",), "nothing",
-                                           "pip install absent", _DenseCholesky))
+    linalg.register_backend(
+        linalg.Backend("dense", "scipy", ("scipy.linalg",), "dense Cholesky", "never missing", _DenseCholesky),
+        before="superlu",
+    )
+    linalg.register_backend(
+        linalg.Backend("absent", "absent", ("hht3d_no_such_module",), "nothing", "pip install absent", _DenseCholesky)
+    )
     assert list(backends.SOLVER_BACKENDS)[-2:] == ["superlu", "absent"]
     assert "dense" in linalg.available_backends() and "absent" not in linalg.available_backends()
     a = sp.csr_matrix(np.array([[4.0, 1.0], [1.0, 3.0]]))
@@ -150,8 +153,11 @@ def test_a_new_backend_is_one_registry_entry(monkeypatch):
 
     param = OPERATIONS["emd"].param("backend")
     assert param.check("dense", "steps.emd") == "dense" and "dense" in param.describe()
-    emd = next(rule["then"] for rule in pipeline_schema()["$defs"]["step"]["allOf"]
-               if rule["if"]["properties"]["op"]["const"] == "emd")
+    emd = next(
+        rule["then"]
+        for rule in pipeline_schema()["$defs"]["step"]["allOf"]
+        if rule["if"]["properties"]["op"]["const"] == "emd"
+    )
     assert emd["properties"]["params"]["properties"]["backend"]["enum"][-4:] == ["dense", "superlu", "absent", None]
 
 
@@ -197,8 +203,9 @@ def test_a_locked_backend_is_entered_by_one_thread_at_a_time(monkeypatch, lock):
     without may (the first case shows the check sees overlap when nothing prevents it)."""
     monkeypatch.setattr(backends, "SOLVER_BACKENDS", dict(backends.SOLVER_BACKENDS))
     monkeypatch.setattr(_Watched, "library", _Occupancy())
-    linalg.register_backend(linalg.Backend("watched", "scipy", ("scipy.linalg",), "dense Cholesky",
-                                           "never missing", _Watched, lock))
+    linalg.register_backend(
+        linalg.Backend("watched", "scipy", ("scipy.linalg",), "dense Cholesky", "never missing", _Watched, lock)
+    )
     a = sp.csr_matrix(np.array([[4.0, 1.0], [1.0, 3.0]]))
 
     def work():

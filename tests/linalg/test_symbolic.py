@@ -1,4 +1,5 @@
 """Symbolic analyses (hht3d.linalg.symbolic): refactorization on one pattern, a replaced factor, bad input."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -6,11 +7,10 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from hht3d import linalg
-from hht3d.errors import InputError, NumericalError
-
-from hht3d.decomposition import envelope_operator
 from helpers.systems import BACKENDS, SINGLE_FACTOR, relative_error, singular, systems
+from hht3d import linalg
+from hht3d.decomposition import envelope_operator
+from hht3d.errors import InputError, NumericalError
 
 
 @pytest.mark.parametrize("backend", BACKENDS)

@@ -1,9 +1,10 @@
 """Fixtures of the pipeline tests: a bumpy sphere, a point cloud and a folder of two scans, as files."""
+
 import numpy as np
 import pytest
+
 from helpers.meshes import bumpy_sphere, fibonacci_sphere
 from helpers.pipelines import bumpy_file
-
 from hht3d import Surface
 from hht3d.io import write_ply
 

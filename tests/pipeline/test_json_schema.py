@@ -1,4 +1,5 @@
 """The JSON Schema of pipeline files: shipped up to date, accepts every example, refuses what the validator refuses."""
+
 import json
 from pathlib import Path
 
@@ -26,7 +27,8 @@ def validator():
 def test_shipped_schema_is_the_generated_one():
     assert SHIPPED.read_text(encoding="utf-8") == schema_text(), (
         "hht3d/data/pipeline.schema.json is stale: regenerate it with "
-        "python3 -m hht3d schema --output hht3d/data/pipeline.schema.json")
+        "python3 -m hht3d schema --output hht3d/data/pipeline.schema.json"
+    )
 
 
 def test_schema_has_the_validators_keys_and_every_operation():
@@ -47,26 +49,35 @@ def test_every_example_pipeline_is_valid(validator, path):
     assert [e.message for e in validator.iter_errors(json.loads(json.dumps(document)))] == []
 
 
-@pytest.mark.parametrize("change, where", [
-    (lambda d: d["steps"][1].update(op="hhtt"), ["steps", 1, "op"]),
-    (lambda d: d["steps"][1]["params"].update(max_imfs=100), ["steps", 1, "params", "max_imfs"]),
-    (lambda d: d["steps"][1]["params"].update(tol=0), ["steps", 1, "params", "tol"]),
-    (lambda d: d["steps"][1]["params"].update(stopping="never"), ["steps", 1, "params", "stopping"]),
-    (lambda d: d["steps"][1]["params"].update(max_imf=4), ["steps", 1, "params"]),
-    (lambda d: d["steps"].append({"op": "filter_signal", "params": {"gain": {"kind": "band_stop", "low": 1}}}),
-     ["steps", 2, "params", "gain"]),
-    (lambda d: d["outputs"]["files"][0].update(colour="red"), ["outputs", "files", 0]),
-    (lambda d: d.update(version=2), ["version"]),
-])
+@pytest.mark.parametrize(
+    "change, where",
+    [
+        (lambda d: d["steps"][1].update(op="hhtt"), ["steps", 1, "op"]),
+        (lambda d: d["steps"][1]["params"].update(max_imfs=100), ["steps", 1, "params", "max_imfs"]),
+        (lambda d: d["steps"][1]["params"].update(tol=0), ["steps", 1, "params", "tol"]),
+        (lambda d: d["steps"][1]["params"].update(stopping="never"), ["steps", 1, "params", "stopping"]),
+        (lambda d: d["steps"][1]["params"].update(max_imf=4), ["steps", 1, "params"]),
+        (
+            lambda d: d["steps"].append({"op": "filter_signal", "params": {"gain": {"kind": "band_stop", "low": 1}}}),
+            ["steps", 2, "params", "gain"],
+        ),
+        (lambda d: d["outputs"]["files"][0].update(colour="red"), ["outputs", "files", 0]),
+        (lambda d: d.update(version=2), ["version"]),
+    ],
+)
 def test_schema_refuses_what_the_validator_refuses(validator, change, where):
-    document = {"version": 1, "inputs": {"builtin": "spot"},
-                "steps": [{"op": "signal", "params": {"kind": "mean_curvature"}}, {"op": "hht", "params": {}}],
-                "outputs": {"files": [{"path": "{stem}.npz"}]}}
+    document = {
+        "version": 1,
+        "inputs": {"builtin": "spot"},
+        "steps": [{"op": "signal", "params": {"kind": "mean_curvature"}}, {"op": "hht", "params": {}}],
+        "outputs": {"files": [{"path": "{stem}.npz"}]},
+    }
     assert list(validator.iter_errors(document)) == []
     change(document)
     errors = list(validator.iter_errors(document))
     assert errors and any(list(e.absolute_path) == where for e in errors), [
-        (list(e.absolute_path), e.message) for e in errors]
+        (list(e.absolute_path), e.message) for e in errors
+    ]
 
 
 def test_cli_prints_and_writes_the_schema(tmp_path, capsys):

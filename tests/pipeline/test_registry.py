@@ -1,16 +1,17 @@
 """The operations (hht3d.pipeline.registry): a new one is one core function and one entry; every numeric parameter
 has an upper bound."""
+
 import dataclasses
 import textwrap
 
 import numpy as np
 import pytest
 
-from hht3d.io import load
 from hht3d.geometry.signals import mean_curvature
+from hht3d.io import load
 from hht3d.pipeline import OPERATIONS, parse_pipeline, run_pipeline
-from hht3d.records import Record, option
 from hht3d.pipeline.validation import EXECUTION
+from hht3d.records import Record, option
 
 
 def _scaled(surface, signal, *, factor: float = 2.0):
@@ -27,9 +28,18 @@ def test_a_new_operation_is_one_core_function_and_one_entry(monkeypatch, tmp_pat
     from hht3d.pipeline import Operation, Slot
     from hht3d.pipeline.params import record_params
 
-    monkeypatch.setitem(OPERATIONS, "scaled", Operation(
-        "scaled", "the signal times a factor", (Slot("surface", ("surface",)), Slot("signal", ("signal",))),
-        "signal", record_params(_ScaledOptions), func=_scaled))
+    monkeypatch.setitem(
+        OPERATIONS,
+        "scaled",
+        Operation(
+            "scaled",
+            "the signal times a factor",
+            (Slot("surface", ("surface",)), Slot("signal", ("signal",))),
+            "signal",
+            record_params(_ScaledOptions),
+            func=_scaled,
+        ),
+    )
     text = textwrap.dedent(f"""\
         version: 1
         execution: {{scheduler: synchronous, progress: false}}
@@ -45,8 +55,9 @@ def test_a_new_operation_is_one_core_function_and_one_entry(monkeypatch, tmp_pat
     assert plan.step("tripled").params == {"factor": 3.0}
     (row,) = run_pipeline(plan)
     assert row.status == "ok", row.error
-    np.testing.assert_array_equal(np.load(tmp_path / "out" / "tripled.npz")["signal"],
-                                  3.0 * mean_curvature(load(mesh_file)))
+    np.testing.assert_array_equal(
+        np.load(tmp_path / "out" / "tripled.npz")["signal"], 3.0 * mean_curvature(load(mesh_file))
+    )
     with pytest.raises(Exception, match="parameter factor must be a number >= 0"):
         parse_pipeline(text.replace("factor: 3", "factor: -1"))
 

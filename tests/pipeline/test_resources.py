@@ -1,4 +1,5 @@
 """What a pipeline's inputs cost (hht3d.pipeline.resources): announced by validate, refused when it cannot fit."""
+
 import pytest
 
 from hht3d.cli import main

@@ -1,26 +1,26 @@
 """YAML pipelines run (hht3d.pipeline.runner): the examples write their outputs, runtime errors name the step
 and the input file, and the numbers match the graph API."""
+
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers.pipelines import EXAMPLES, GOOD, _fast_overrides, _run, assert_output_fits
 
-from helpers.results import assert_same_hht, hht_arrays_from_ply
 from helpers.folders import dead_writers_part, produced_names
+from helpers.pipelines import EXAMPLES, GOOD, _fast_overrides, _run, assert_output_fits
+from helpers.results import assert_same_hht, hht_arrays_from_ply
 from hht3d import graph
 from hht3d.apps import HighBoost, LowPass, filter_geometry
-from hht3d.transform import hht
-from hht3d.io import load
 from hht3d.geometry.signals import mean_curvature
+from hht3d.io import load
 from hht3d.pipeline import load_pipeline, run_pipeline
+from hht3d.transform import hht
 
 
 # -- the examples ------------------------------------------------------------------------------
 def test_examples_are_there():
-    assert {p.name for p in EXAMPLES} >= {"demo.yaml", "dataset_features.yaml", "filtering.yaml",
-                                          "point_cloud.yaml"}
+    assert {p.name for p in EXAMPLES} >= {"demo.yaml", "dataset_features.yaml", "filtering.yaml", "point_cloud.yaml"}
 
 
 @pytest.mark.slow
@@ -45,8 +45,15 @@ def test_example_runs_and_writes_its_outputs(example, tmp_path, mesh_file, cloud
 def test_point_cloud_example_keeps_points_and_fields(tmp_path, cloud_file):
     out = tmp_path / "out"
     example = next(p for p in EXAMPLES if p.stem == "point_cloud")
-    _run(example, "--set", f"inputs={cloud_file}", "--set", f"outputs.folder={out}",
-         "--set", "steps.hht.params.max_imfs=2")
+    _run(
+        example,
+        "--set",
+        f"inputs={cloud_file}",
+        "--set",
+        f"outputs.folder={out}",
+        "--set",
+        "steps.hht.params.max_imfs=2",
+    )
     result = load(out / "cloud_hht.ply", clean=False)
     assert result.faces is None and result.n_vertices == 300
     assert {"signal", "imf_1", "frequency_1", "residue"} <= set(result.attributes)
@@ -61,9 +68,17 @@ def test_point_cloud_example_keeps_points_and_fields(tmp_path, cloud_file):
 def test_filtering_example_moves_vertices_and_keeps_faces(tmp_path, mesh_file):
     out = tmp_path / "out"
     example = next(p for p in EXAMPLES if p.stem == "filtering")
-    _run(example, "--set", f"inputs={mesh_file}", "--set", f"outputs.folder={out}",
-         "--set", "steps.smooth.params.gain={kind: low_pass, cutoff: 1.0}",  # the bumps are at ~5 rad/unit
-         "--set", "steps.enhance.params.gain={kind: high_boost, cutoff: 3.0, factor: 2.0, width: 1.0}")
+    _run(
+        example,
+        "--set",
+        f"inputs={mesh_file}",
+        "--set",
+        f"outputs.folder={out}",
+        "--set",
+        "steps.smooth.params.gain={kind: low_pass, cutoff: 1.0}",  # the bumps are at ~5 rad/unit
+        "--set",
+        "steps.enhance.params.gain={kind: high_boost, cutoff: 3.0, factor: 2.0, width: 1.0}",
+    )
     original, smooth = load(mesh_file, clean=False), load(out / "bumpy_smooth.ply", clean=False)
     np.testing.assert_array_equal(smooth.faces, original.faces)
     assert np.abs(smooth.vertices - original.vertices).max() > 1e-4
@@ -73,10 +88,13 @@ def test_filtering_example_moves_vertices_and_keeps_faces(tmp_path, mesh_file):
     result = hht(surface, mean_curvature(surface), emd={"max_imfs": 6})
     expected = filter_geometry(result, LowPass(cutoff=1.0))
     np.testing.assert_allclose(smooth.vertices, expected.vertices, rtol=0, atol=1e-9)
-    enhanced = filter_geometry(result, HighBoost(cutoff=3.0, factor=2.0, width=1.0), interior_weight=0.01, boundary_weight=1.0)
+    enhanced = filter_geometry(
+        result, HighBoost(cutoff=3.0, factor=2.0, width=1.0), interior_weight=0.01, boundary_weight=1.0
+    )
     assert np.abs(enhanced.vertices - original.vertices).max() > 1e-4  # the boost acts: not an unchanged copy
-    np.testing.assert_allclose(load(out / "bumpy_enhanced.ply", clean=False).vertices, enhanced.vertices,
-                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(
+        load(out / "bumpy_enhanced.ply", clean=False).vertices, enhanced.vertices, rtol=0, atol=1e-9
+    )
 
 
 # -- same numbers through the CLI, the Python pipeline API and the graph API ------------------------
@@ -93,8 +111,14 @@ def test_cli_pipeline_and_graph_api_give_the_same_numbers(tmp_path, mesh_file):
     (expected,) = graph.compute(lazy, scheduler="synchronous", progress=False)
     assert row.status == "ok" and row.imfs == expected.n_imfs >= 2
     mono = expected.monogenic
-    arrays = {"signal": expected.signal, "imfs": expected.imfs, "residue": expected.residue, "riesz": mono.riesz,
-              "amplitude": mono.amplitude, "frequency": mono.frequency}
+    arrays = {
+        "signal": expected.signal,
+        "imfs": expected.imfs,
+        "residue": expected.residue,
+        "riesz": mono.riesz,
+        "amplitude": mono.amplitude,
+        "frequency": mono.frequency,
+    }
     for folder in ("cli", "api"):
         got = np.load(tmp_path / folder / "x.npz")
         for name, values in arrays.items():

@@ -1,14 +1,15 @@
 """Fixtures of the spectral tests: the shipped model spot, a point cloud, a jittered grid, a cylinder's waves."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 import hht3d
-from hht3d.geometry.surface import Surface
 from helpers.meshes import fibonacci_sphere, grid, open_cylinder
 from helpers.models import shipped_model_path
 from helpers.spectral import LENGTH, RADIUS, WAVENUMBERS
+from hht3d.geometry.surface import Surface
 
 SPOT = shipped_model_path("spot.ply")
 

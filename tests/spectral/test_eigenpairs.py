@@ -3,17 +3,17 @@ SciPy's generalized eigh and ARPACK.
 
 Relative errors are measured in the M-norm ``‖x‖_M = √(xᵀMx)``.
 """
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
 
-from hht3d.spectral import fractional_laplacian, spectral_bounds
+from helpers.spectral import eigen_reference, generalized_eigh, m_error, mixed_signals
 from hht3d.geometry.signals import fluctuation
 from hht3d.geometry.surface import Surface
-from helpers.spectral import eigen_reference, generalized_eigh, m_error, mixed_signals
-
+from hht3d.spectral import fractional_laplacian, spectral_bounds
 
 # -- exactness of the three methods -------------------------------------------------------------
 
@@ -47,8 +47,9 @@ def test_spectral_arpack_equals_truncated_generalized_eigh(jittered_grid):
 # -- spectral bounds ----------------------------------------------------------------------------
 def extreme_eigenvalues(surface):
     """``(λ_1, λ_max)`` of ``L φ = λ M φ`` from SciPy's ARPACK, independent of the bounds code."""
-    lowest = spla.eigsh(surface.stiffness, k=surface.n_components + 1, M=surface.mass, sigma=-1e-6,
-                        which="LM", tol=1e-12)[0]
+    lowest = spla.eigsh(
+        surface.stiffness, k=surface.n_components + 1, M=surface.mass, sigma=-1e-6, which="LM", tol=1e-12
+    )[0]
     highest = spla.eigsh(surface.stiffness, k=1, M=surface.mass, which="LA", tol=1e-10)[0]
     return float(np.sort(lowest)[-1]), float(highest[0])
 

@@ -7,18 +7,18 @@ with the continuum Eq. 23 evaluated from ``scipy.special.lpmv`` and finite
 differences; and the closed-form discrete response of the paper's gradient
 route on a regular grid.
 """
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 from scipy.special import lpmv
 
-from hht3d.errors import InputError
-from hht3d.spectral import FREQUENCY_METHODS, instantaneous_frequency, resolvable_frequency
-from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
-from hht3d.spectral import fractional_laplacian, riesz
-from hht3d.geometry.surface import Surface
 from helpers.meshes import grid, icosphere
+from hht3d.errors import InputError
+from hht3d.geometry.surface import Surface
+from hht3d.spectral import FREQUENCY_METHODS, fractional_laplacian, instantaneous_frequency, resolvable_frequency, riesz
+from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
 
 # A strip [0, 1] x [0, 16h], h = 1/128.  cos(mπx) is a Neumann eigenfunction of the
 # continuum strip and, sampled, of the cotangent Laplacian of the regular grid
@@ -82,7 +82,7 @@ def test_gradient_route_matches_its_discrete_response(regular):
     s, (_, gradient) = regular
     theta = WAVENUMBERS[:, None] * s.vertices[:, 0]
     sigma, c = np.sin(WAVENUMBERS * H) / H, np.cos(WAVENUMBERS * H / 2)
-    expected = (sigma * c)[:, None] / (np.cos(theta) ** 2 + (c ** 2)[:, None] * np.sin(theta) ** 2)
+    expected = (sigma * c)[:, None] / (np.cos(theta) ** 2 + (c**2)[:, None] * np.sin(theta) ** 2)
     inner = away_from_edges(s)
     assert np.allclose(gradient.frequency[:, inner], expected[:, inner], rtol=1e-6)
     medians = np.median(gradient.frequency[:, inner], axis=1) / WAVENUMBERS
@@ -124,14 +124,17 @@ def test_amplitude_modulated_waves(regular):
 
 # -- spherical harmonics against the continuum Eq. 23 ------------------------------------------
 
+
 def harmonic(l: int, m: int, polar, azimuth):
     return lpmv(m, l, np.cos(polar)) * np.cos(m * azimuth)
 
 
 def surface_gradient(func, polar, azimuth, step=1e-4):
     """(∂_θ, ∂_φ / sin θ) by fourth-order central differences (error ~ step⁴ f⁽⁵⁾)."""
+
     def diff(shift):
         return (-func(*shift(2)) + 8 * func(*shift(1)) - 8 * func(*shift(-1)) + func(*shift(-2))) / (12 * step)
+
     d_polar = diff(lambda j: (polar + j * step, azimuth))
     d_azimuth = diff(lambda j: (polar, azimuth + j * step))
     return np.stack([d_polar, d_azimuth / np.sin(polar)], axis=-1)
@@ -154,15 +157,16 @@ def continuum_frequency(l: int, m: int, polar, azimuth):
     f = harmonic(l, m, polar, azimuth)
     r = riesz(polar, azimuth)
     q = np.linalg.norm(r, axis=-1)
-    jac = np.stack([surface_gradient(lambda p, a, c=c: riesz(p, a)[..., c], polar, azimuth, 1e-3)
-                    for c in range(2)], axis=-2)  # [vertex, component, direction]
+    jac = np.stack(
+        [surface_gradient(lambda p, a, c=c: riesz(p, a)[..., c], polar, azimuth, 1e-3) for c in range(2)], axis=-2
+    )  # [vertex, component, direction]
     direction = np.divide(r, q[:, None], out=np.zeros_like(r), where=q[:, None] > 1e-9 * q.max())
     grad_q = np.einsum("vcg,vc->vg", jac, direction)
     zero = ~(q > 1e-9 * q.max())
     grad_q[zero] = np.linalg.svd(jac[zero], compute_uv=False)[:, :1] * [1.0, 0.0]
     grad_f = r / scale
     numerator = np.linalg.norm(f[:, None] * grad_q - q[:, None] * grad_f, axis=-1)
-    return numerator / (f ** 2 + q ** 2)
+    return numerator / (f**2 + q**2)
 
 
 @pytest.fixture(scope="module")
@@ -195,6 +199,7 @@ def test_spherical_harmonics_match_the_continuum_eq23(sphere):
 
 # -- shapes, stacking, the resolution limit -------------------------------------------------
 
+
 def test_signals_at_once_equal_one_at_a_time(monkeypatch):
     rng = np.random.default_rng(1)
     small = Surface(*icosphere(3))
@@ -203,7 +208,7 @@ def test_signals_at_once_equal_one_at_a_time(monkeypatch):
     r -= np.einsum("kvc,vc->kv", r, small.normals)[..., None] * small.normals
     monkeypatch.setenv("OMP_NUM_THREADS", "3")  # one thread per signal, whatever the cores
     together = instantaneous_frequency(small, f, r)
-    alone = np.stack([instantaneous_frequency(small, f[i:i + 1], r[i:i + 1])[0] for i in range(3)])
+    alone = np.stack([instantaneous_frequency(small, f[i : i + 1], r[i : i + 1])[0] for i in range(3)])
     assert np.array_equal(together, alone)
     assert np.all(np.isfinite(together)) and together.min() >= 0
 
@@ -242,14 +247,15 @@ def test_resolvable_frequency_is_the_grid_nyquist_limit(regular):
 
 def test_option_reaches_hht_the_graph_and_the_pipeline():
     from hht3d import graph
-    from hht3d.transform import hht
     from hht3d.pipeline.registry import OPERATIONS
+    from hht3d.transform import hht
 
     s = Surface(*icosphere(3))
     f = np.cos(6 * np.arctan2(s.vertices[:, 1], s.vertices[:, 0])) + s.vertices[:, 2]
     eager = hht(s, f, riesz={"frequency": "gradient"}, emd={"max_imfs": 1})
-    (lazy,) = graph.compute(graph.hht(s, f, riesz={"frequency": "gradient"}, emd={"max_imfs": 1}),
-                            scheduler="synchronous", progress=False)
+    (lazy,) = graph.compute(
+        graph.hht(s, f, riesz={"frequency": "gradient"}, emd={"max_imfs": 1}), scheduler="synchronous", progress=False
+    )
     assert eager.info["riesz"]["frequency"] == lazy.info["riesz"]["frequency"] == "gradient"
     expected = instantaneous_frequency(s, eager.imfs, eager.monogenic.riesz, method="gradient")
     assert np.allclose(eager.monogenic.frequency, expected) and np.allclose(lazy.monogenic.frequency, expected)

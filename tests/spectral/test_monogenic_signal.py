@@ -1,16 +1,17 @@
 """Monogenic signal and Hilbert spectrum against analytic oracles."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from hht3d.errors import InputError
-from hht3d.spectral.frequency import instantaneous_frequency
-from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
-from hht3d.spectral import fractional_laplacian, riesz
-from hht3d.geometry.surface import Surface
 from helpers.meshes import fibonacci_sphere, grid
 from helpers.spectral import LENGTH, RADIUS, WAVENUMBERS
+from hht3d.errors import InputError
+from hht3d.geometry.surface import Surface
+from hht3d.spectral import fractional_laplacian, riesz
+from hht3d.spectral.frequency import instantaneous_frequency
+from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
 
 
 @pytest.mark.parametrize("frequency", ["phase", "gradient"])
@@ -49,8 +50,8 @@ def test_definitions_and_identity(cylinder, cylinder_waves):
     result = monogenic(cylinder, imfs)
     assert result.riesz.shape == (3, cylinder.n_vertices, 3)
     assert np.allclose(result.riesz, riesz(cylinder, imfs), atol=1e-12)
-    q2 = np.sum(result.riesz ** 2, axis=-1)
-    assert np.allclose(result.amplitude ** 2, imfs ** 2 + q2)
+    q2 = np.sum(result.riesz**2, axis=-1)
+    assert np.allclose(result.amplitude**2, imfs**2 + q2)
     assert result.phase.min() >= 0 and result.phase.max() <= np.pi
     assert np.allclose(result.reconstruct() + residue, signal, atol=1e-12 * np.abs(signal).max())
 
@@ -86,7 +87,7 @@ def test_point_cloud():
     z = s.vertices[:, 2]
     result = monogenic(s, z)
     band = np.abs(z) < 0.8
-    expected = np.sqrt(z ** 2 + (1 - z ** 2) / 2)
+    expected = np.sqrt(z**2 + (1 - z**2) / 2)
     assert np.median(np.abs(result.amplitude[0, band] / expected[band] - 1)) < 0.03
 
 
@@ -129,9 +130,12 @@ def test_monogenic_quantities_scale_with_the_signal(scale):
     # fold's orientation is chosen among near-equal directions; everywhere else it is the same number
     same = np.isclose(scaled.frequency, base.frequency, rtol=1e-8, atol=1e-8 * base.frequency.max())
     assert same.mean() > 0.999
-    weight = base.amplitude ** 2 * sphere.mass_diagonal
+    weight = base.amplitude**2 * sphere.mass_diagonal
     np.testing.assert_allclose((weight * scaled.frequency).sum(1), (weight * base.frequency).sum(1), rtol=1e-6)
     from hht3d.spectral import HilbertSpectrum  # its energy proportions stay finite too
 
-    np.testing.assert_allclose(HilbertSpectrum.from_monogenic(sphere, scaled).mean_frequency(),
-                               HilbertSpectrum.from_monogenic(sphere, base).mean_frequency(), rtol=1e-6)
+    np.testing.assert_allclose(
+        HilbertSpectrum.from_monogenic(sphere, scaled).mean_frequency(),
+        HilbertSpectrum.from_monogenic(sphere, base).mean_frequency(),
+        rtol=1e-6,
+    )

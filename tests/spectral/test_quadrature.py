@@ -4,16 +4,24 @@ within the documented one, its shift groups sum to the whole.
 Relative errors are measured in the M-norm ``‖x‖_M = √(xᵀMx)``, the norm
 in which the quadrature tolerance is a proven bound.
 """
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from hht3d.spectral import (combine_quadrature_parts, fractional_laplacian, quadrature_nodes, quadrature_part, quadrature_plan, spectral_bounds)
-from hht3d.geometry.signals import fluctuation
-from hht3d.spectral.shifts import shifted_solve
-from hht3d.errors import InputError
 from helpers.spectral import eigen_reference, m_error, mixed_signals
+from hht3d.errors import InputError
+from hht3d.geometry.signals import fluctuation
+from hht3d.spectral import (
+    combine_quadrature_parts,
+    fractional_laplacian,
+    quadrature_nodes,
+    quadrature_part,
+    quadrature_plan,
+    spectral_bounds,
+)
+from hht3d.spectral.shifts import shifted_solve
 
 
 @pytest.mark.slow
@@ -30,8 +38,11 @@ def test_quadrature_error_is_within_its_documented_tolerance(name, request):
     # dense eigh is slow, it is the dense method, checked against that eigh above.
     surface = request.getfixturevalue(name)
     f = mixed_signals(surface)
-    exact = (eigen_reference(surface, fluctuation(surface, f)) if name == "jittered_grid"
-             else fractional_laplacian(surface, f, method="dense"))
+    exact = (
+        eigen_reference(surface, fluctuation(surface, f))
+        if name == "jittered_grid"
+        else fractional_laplacian(surface, f, method="dense")
+    )
     tolerances = (1e-4, 1e-6, 1e-8, 1e-10) if name == "jittered_grid" else (1e-8,)
     for tol in tolerances:
         error = m_error(surface, fractional_laplacian(surface, f, tol=tol), exact)
@@ -40,6 +51,7 @@ def test_quadrature_error_is_within_its_documented_tolerance(name, request):
 
 
 # -- quadrature internals -------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("kappa", [1e2, 1e6, 1e9])
 @pytest.mark.parametrize("tol", [1e-4, 1e-8, 1e-12])
@@ -52,7 +64,7 @@ def test_quadrature_nodes_reach_tolerance(kappa, tol):
     approx = (weights / (lam[:, None] + sigmas)).sum(1)
     assert np.max(np.abs(approx * np.sqrt(lam) - 1)) <= tol
     # about (ln κ + 3..7) ln(4/tol) / (2π²) shifts
-    assert len(sigmas) <= np.ceil((np.log(kappa) + 6) * np.log(4 / tol) / (2 * np.pi ** 2))
+    assert len(sigmas) <= np.ceil((np.log(kappa) + 6) * np.log(4 / tol) / (2 * np.pi**2))
 
 
 def test_shift_groups_sum_to_the_whole(jittered_grid):

@@ -1,15 +1,16 @@
 """The Hilbert spectrum's resolution limit and its report of unresolved frequencies."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from helpers.meshes import grid
 from hht3d.errors import InputError
+from hht3d.geometry.surface import Surface
 from hht3d.spectral import resolution_report, resolvable_frequency
 from hht3d.spectral.monogenic_signal import MonogenicSignal, monogenic
 from hht3d.spectral.spectrum import HilbertSpectrum
-from hht3d.geometry.surface import Surface
-from helpers.meshes import grid
 
 
 def test_default_limit_comes_from_the_vertex_areas():
@@ -27,7 +28,7 @@ def test_resolution_report_weights_pairs_by_energy_and_area():
     frequency = np.array([[1.0, 1.5, 1.5], [4.0, 1.0, 0.1]])  # above: (0,2) 1.5 > π/3 and (1,0) 4 > π
     amplitude = np.array([[1.0, 1.0, 2.0], [3.0, 1.0, 1.0]])
     report = HilbertSpectrum(frequency, amplitude, area).resolution
-    energy = amplitude ** 2 * area  # [[1, 4, 36], [9, 4, 9]]
+    energy = amplitude**2 * area  # [[1, 4, 36], [9, 4, 9]]
     assert report.pairs == 2 and report.fraction == pytest.approx(2 / 6)
     assert np.allclose(report.per_signal, [1 / 3, 1 / 3])
     assert report.energy_share == pytest.approx((36 + 9) / energy.sum())
@@ -56,7 +57,7 @@ def test_one_energy_share_above_the_limit_on_spot():
     spot = load(data_path("spot.ply"))
     result = hht(spot, mean_curvature(spot), emd={"max_imfs": 3})
     mono = result.monogenic
-    energy = mono.amplitude ** 2 * spot.mass_diagonal
+    energy = mono.amplitude**2 * spot.mass_diagonal
     expected = energy[mono.frequency > np.pi / np.sqrt(spot.mass_diagonal)].sum() / energy.sum()
     assert expected > 0  # spot's finest IMF has unresolved vertices, so the share is not trivially 0
     assert mono.resolution.energy_share == pytest.approx(expected, rel=1e-12)

@@ -3,6 +3,7 @@
 Relative errors are measured in the M-norm ``‖x‖_M = √(xᵀMx)``, the norm
 in which the quadrature tolerance is a proven bound.
 """
+
 from __future__ import annotations
 
 import sys
@@ -12,13 +13,13 @@ import pytest
 import scipy.sparse.linalg as spla
 from scipy.special import sph_harm_y
 
-from hht3d import linalg
-from hht3d.spectral import fractional_laplacian, riesz
-from hht3d.geometry.signals import fluctuation
-from hht3d.errors import InputError
-from hht3d.geometry.surface import Surface
 from helpers.meshes import grid, icosphere
 from helpers.spectral import m_error, mixed_signals
+from hht3d import linalg
+from hht3d.errors import InputError
+from hht3d.geometry.signals import fluctuation
+from hht3d.geometry.surface import Surface
+from hht3d.spectral import fractional_laplacian, riesz
 
 
 def test_dense_and_spectral_other_powers(jittered_grid):
@@ -35,6 +36,7 @@ def test_dense_and_spectral_other_powers(jittered_grid):
 
 
 # -- analytic oracles -----------------------------------------------------------------------------
+
 
 def real_harmonic_mix(l, polar, azimuth, rng):
     """Random combination of the 2l+1 real spherical harmonics of degree l."""
@@ -78,10 +80,11 @@ def test_riesz_of_sphere_harmonic_is_its_scaled_gradient():
     for kind in ("lsq", "fem"):
         r = riesz(s, z, gradient=kind)
         assert r.shape == (s.n_vertices, 3)
-        assert np.sqrt(np.sum((r - exact) ** 2) / np.sum(exact ** 2)) < 0.01
+        assert np.sqrt(np.sum((r - exact) ** 2) / np.sum(exact**2)) < 0.01
 
 
 # -- Riesz isometry --------------------------------------------------------------------------------
+
 
 def test_isometry_face_gradient_is_exact():
     # Σ_t A_t |∇u|² = uᵀLu (cotan L) and uᵀLu = f̃ᵀMf̃ for u = L^{-1/2}f̃; the quadrature
@@ -90,7 +93,7 @@ def test_isometry_face_gradient_is_exact():
     f = mixed_signals(s)
     u = fractional_laplacian(s, f)
     grads = (s.face_gradient() @ u.T).reshape(len(s.faces), 3, -1)
-    energy = np.einsum("fik,f->k", grads ** 2, s.face_areas)
+    energy = np.einsum("fik,f->k", grads**2, s.face_areas)
     expected = (fluctuation(s, f) ** 2 * s.mass_diagonal).sum(-1)
     assert np.allclose(energy, expected, rtol=3e-8, atol=0)
 
@@ -103,12 +106,13 @@ def test_isometry_vertex_gradients_on_smooth_signals(kind):
     v = s.vertices
     f = np.stack([np.sin(3 * v[:, 0]) * np.cos(2 * v[:, 1]) + v[:, 2] ** 2, v[:, 0] * v[:, 1]])
     r = riesz(s, f, gradient=kind)
-    energy = (np.sum(r ** 2, axis=-1) * s.mass_diagonal).sum(-1)
+    energy = (np.sum(r**2, axis=-1) * s.mass_diagonal).sum(-1)
     expected = (fluctuation(s, f) ** 2 * s.mass_diagonal).sum(-1)
     assert np.allclose(energy, expected, rtol=0.02)
 
 
 # -- kernel ------------------------------------------------------------------------------------------
+
 
 def test_kernel_is_projected_per_component():
     v, f = icosphere(2)
@@ -152,6 +156,7 @@ def test_backends_agree(jittered_grid, backend):
 
 
 # -- errors ---------------------------------------------------------------------------------------
+
 
 def test_bad_inputs(jittered_grid, monkeypatch):
     s = jittered_grid

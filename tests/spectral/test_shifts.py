@@ -1,11 +1,12 @@
 """The shifted systems ``L + σM`` (hht3d.spectral.shifts): one pattern for every shift."""
+
 from __future__ import annotations
 
 import numpy as np
 
-from hht3d.spectral.shifts import shifted_matrix
-from hht3d.geometry.surface import Surface
 from helpers.meshes import fibonacci_sphere
+from hht3d.geometry.surface import Surface
+from hht3d.spectral.shifts import shifted_matrix
 
 
 def test_pattern_has_explicit_diagonal():

@@ -1,16 +1,17 @@
 """The Hilbert spectrum (hht3d.spectral.spectrum) of a cylinder's waves against analytic oracles."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from helpers.spectral import RADIUS, WAVENUMBERS
 from hht3d.errors import InputError
 from hht3d.spectral.monogenic_signal import monogenic
 from hht3d.spectral.spectrum import HilbertSpectrum
-from helpers.spectral import RADIUS, WAVENUMBERS
-
 
 # -- Hilbert spectrum -----------------------------------------------------------------------------
+
 
 @pytest.fixture(scope="module")
 def cylinder_spectrum(cylinder, cylinder_waves):

@@ -1,13 +1,14 @@
 """Fixtures of the rendering and viewer tests: a small sphere, the HHT of the demo model and its page."""
+
 from __future__ import annotations
 
 import pytest
 
 import hht3d
-from hht3d.geometry import signals
-from hht3d.cli import demo_model_path
-from hht3d.geometry.surface import Surface
 from helpers.meshes import icosphere
+from hht3d.cli import demo_model_path
+from hht3d.geometry import signals
+from hht3d.geometry.surface import Surface
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,5 @@
 """Figures of HHT results: the Fig. 4 composite, Hilbert spectrum plots and the standard set."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -8,18 +9,18 @@ import numpy as np
 import pytest
 
 from helpers.images import assert_red_blue_swapped
-from hht3d.viz import figures
-from hht3d.errors import InputError
-from hht3d.transform import HHTResult, hht
-from hht3d.geometry.surface import Surface
 from helpers.meshes import fibonacci_sphere, icosphere
+from hht3d.errors import InputError
+from hht3d.geometry.surface import Surface
+from hht3d.transform import HHTResult, hht
+from hht3d.viz import figures
 
 
 def two_scale_signal(vertices):
     """Two oscillations around the equator (8 and 3 waves) and a trend: two IMFs and a residue."""
     x, y, z = vertices.T
     azimuth = np.arctan2(y, x)
-    return np.cos(8 * azimuth) * (1 - z ** 2) + 0.8 * np.cos(3 * azimuth + 0.5) * (1 - z ** 2) ** 1.5 + 0.5 * z
+    return np.cos(8 * azimuth) * (1 - z**2) + 0.8 * np.cos(3 * azimuth + 0.5) * (1 - z**2) ** 1.5 + 0.5 * z
 
 
 @pytest.fixture(scope="module")
@@ -44,8 +45,14 @@ def pixels(path):
 
 def test_standard_set_is_written_at_the_requested_sizes(result, tmp_path):
     pyplot_loaded = "matplotlib.pyplot" in sys.modules
-    paths = figures.write_figures(result, tmp_path / "figs", hht_size=(900, 520), spectrum_size=(700, 300),
-                                  field_size=(400, 360), signal_name="test signal")
+    paths = figures.write_figures(
+        result,
+        tmp_path / "figs",
+        hht_size=(900, 520),
+        spectrum_size=(700, 300),
+        field_size=(400, 360),
+        signal_name="test signal",
+    )
     assert set(paths) == {"hht", "spectrum", "signal"}
     assert paths["hht"].name == "sphere_hht.png"
     sizes = {"hht": (520, 900), "spectrum": (300, 700), "signal": (360, 400)}
@@ -79,8 +86,9 @@ def negated(result: HHTResult) -> HHTResult:
     the phase φ becomes π − φ, the amplitude and frequency stay."""
     mono = result.monogenic
     flipped = dataclasses.replace(mono, imfs=-mono.imfs, riesz=-mono.riesz, phase=np.pi - mono.phase)
-    return dataclasses.replace(result, signal=-result.signal, imfs=-result.imfs, residue=-result.residue,
-                               monogenic=flipped)
+    return dataclasses.replace(
+        result, signal=-result.signal, imfs=-result.imfs, residue=-result.residue, monogenic=flipped
+    )
 
 
 def test_composite_panels_show_their_own_fields(result):
@@ -125,8 +133,9 @@ def test_point_cloud_result(cloud_result, tmp_path):
     # the signal figure shows the signal on the points: rendered again for −f with the same title
     # (the signed signal gets symmetric limits, so the colour bar is the same), only the splats
     # change, and red and blue swap there
-    other = render_png(tmp_path / "negated.png", cloud_result.surface, -cloud_result.signal, size=(400, 360),
-                       title="cloud: signal")
+    other = render_png(
+        tmp_path / "negated.png", cloud_result.surface, -cloud_result.signal, size=(400, 360), title="cloud: signal"
+    )
     changed = assert_red_blue_swapped(pixels(paths["signal"]), pixels(other))
     assert 0.1 < changed.mean() < 0.7
 
@@ -142,15 +151,18 @@ def test_spectrum_shares(result):
     assert figures.spectrum_figure(result, scale="log").axes[0].get_xscale() == "log"
 
 
-@pytest.mark.parametrize(("call", "message"), [
-    (lambda r: figures.hht_figure("not a result"), "HHTResult"),
-    (lambda r: figures.hht_figure(r, size=(50, 50)), "larger"),
-    (lambda r: figures.hht_figure(r, view="under"), "unknown view"),
-    (lambda r: figures.hht_figure(r, dpi=0), "dpi"),
-    (lambda r: figures.spectrum_figure(r, scale="mel"), "scale"),
-    (lambda r: figures.spectrum_figure(r, bins=0), "bins"),
-    (lambda r: figures.spectrum_figure(r, size=(10, -1)), "size"),
-])
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda r: figures.hht_figure("not a result"), "HHTResult"),
+        (lambda r: figures.hht_figure(r, size=(50, 50)), "larger"),
+        (lambda r: figures.hht_figure(r, view="under"), "unknown view"),
+        (lambda r: figures.hht_figure(r, dpi=0), "dpi"),
+        (lambda r: figures.spectrum_figure(r, scale="mel"), "scale"),
+        (lambda r: figures.spectrum_figure(r, bins=0), "bins"),
+        (lambda r: figures.spectrum_figure(r, size=(10, -1)), "size"),
+    ],
+)
 def test_bad_parameters_raise_input_error(result, call, message):
     with pytest.raises(InputError, match=message):
         call(result)

@@ -1,4 +1,5 @@
 """The page (hht3d.viz.page): self-contained, no external script or style."""
+
 from __future__ import annotations
 
 import re

@@ -1,12 +1,13 @@
 """What a viewer page's data holds (hht3d.viz.page_data): one geometry for every field, the spectrum and the
 quality figures, each field's colour limits, the spectrum's resolution limit."""
+
 from __future__ import annotations
 
 import base64
 
 import numpy as np
-from helpers.pages import cloud_with_spectrum, decoded, page_data
 
+from helpers.pages import cloud_with_spectrum, decoded, page_data
 from hht3d.viz.viewer import color_limits
 
 
@@ -15,8 +16,9 @@ def test_page_geometry_is_shared_by_all_fields(result, result_page):
     (trace,) = data["figure"]["data"]
     assert trace["type"] == "mesh3d" and "intensity" not in trace
     np.testing.assert_array_equal(decoded(trace["x"]), result.surface.vertices[:, 0].astype(np.float32))
-    faces = np.column_stack([np.frombuffer(base64.b64decode(trace[c]["bdata"]), dtype=trace[c]["dtype"])
-                             for c in "ijk"])
+    faces = np.column_stack(
+        [np.frombuffer(base64.b64decode(trace[c]["bdata"]), dtype=trace[c]["dtype"]) for c in "ijk"]
+    )
     np.testing.assert_array_equal(faces, result.surface.faces)
 
 

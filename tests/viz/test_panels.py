@@ -1,4 +1,5 @@
 """PNG panels of a field (hht3d.viz.panels): the requested size, no pyplot state, the field's colours."""
+
 from __future__ import annotations
 
 import sys
@@ -13,8 +14,9 @@ def test_render_png_has_the_requested_size(sphere, tmp_path):
     from PIL import Image
 
     pyplot_loaded = "matplotlib.pyplot" in sys.modules
-    path = panels.render_png(tmp_path / "x.png", sphere, sphere.vertices[:, 0], title="x", label="x (m)",
-                        size=(420, 300), dpi=90)
+    path = panels.render_png(
+        tmp_path / "x.png", sphere, sphere.vertices[:, 0], title="x", label="x (m)", size=(420, 300), dpi=90
+    )
     with Image.open(path) as image:
         assert image.size == (420, 300)
         pixels = np.asarray(image.convert("RGB"), dtype=float)
@@ -24,10 +26,28 @@ def test_render_png_has_the_requested_size(sphere, tmp_path):
     # the PNG shows the field: with −x (same symmetric limits, so the same title and colour bar)
     # only the model's pixels change, red and blue swap there, and red lies right of blue (the
     # front view looks down −z with y up, so x grows to the right)
-    other = panels.render_png(tmp_path / "y.png", sphere, -sphere.vertices[:, 0], title="x", label="x (m)",
-                         size=(420, 300), dpi=90, limits=(-1, 1), cmap="RdBu_r")
-    path = panels.render_png(tmp_path / "x.png", sphere, sphere.vertices[:, 0], title="x", label="x (m)",
-                        size=(420, 300), dpi=90, limits=(-1, 1), cmap="RdBu_r")
+    other = panels.render_png(
+        tmp_path / "y.png",
+        sphere,
+        -sphere.vertices[:, 0],
+        title="x",
+        label="x (m)",
+        size=(420, 300),
+        dpi=90,
+        limits=(-1, 1),
+        cmap="RdBu_r",
+    )
+    path = panels.render_png(
+        tmp_path / "x.png",
+        sphere,
+        sphere.vertices[:, 0],
+        title="x",
+        label="x (m)",
+        size=(420, 300),
+        dpi=90,
+        limits=(-1, 1),
+        cmap="RdBu_r",
+    )
     with Image.open(path) as image, Image.open(other) as flipped:
         a, b = (np.asarray(i.convert("RGB"), dtype=float) for i in (image, flipped))
     changed = assert_red_blue_swapped(a, b)

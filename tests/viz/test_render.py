@@ -1,4 +1,5 @@
 """Headless rendering of per-vertex fields: cameras, colours, z-buffer, point splats, PNGs."""
+
 from __future__ import annotations
 
 import sys
@@ -6,11 +7,11 @@ import sys
 import numpy as np
 import pytest
 
-from hht3d.viz import panels
-from hht3d.viz import render as R
+from helpers.meshes import fibonacci_sphere
 from hht3d.errors import InputError
 from hht3d.geometry.surface import Surface
-from helpers.meshes import fibonacci_sphere
+from hht3d.viz import panels
+from hht3d.viz import render as R
 
 
 @pytest.fixture(scope="module")
@@ -45,13 +46,21 @@ def test_field_colours_follow_x(fixture, request):
     assert image.mask[:, 80].sum() > 0.85 * 120
 
 
-@pytest.mark.parametrize(("view", "up", "axis", "red"), [
-    ("right", "y", 0, 1.0), ("left", "y", 0, 0.0), ("back", "y", 2, 0.0), ("front", "y", 2, 1.0),
-    ("top", "y", 1, 1.0), ("bottom", "y", 1, 0.0), ((90.0, 0.0), "y", 0, 1.0), ("front", "z", 1, 0.0),
-])
+@pytest.mark.parametrize(
+    ("view", "up", "axis", "red"),
+    [
+        ("right", "y", 0, 1.0),
+        ("left", "y", 0, 0.0),
+        ("back", "y", 2, 0.0),
+        ("front", "y", 2, 1.0),
+        ("top", "y", 1, 1.0),
+        ("bottom", "y", 1, 0.0),
+        ((90.0, 0.0), "y", 0, 1.0),
+        ("front", "z", 1, 0.0),
+    ],
+)
 def test_views_see_the_named_side(sphere, view, up, axis, red):
-    image = R.render(sphere, sphere.vertices[:, axis], view=view, up=up, size=(64, 64), cmap="RdBu_r",
-                     symmetric=True)
+    image = R.render(sphere, sphere.vertices[:, axis], view=view, up=up, size=(64, 64), cmap="RdBu_r", symmetric=True)
     assert abs(red_over_blue(image, np.ones((64, 64), bool)) - red) < 0.05
 
 
@@ -105,20 +114,23 @@ def test_color_scale_robust_and_symmetric():
     assert R.color_scale(values, limits=(0, 2), cmap="magma") == R.ColorScale("magma", 0.0, 2.0)
 
 
-@pytest.mark.parametrize(("call", "message"), [
-    (lambda s: R.render(s, view="sideways"), "unknown view"),
-    (lambda s: R.render(s, view=(1.0,)), "azimuth"),
-    (lambda s: R.render(s, up="w"), "up axis"),
-    (lambda s: R.render(s, up=(0, 0, 0)), "up must be"),
-    (lambda s: R.render(s, s.vertices[:, 0], cmap="nope"), "colour map"),
-    (lambda s: R.render(s, s.vertices[:, 0], limits=(1, 0)), "limits"),
-    (lambda s: R.render(s, np.zeros(3)), "one value per vertex"),
-    (lambda s: R.render(s, size=(0, 10)), "size"),
-    (lambda s: R.render(s, size=(10.5, 10)), "size"),
-    (lambda s: R.render(s, backend="povray"), "unknown render backend"),
-    (lambda s: R.render(s, supersample=9), "supersample"),
-    (lambda s: panels.render_png("x.jpg", s), "PNG"),
-])
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda s: R.render(s, view="sideways"), "unknown view"),
+        (lambda s: R.render(s, view=(1.0,)), "azimuth"),
+        (lambda s: R.render(s, up="w"), "up axis"),
+        (lambda s: R.render(s, up=(0, 0, 0)), "up must be"),
+        (lambda s: R.render(s, s.vertices[:, 0], cmap="nope"), "colour map"),
+        (lambda s: R.render(s, s.vertices[:, 0], limits=(1, 0)), "limits"),
+        (lambda s: R.render(s, np.zeros(3)), "one value per vertex"),
+        (lambda s: R.render(s, size=(0, 10)), "size"),
+        (lambda s: R.render(s, size=(10.5, 10)), "size"),
+        (lambda s: R.render(s, backend="povray"), "unknown render backend"),
+        (lambda s: R.render(s, supersample=9), "supersample"),
+        (lambda s: panels.render_png("x.jpg", s), "PNG"),
+    ],
+)
 def test_bad_parameters_raise_input_error(sphere, call, message):
     with pytest.raises(InputError, match=message):
         call(sphere)

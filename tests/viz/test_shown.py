@@ -1,19 +1,20 @@
 """What a page draws of a surface (hht3d.viz.shown): colour limits at the stated percentiles, decimated meshes
 and subsampled point clouds that carry their fields."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers.pages import decoded, field_values, page_data
-from helpers.meshes import fibonacci_sphere, icosphere
 
+from helpers.meshes import fibonacci_sphere, icosphere
+from helpers.pages import decoded, field_values, page_data
 from hht3d import Surface
 from hht3d.viz.viewer import PERCENTILES, color_limits, shown_copy, write_page
 
 
 def test_color_limits_are_the_stated_percentiles():
     values = np.random.default_rng(1).standard_normal(5000) * 3 + 0.5
-    values[:5] = [1e6, -1e6, 1e5, np.nan, np.inf]   # outliers and non-finite values do not move them
+    values[:5] = [1e6, -1e6, 1e5, np.nan, np.inf]  # outliers and non-finite values do not move them
     finite = values[np.isfinite(values)]
     low, high = np.percentile(finite, PERCENTILES)
     limits = color_limits(values)
@@ -30,7 +31,7 @@ def test_color_limits_are_the_stated_percentiles():
 @pytest.mark.slow
 @pytest.mark.parametrize("budget", [2000, 3000])  # 10,242 > 4 x 2000: clustered first; < 4 x 3000: not
 def test_decimation_transfers_fields_to_the_nearest_vertex(tmp_path, budget):
-    v, f = icosphere(5)            # 10,242 vertices
+    v, f = icosphere(5)  # 10,242 vertices
     surface = Surface(v, f, name="sphere")
     field = np.sin(3 * v[:, 0]) + v[:, 1] * v[:, 2]
     shown = shown_copy(surface, budget)

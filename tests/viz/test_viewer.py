@@ -3,6 +3,7 @@
 The browser tests drive Debian's chromium (installed by ``bash .ci/setup``) through Playwright; they
 skip only where chromium is not installed and this is not CI.
 """
+
 from __future__ import annotations
 
 import io
@@ -13,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers.pages import cloud_with_spectrum, field_values, page_data
-from helpers.meshes import icosphere
 
 import hht3d
+from helpers.meshes import icosphere
+from helpers.pages import cloud_with_spectrum, field_values, page_data
 from hht3d import Surface
 from hht3d.apps import filter_geometry
 from hht3d.apps.filters import LowPass
@@ -24,8 +25,15 @@ from hht3d.cli import main
 from hht3d.errors import InputError
 from hht3d.viz.viewer import SHAPE, file_html, read_fields, surfaces_html, write_page
 
-CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+CHROMIUM_ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 
 
 # -- fixtures ------------------------------------------------------------------------------------
@@ -50,8 +58,9 @@ class Opened:
     def __init__(self, browser, path):
         self.page = browser.new_page(viewport={"width": 1280, "height": 760})
         self.errors, self.requests = [], []
-        self.page.on("console", lambda m: self.errors.append(f"console {m.type}: {m.text}")
-                     if m.type == "error" else None)
+        self.page.on(
+            "console", lambda m: self.errors.append(f"console {m.type}: {m.text}") if m.type == "error" else None
+        )
         self.page.on("pageerror", lambda e: self.errors.append(f"page error: {e}"))
         self.page.on("request", lambda r: self.requests.append(r.url))
         self.page.goto(path.as_uri())
@@ -175,7 +184,7 @@ def test_page_renders_offline_without_errors_and_switches_fields(browser, opened
     assert np.any(np.abs(page.picture() - second) > 24, axis=2).mean() > 0.02
     assert "p1 to p99" in page.page.text_content("#hht3d-limits")
     assert page.errors == []
-    assert page.requests == [page.url]   # nothing fetched: plotly.js and the data are in the file
+    assert page.requests == [page.url]  # nothing fetched: plotly.js and the data are in the file
 
 
 def test_page_shows_hover_values_and_the_spectrum(browser, opened, result_page):
@@ -213,7 +222,7 @@ def test_point_cloud_page_renders(browser, opened, tmp_path):
     assert "resolution limit" in page.page.text_content("#hht3d-spectrum")
     assert page.page.text_content("#hht3d-title") == "cloud"
     low, high = page.page.evaluate("document.getElementById('hht3d-spectrum').layout.xaxis.range")
-    assert 0 < low < np.log10(12.0) < high < 2   # the log axis spans the spectrum, not the marker's log10
+    assert 0 < low < np.log10(12.0) < high < 2  # the log axis spans the spectrum, not the marker's log10
     assert page.errors == []
 
 

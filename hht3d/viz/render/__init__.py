@@ -36,6 +36,7 @@ Modules: :mod:`~hht3d.viz.render.view` (the camera), :mod:`~hht3d.viz.render.col
 :mod:`~hht3d.viz.render.software` (the z-buffer), :mod:`~hht3d.viz.render.offscreen`
 (Open3D) and :mod:`~hht3d.viz.render.backends` (choosing one).
 """
+
 from .backends import RENDERERS, available_backends, render, renderer
 from .colors import PERCENTILES, SEQUENTIAL_CMAP, SYMMETRIC_CMAP, ColorScale, color_scale
 from .image import Rendering
@@ -43,5 +44,19 @@ from .offscreen import Open3DRenderer
 from .software import SoftwareRenderer
 from .view import UP_AXES, VIEWS, Camera, camera, model_aspect
 
-__all__ = ["RENDERERS", "UP_AXES", "VIEWS", "Camera", "ColorScale", "Rendering", "SoftwareRenderer",
-           "Open3DRenderer", "available_backends", "camera", "color_scale", "model_aspect", "render", "renderer"]
+__all__ = [
+    "RENDERERS",
+    "UP_AXES",
+    "VIEWS",
+    "Camera",
+    "ColorScale",
+    "Rendering",
+    "SoftwareRenderer",
+    "Open3DRenderer",
+    "available_backends",
+    "camera",
+    "color_scale",
+    "model_aspect",
+    "render",
+    "renderer",
+]

@@ -1,4 +1,5 @@
 """Choosing a renderer, and rendering a field in one call."""
+
 from __future__ import annotations
 
 from ...errors import InputError
@@ -21,8 +22,16 @@ def available_backends() -> list[str]:
     return ["software"] + (["open3d"] if not open3d_problem() else [])
 
 
-def renderer(surface: Surface, *, view="front", up="y", size=(800, 800), backend: str = "auto",
-             supersample: int = 2, point_size: float | None = None):
+def renderer(
+    surface: Surface,
+    *,
+    view="front",
+    up="y",
+    size=(800, 800),
+    backend: str = "auto",
+    supersample: int = 2,
+    point_size: float | None = None,
+):
     """A renderer of ``surface`` from one view; call ``.render(values, scale)`` per field.
 
     Parameters
@@ -55,9 +64,21 @@ def renderer(surface: Surface, *, view="front", up="y", size=(800, 800), backend
     return SoftwareRenderer(surface, cam, size, supersample=supersample, point_size=point_size)
 
 
-def render(surface: Surface, values=None, *, view="front", up="y", size=(800, 800), cmap: str | None = None,
-           limits=None, symmetric: bool | None = None, percentiles=PERCENTILES, backend: str = "auto",
-           supersample: int = 2, point_size: float | None = None) -> Rendering:
+def render(
+    surface: Surface,
+    values=None,
+    *,
+    view="front",
+    up="y",
+    size=(800, 800),
+    cmap: str | None = None,
+    limits=None,
+    symmetric: bool | None = None,
+    percentiles=PERCENTILES,
+    backend: str = "auto",
+    supersample: int = 2,
+    point_size: float | None = None,
+) -> Rendering:
     """Render a per-vertex field (or, with ``values=None``, the shaded model) to an RGBA image.
 
     Parameters
@@ -75,8 +96,12 @@ def render(surface: Surface, values=None, *, view="front", up="y", size=(800, 80
     Rendering
     """
     field = None if values is None else check_field(surface, values)
-    scale = None if field is None else color_scale(field, cmap=cmap, limits=limits, symmetric=symmetric,
-                                                   percentiles=percentiles)
-    drawer = renderer(surface, view=view, up=up, size=size, backend=backend, supersample=supersample,
-                      point_size=point_size)
+    scale = (
+        None
+        if field is None
+        else color_scale(field, cmap=cmap, limits=limits, symmetric=symmetric, percentiles=percentiles)
+    )
+    drawer = renderer(
+        surface, view=view, up=up, size=size, backend=backend, supersample=supersample, point_size=point_size
+    )
     return drawer.render(field, scale)

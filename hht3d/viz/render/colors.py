@@ -1,4 +1,5 @@
 """Colour scales: a colour map with robust, optionally symmetric limits (NaN grey)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -53,8 +54,9 @@ class ColorScale:
         return ScalarMappable(Normalize(self.vmin, self.vmax), self.cmap)
 
 
-def color_scale(values, *, cmap: str | None = None, limits=None, symmetric: bool | None = None,
-                percentiles=PERCENTILES) -> ColorScale:
+def color_scale(
+    values, *, cmap: str | None = None, limits=None, symmetric: bool | None = None, percentiles=PERCENTILES
+) -> ColorScale:
     """Choose colour limits for a field: robust percentiles, symmetric about 0 for signed fields.
 
     Parameters
@@ -103,8 +105,9 @@ def _check_cmap(cmap: str) -> None:
     import matplotlib
 
     if cmap not in matplotlib.colormaps:
-        raise InputError(f"unknown colour map {cmap!r}; use a Matplotlib name such as 'viridis', "
-                         "'magma', 'RdBu_r' or 'coolwarm'")
+        raise InputError(
+            f"unknown colour map {cmap!r}; use a Matplotlib name such as 'viridis', 'magma', 'RdBu_r' or 'coolwarm'"
+        )
 
 
 def _checked_limits(limits) -> tuple[float, float]:

@@ -1,4 +1,5 @@
 """What both renderers share: the image, its size, framing the model, shading and point splats."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -9,12 +10,21 @@ from ...errors import InputError
 from ...geometry.surface import Surface
 from .colors import ColorScale
 
-__all__ = ["Rendering", "Framing", "MAX_SIZE", "MAX_SAMPLES", "MODEL_GREY", "check_size", "check_field",
-           "lambert", "splat_radius"]
+__all__ = [
+    "Rendering",
+    "Framing",
+    "MAX_SIZE",
+    "MAX_SAMPLES",
+    "MODEL_GREY",
+    "check_size",
+    "check_field",
+    "lambert",
+    "splat_radius",
+]
 
 #: Largest image side in pixels, and most (supersampled) pixels the software renderer fills.
 MAX_SIZE = 8192
-MAX_SAMPLES = 2 ** 25
+MAX_SAMPLES = 2**25
 #: The colour of the model without a field.
 MODEL_GREY = np.array([0.78, 0.78, 0.76])
 #: Shading of a face turned away from the light.
@@ -61,8 +71,7 @@ class Framing:
         extent = np.maximum(high - low, 1e-9 * float(np.max(high - low)) + 1e-300)
         self.center = (low + high) / 2
         self.width, self.height = width, height
-        self.pixels_per_unit = float(min(width * (1 - 2 * margin) / extent[0],
-                                         height * (1 - 2 * margin) / extent[1]))
+        self.pixels_per_unit = float(min(width * (1 - 2 * margin) / extent[0], height * (1 - 2 * margin) / extent[1]))
 
     def pixels(self, xy: np.ndarray) -> np.ndarray:
         """Pixel coordinates (column, row from the top), pixel centres at half integers."""
@@ -91,8 +100,10 @@ def check_field(surface: Surface, values) -> np.ndarray:
     except (TypeError, ValueError):
         raise InputError(f"{surface.name}: the field to render is not numeric") from None
     if field.shape != (surface.n_vertices,):
-        raise InputError(f"{surface.name}: the field to render has shape {field.shape}; expected "
-                         f"({surface.n_vertices},), one value per vertex")
+        raise InputError(
+            f"{surface.name}: the field to render has shape {field.shape}; expected "
+            f"({surface.n_vertices},), one value per vertex"
+        )
     return field
 
 

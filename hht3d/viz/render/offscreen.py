@@ -1,4 +1,5 @@
 """The Open3D (Filament) offscreen renderer, and whether it can start here (see :mod:`hht3d.viz.render`)."""
+
 from __future__ import annotations
 
 import contextlib
@@ -55,9 +56,11 @@ class _Offscreen:
 
             problem = open3d_problem()
             if problem:
-                raise InputError(f"the 'open3d' render backend is unavailable here ({problem}); use "
-                                 "backend='software', or install an EGL/Vulkan driver (Debian: "
-                                 "libvulkan1 mesa-vulkan-drivers)")
+                raise InputError(
+                    f"the 'open3d' render backend is unavailable here ({problem}); use "
+                    "backend='software', or install an EGL/Vulkan driver (Debian: "
+                    "libvulkan1 mesa-vulkan-drivers)"
+                )
             cls.renderer, cls.size = None, None  # destroy the old one before making the next
             with _quiet_stdout(), o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):
                 cls.renderer = rendering.OffscreenRenderer(width, height)
@@ -123,8 +126,15 @@ class Open3DRenderer:
         depth_range = max(float(np.ptp(self._depth)), 1e-9)
         cam, (x, y) = self.camera, self._framing.center
         center = x * cam.right + y * cam.up + self._depth.max() * cam.toward
-        offscreen.scene.camera.set_projection(rendering.Camera.Projection.Ortho, -half[0], half[0], -half[1],
-                                              half[1], 0.5 * depth_range, 2.5 * depth_range)
+        offscreen.scene.camera.set_projection(
+            rendering.Camera.Projection.Ortho,
+            -half[0],
+            half[0],
+            -half[1],
+            half[1],
+            0.5 * depth_range,
+            2.5 * depth_range,
+        )
         offscreen.scene.camera.look_at(center, center + depth_range * cam.toward, cam.up)
 
     def render(self, values=None, scale: ColorScale | None = None) -> Rendering:
@@ -154,8 +164,9 @@ class Open3DRenderer:
 
         vectors = o3d.utility.Vector3dVector
         if self.surface.is_mesh:
-            geometry = o3d.geometry.TriangleMesh(vectors(self.surface.vertices),
-                                                 o3d.utility.Vector3iVector(self.surface.faces))
+            geometry = o3d.geometry.TriangleMesh(
+                vectors(self.surface.vertices), o3d.utility.Vector3iVector(self.surface.faces)
+            )
             geometry.vertex_colors = vectors(colors)
         else:
             geometry = o3d.geometry.PointCloud(vectors(self.surface.vertices))

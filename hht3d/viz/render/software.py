@@ -1,4 +1,5 @@
 """The software renderer: a NumPy z-buffer with supersampling (see :mod:`hht3d.viz.render`)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -18,10 +19,10 @@ __all__ = ["SoftwareRenderer"]
 class _Fragments:
     """The visible surface sample of every covered supersampled pixel."""
 
-    pixel: np.ndarray    # (m,) flat index into the (H, W) supersampled image
-    vertex: np.ndarray   # (m, 3) vertices whose values are blended
-    weight: np.ndarray   # (m, 3) blend weights (barycentric; points: 1, 0, 0)
-    shade: np.ndarray    # (m,) Lambert factor
+    pixel: np.ndarray  # (m,) flat index into the (H, W) supersampled image
+    vertex: np.ndarray  # (m, 3) vertices whose values are blended
+    weight: np.ndarray  # (m, 3) blend weights (barycentric; points: 1, 0, 0)
+    shade: np.ndarray  # (m,) Lambert factor
 
 
 class SoftwareRenderer:
@@ -29,16 +30,17 @@ class SoftwareRenderer:
 
     name = "software"
 
-    def __init__(self, surface: Surface, cam: Camera, size, *, supersample: int = 2,
-                 point_size: float | None = None):
+    def __init__(self, surface: Surface, cam: Camera, size, *, supersample: int = 2, point_size: float | None = None):
         self.surface, self.camera = surface, cam
         self.width, self.height = check_size(size)
         if not isinstance(supersample, (int, np.integer)) or not 1 <= supersample <= 4:
             raise InputError(f"supersample must be an integer in [1, 4], got {supersample!r}")
         self.supersample = int(supersample)
-        if self.width * self.height * self.supersample ** 2 > MAX_SAMPLES:
-            raise InputError(f"{self.width}×{self.height} pixels with supersample={self.supersample} need "
-                             f"more than {MAX_SAMPLES:,} samples; lower the size or the supersampling")
+        if self.width * self.height * self.supersample**2 > MAX_SAMPLES:
+            raise InputError(
+                f"{self.width}×{self.height} pixels with supersample={self.supersample} need "
+                f"more than {MAX_SAMPLES:,} samples; lower the size or the supersampling"
+            )
         self.point_size = _check_point_size(point_size)
         self._fragments: _Fragments | None = None
 
@@ -76,8 +78,7 @@ class SoftwareRenderer:
             pixel, vertex, weight = _rasterize_triangles(xy, depth, self.surface.faces, width, height)
         else:
             radius = splat_radius(self.surface, self.point_size, framing.pixels_per_unit, s)
-            pixel, vertex, weight = _rasterize_points(xy, depth * framing.pixels_per_unit, radius,
-                                                      width, height)
+            pixel, vertex, weight = _rasterize_points(xy, depth * framing.pixels_per_unit, radius, width, height)
         normals = np.einsum("mk,mkj->mj", weight, self.surface.normals[vertex])
         length = np.linalg.norm(normals, axis=1, keepdims=True)
         normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
@@ -172,9 +173,9 @@ def _rasterize_points(xy, depth, radius: float, width: int, height: int):
         local, column, row = _expand(low[part], span[part])
         point = points[local + part.start]
         d2 = (column + 0.5 - xy[point, 0]) ** 2 + (row + 0.5 - xy[point, 1]) ** 2
-        keep = (d2 <= radius ** 2) & (column >= 0) & (column < width) & (row >= 0) & (row < height)
+        keep = (d2 <= radius**2) & (column >= 0) & (column < width) & (row >= 0) & (row < height)
         point, column, row = point[keep], column[keep], row[keep]
-        bulge = np.sqrt(radius ** 2 - d2[keep])  # a sphere's front: nearer at the disc centre
+        bulge = np.sqrt(radius**2 - d2[keep])  # a sphere's front: nearer at the disc centre
         buffer.offer(row * width + column, depth[point] + bulge, point, np.zeros((len(point), 2)))
     pixel, point, _ = buffer.covered()
     return pixel, np.repeat(point[:, None], 3, axis=1), np.tile([1.0, 0.0, 0.0], (len(point), 1))

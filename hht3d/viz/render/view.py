@@ -1,4 +1,5 @@
 """The orthographic camera: named views, up axes, projection and the light beside the eye."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -12,8 +13,14 @@ __all__ = ["VIEWS", "UP_AXES", "Camera", "camera", "model_aspect"]
 
 #: Named views as ``(azimuth, elevation)`` in degrees.  Azimuth turns the eye about the up
 #: axis towards the model's right (as seen in the front view); elevation raises it.
-VIEWS = {"front": (0.0, 0.0), "back": (180.0, 0.0), "right": (90.0, 0.0), "left": (-90.0, 0.0),
-         "top": (0.0, 90.0), "bottom": (0.0, -90.0)}
+VIEWS = {
+    "front": (0.0, 0.0),
+    "back": (180.0, 0.0),
+    "right": (90.0, 0.0),
+    "left": (-90.0, 0.0),
+    "top": (0.0, 90.0),
+    "bottom": (0.0, -90.0),
+}
 #: Named up axes.  The front view looks at the model from +z (up ±x or ±y) or from −y (up ±z).
 UP_AXES = ("x", "y", "z", "-x", "-y", "-z")
 
@@ -74,14 +81,16 @@ def camera(view="front", up="y") -> Camera:
 def _view_angles(view) -> tuple[float, float]:
     if isinstance(view, str):
         if view not in VIEWS:
-            raise InputError(f"unknown view {view!r}; choose one of {', '.join(VIEWS)} "
-                             "or give (azimuth, elevation) in degrees")
+            raise InputError(
+                f"unknown view {view!r}; choose one of {', '.join(VIEWS)} or give (azimuth, elevation) in degrees"
+            )
         return VIEWS[view]
     try:
         azimuth, elevation = (float(a) for a in view)
     except (TypeError, ValueError):
-        raise InputError(f"view must be a name ({', '.join(VIEWS)}) or (azimuth, elevation) in degrees, "
-                         f"got {view!r}") from None
+        raise InputError(
+            f"view must be a name ({', '.join(VIEWS)}) or (azimuth, elevation) in degrees, got {view!r}"
+        ) from None
     if not (np.isfinite(azimuth) and np.isfinite(elevation)):
         raise InputError(f"view angles must be finite, got {view!r}")
     return azimuth, elevation
