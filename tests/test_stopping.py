@@ -104,7 +104,10 @@ def test_a_stop_removes_the_temporary_folders_of_downloads(tmp_path, monkeypatch
     from hht3d.io import storage
     from hht3d.stopping import clean_stop
 
+    import threading
+
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    monkeypatch.setattr("hht3d.io.atomic._STOPPING", threading.Event())  # the stop refuses writes: not the suite's
     fsspec.filesystem("memory").pipe_file("/stop/scan.ply", b"ply")
     with storage.local_copy("memory://stop/scan.ply") as local:
         assert local.is_file() and local.parent.name.startswith(f"hht3d-{os.getpid()}-")
