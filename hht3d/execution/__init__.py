@@ -9,7 +9,7 @@
 
 from .cluster import ClusterLost
 from .progress import PROGRESS_INTERVAL, ProgressLines
-from .schedulers import MAX_WORKERS, SCHEDULERS, compute, open_client
+from .schedulers import MAX_WORKERS, SCHEDULERS, ExecutionOptions, compute, open_client
 from .workers import worker_count
 
 __all__ = [
@@ -20,5 +20,6 @@ __all__ = [
     "worker_count",
     "PROGRESS_INTERVAL",
     "ProgressLines",
+    "ExecutionOptions",
     "ClusterLost",
 ]

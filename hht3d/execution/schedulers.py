@@ -22,20 +22,46 @@ import contextlib
 import logging
 import os
 import sys
+from dataclasses import dataclass
 
 import dask
 
+from ..decomposition.options import EnsembleOptions
 from ..errors import InputError, one_line
 from ..logs import get_logger, quieted, showing
+from ..records import Record, option
 from .cluster import gather_bounded
 from .progress import is_terminal, local_progress
 from .workers import check_main_guard, limit_blas_threads, sigint_ignored_by_children
 
-__all__ = ["SCHEDULERS", "MAX_WORKERS", "compute", "open_client"]
+__all__ = ["SCHEDULERS", "MAX_WORKERS", "ExecutionOptions", "compute", "open_client"]
 
 SCHEDULERS = ("synchronous", "threads", "processes", "distributed")
 #: The most workers a run may ask for: threads, processes or local-cluster workers.
 MAX_WORKERS = 256
+
+
+@dataclass(frozen=True)
+class ExecutionOptions(Record):
+    """The ``execution`` block: where and how the graph runs (:func:`compute`),
+    and the default seed of randomised steps.  Its settings are also the checks of the CLI's
+    ``--scheduler`` and ``--workers``."""
+
+    label = "execution"
+
+    scheduler: str = option("threads", "Dask scheduler", choices=SCHEDULERS)
+    workers: int | None = option(
+        None,
+        "threads, processes or cluster workers (default: one per core)",
+        kind="int",
+        minimum=1,
+        maximum=MAX_WORKERS,
+    )
+    address: str | None = option(None, "address of a running dask.distributed scheduler", kind="str")
+    progress: bool = option(True, "progress bar on stderr")
+    seed: int = option(0, "default seed of randomised steps", like=EnsembleOptions.specs()["seed"])
+
+
 _LOG = get_logger("hht3d.execution")
 
 
@@ -106,8 +132,7 @@ def compute(
         scheduler = "distributed"
     if scheduler not in SCHEDULERS:
         raise InputError(f"unknown scheduler {scheduler!r}; choose one of {SCHEDULERS}")
-    if workers is not None and not 1 <= workers <= MAX_WORKERS:
-        raise InputError(f"workers must be in [1, {MAX_WORKERS}], got {workers}")
+    ExecutionOptions.check("workers", workers)
     if scheduler == "processes" or (scheduler == "distributed" and not address and client is None):
         check_main_guard(f"{scheduler} scheduler")
     with showing() if progress else contextlib.nullcontext():

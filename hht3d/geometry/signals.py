@@ -7,12 +7,14 @@ is how the CLI and pipelines refer to them.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import InputError
+from ..records import Record, option
 from . import operators as ops
 from .surface import Surface
 from .validation import check_signal
@@ -37,6 +39,22 @@ __all__ = [
 
 #: A vertex whose lumped area is below this fraction of its neighbours' median area is unreliable.
 MIN_AREA_FRACTION = 0.1
+
+
+@dataclass(frozen=True)
+class CurvatureOptions(Record):
+    """The setting of :func:`mean_curvature` and :func:`gaussian_curvature`."""
+
+    label = "curvature"
+
+    min_area: float = option(
+        MIN_AREA_FRACTION,
+        "vertices with less area than this fraction of the area nearby are pooled",
+        minimum=0,
+        maximum=100,
+    )
+
+
 #: ... and the reference area is at least this fraction of the median vertex area of the surface.
 CLUSTER_AREA_FRACTION = 0.3
 #: A curvature below this many ulps of the terms it is summed from is zero (see ``_round_off``).
@@ -197,16 +215,7 @@ def gaussian_curvature(surface: Surface, *, min_area: float = MIN_AREA_FRACTION)
 
 
 def _fraction(min_area) -> float:
-    if (
-        isinstance(min_area, bool)
-        or not isinstance(min_area, (int, float, np.number))
-        or not np.isfinite(min_area)
-        or not 0 <= min_area <= 100
-    ):
-        raise InputError(
-            f"min_area must be a number in [0, 100] (a fraction of the median vertex area), got {min_area!r}"
-        )
-    return float(min_area)
+    return CurvatureOptions.check("min_area", min_area)
 
 
 def centroid_distance(surface: Surface) -> np.ndarray:

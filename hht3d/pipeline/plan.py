@@ -11,11 +11,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..dataset.summary import summary_paths
-from ..decomposition.options import EnsembleOptions
-from ..execution import MAX_WORKERS, SCHEDULERS
+from ..execution import ExecutionOptions
 from ..io.storage import join, parent_name, stem
 from ..output_formats import Format
-from ..records import Record, option
 from .params import yaml_text
 from .registry import Operation
 
@@ -26,27 +24,6 @@ FILE = "<input file>"
 
 #: Placeholders of output path patterns.
 PLACEHOLDERS = ("stem", "parent", "name")
-
-
-@dataclass(frozen=True)
-class ExecutionOptions(Record):
-    """The ``execution`` block: where and how the graph runs (:func:`hht3d.execution.schedulers.compute`),
-    and the default seed of randomised steps.  Its settings are also the checks of the CLI's
-    ``--scheduler`` and ``--workers``."""
-
-    label = "execution"
-
-    scheduler: str = option("threads", "Dask scheduler", choices=SCHEDULERS)
-    workers: int | None = option(
-        None,
-        "threads, processes or cluster workers (default: one per core)",
-        kind="int",
-        minimum=1,
-        maximum=MAX_WORKERS,
-    )
-    address: str | None = option(None, "address of a running dask.distributed scheduler", kind="str")
-    progress: bool = option(True, "progress bar on stderr")
-    seed: int = option(0, "default seed of randomised steps", like=EnsembleOptions.specs()["seed"])
 
 
 @dataclass(frozen=True)
