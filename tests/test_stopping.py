@@ -99,12 +99,12 @@ def test_signal_stops_the_run_cleanly_and_it_resumes(job, scheduler, signum, to_
 def test_a_stop_removes_the_temporary_folders_of_downloads(tmp_path, monkeypatch):
     """A stop ends with os._exit, so a download's ``with`` block never removes its folder: the stop
     removes every temporary folder of this process (and of its ended workers) itself."""
+    import threading
+
     import fsspec
 
     from hht3d.io import storage
     from hht3d.stopping import clean_stop
-
-    import threading
 
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
     monkeypatch.setattr("hht3d.io.atomic._STOPPING", threading.Event())  # the stop refuses writes: not the suite's
