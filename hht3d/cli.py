@@ -27,6 +27,7 @@ import json
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, Sequence, cast
 
 from .errors import HHT3DError, PipelineError, one_line, shown
 from .execution import SCHEDULERS
@@ -36,6 +37,10 @@ from .redaction import redact
 from .version import __version__
 from .viz.render import UP_AXES, VIEWS
 from .viz.viewer import VERTEX_BUDGET
+
+if TYPE_CHECKING:
+    from hht3d.pipeline.plan import Pipeline
+    from hht3d.pipeline.runner import ItemSummary, OutputFolder  # the runner's own imports
 
 #: The demo model shipped in the package: Keenan Crane's "spot" (CC0).
 DEMO_MODEL = "spot.ply"
@@ -56,7 +61,7 @@ def demo_pipeline_path() -> Path:
     return data_path(DEMO_PIPELINE)
 
 
-def _plan(path, overrides):
+def _plan(path: Path | str, overrides: Sequence[str]) -> Pipeline:
     """The validated pipeline; a ``memory://`` output folder is refused, since its results would
     vanish with this process (from Python, :func:`hht3d.pipeline.run_pipeline` takes one)."""
     from .pipeline import load_pipeline
@@ -70,7 +75,7 @@ def _plan(path, overrides):
     return plan
 
 
-def _row_lines(row) -> list[str]:
+def _row_lines(row: ItemSummary) -> list[str]:
     """How the CLI reports one input: a status line, then its warnings and the files written."""
     size = "".join(
         [
@@ -94,13 +99,13 @@ def _row_lines(row) -> list[str]:
     return lines + [f"  {verb} {path}" for path in row.outputs]
 
 
-def _not_done(plan, folder) -> str:
+def _not_done(plan: Pipeline, folder: OutputFolder) -> str:
     """The inputs whose outputs are not all done in ``folder`` (an OutputFolder), for a message."""
     left = [redact(str(s)) for s in plan.inputs if not folder.done(plan.output_paths(s))]
     return f"{len(left)} of {len(plan.inputs)} inputs not done" + (f" ({shown(left)})" if left else "")
 
 
-def _execute(plan, args) -> int:
+def _execute(plan: Pipeline, args: argparse.Namespace) -> int:
     from .dataset.summary import summary_paths, write_summary
     from .execution import ClusterLost
     from .pipeline import failures, run_pipeline
@@ -128,7 +133,7 @@ def _execute(plan, args) -> int:
             print(redact("\n".join(_row_lines(row))), flush=True)
         slow = [row for row in rows if row.solver_advice]
         if slow:  # once per run, for its largest input
-            _LOG.warning(max(slow, key=lambda row: row.vertices).solver_advice)
+            _LOG.warning(max(slow, key=lambda row: cast(int, row.vertices)).solver_advice)  # set with the advice
         if plan.summary:
             write_summary(rows, plan.folder, folder.run, plan.storage_options)
             print(redact(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}"))
@@ -150,15 +155,15 @@ def _execute(plan, args) -> int:
     return 0
 
 
-def _run(args) -> int:
+def _run(args: argparse.Namespace) -> int:
     return _execute(_plan(args.pipeline, args.set), args)
 
 
-def _demo(args) -> int:
+def _demo(args: argparse.Namespace) -> int:
     return _execute(_plan(demo_pipeline_path(), [f"outputs.folder={json.dumps(args.out)}", *args.set]), args)
 
 
-def _validate(args) -> int:
+def _validate(args: argparse.Namespace) -> int:
     from .errors import OutputError
     from .pipeline.resources import check_resources, resource_lines
     from .pipeline.runner import output_folder
@@ -176,7 +181,7 @@ def _validate(args) -> int:
     return 0
 
 
-def _ops(args) -> int:
+def _ops(args: argparse.Namespace) -> int:
     from .output_formats import FORMATS
     from .pipeline import OPERATIONS
     from .pipeline.params import did_you_mean, record_params, yaml_text
@@ -212,7 +217,7 @@ def _backends(vertices: int) -> None:
     print("\n".join(estimate_lines(vertices)))
 
 
-def _info(args) -> int:
+def _info(args: argparse.Namespace) -> int:
     from .geometry.topology import describe
     from .io import load
 
@@ -231,7 +236,7 @@ def _info(args) -> int:
     return 0
 
 
-def _view(args) -> int:
+def _view(args: argparse.Namespace) -> int:
     from .io.storage import is_url, local_copy, stem
     from .io.uploads import write_via
     from .viz.viewer import file_html
@@ -245,7 +250,7 @@ def _view(args) -> int:
     return 0
 
 
-def _schema(args) -> int:
+def _schema(args: argparse.Namespace) -> int:
     from .io.atomic import atomic_path
     from .pipeline.json_schema import schema_text
 
@@ -366,14 +371,14 @@ def build_parser() -> argparse.ArgumentParser:
 class _Subcommands:
     """The subparsers, each made with the logging options."""
 
-    def __init__(self, subparsers, common: argparse.ArgumentParser):
+    def __init__(self, subparsers: Any, common: argparse.ArgumentParser) -> None:
         self._subparsers, self._common = subparsers, common
 
-    def add_parser(self, name: str, **kwargs) -> argparse.ArgumentParser:
+    def add_parser(self, name: str, **kwargs: Any) -> argparse.ArgumentParser:
         return self._subparsers.add_parser(name, parents=[self._common], **kwargs)
 
 
-def main(argv=None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command == "info" and args.file is None and not args.backends:

@@ -11,6 +11,8 @@ is shown.
 
 import difflib
 import reprlib
+from collections.abc import Collection
+from typing import Any
 
 from .redaction import redact
 
@@ -68,7 +70,7 @@ def _short_repr() -> reprlib.Repr:
 _REPR = _short_repr()
 
 
-def shown(value, limit: int = MAX_SHOWN) -> str:
+def shown(value: Any, limit: int = MAX_SHOWN) -> str:
     """``repr(value)`` for a message, cut to about ``limit`` characters.
 
     Nested containers are abbreviated while they are formatted
@@ -80,13 +82,13 @@ def shown(value, limit: int = MAX_SHOWN) -> str:
     return _cut(_REPR.repr(redact(value) if isinstance(value, str) else value), limit)
 
 
-def one_line(text, limit: int = 4 * MAX_SHOWN) -> str:
+def one_line(text: object, limit: int = 4 * MAX_SHOWN) -> str:
     """``text`` with its whitespace runs (newlines included) made single spaces, secrets redacted
     (:func:`hht3d.redaction.redact`), cut to ``limit``."""
     return _cut(" ".join(redact(text).split()), limit)
 
 
-def did_you_mean(word, known, *, listing: bool = True) -> str:
+def did_you_mean(word: str, known: Collection[str], *, listing: bool = True) -> str:
     """``"; did you mean 'x'?"`` for the closest of ``known``; else the list of ``known``
     (with ``listing``) or nothing.
 

@@ -30,6 +30,8 @@ import argparse
 import contextlib
 import logging
 import sys
+from collections.abc import Iterator
+from typing import Any
 
 from .redaction import redact
 
@@ -95,7 +97,7 @@ def _configured(logger: logging.Logger) -> bool:
 
 
 @contextlib.contextmanager
-def showing(level: int = logging.INFO, *, info=None, force: bool = False):
+def showing(level: int = logging.INFO, *, info: Any = None, force: bool = False) -> Iterator[None]:
     """hht3d's records of ``level`` and above on stderr while inside.
 
     With ``info`` (a stream; the CLI gives stdout), records below WARNING other than progress
@@ -116,7 +118,7 @@ def showing(level: int = logging.INFO, *, info=None, force: bool = False):
     previous = logger.level, logger.propagate
     for handler in handlers:
         handler.setFormatter(_Prefixed())
-        handler._hht3d = True  # ours, not the application's
+        setattr(handler, "_hht3d", True)  # ours, not the application's
         logger.addHandler(handler)
     logger.setLevel(level)
     logger.propagate = False
@@ -129,7 +131,7 @@ def showing(level: int = logging.INFO, *, info=None, force: bool = False):
 
 
 @contextlib.contextmanager
-def quieted(name: str, level: int = logging.CRITICAL):
+def quieted(name: str, level: int = logging.CRITICAL) -> Iterator[None]:
     """Another library's logger ``name`` at ``level`` while inside, its own level restored on exit."""
     logger = logging.getLogger(name)
     previous = logger.level
@@ -157,7 +159,7 @@ def logging_options() -> argparse.ArgumentParser:
     return common
 
 
-def log_level(args) -> int:
+def log_level(args: argparse.Namespace) -> int:
     """The level of hht3d's messages on stderr that ``-v``, ``-q`` or ``--log-level`` ask for."""
     if args.log_level:
         return getattr(logging, args.log_level.upper())

@@ -11,6 +11,8 @@ import os
 import sys
 import tempfile
 import threading
+from collections.abc import Iterator
+from typing import Any
 
 __all__ = ["captured_native_output", "quiet_open3d"]
 
@@ -19,7 +21,7 @@ _NATIVE_OUTPUT = threading.Lock()
 
 
 @contextlib.contextmanager
-def captured_native_output():
+def captured_native_output() -> Iterator[None]:
     """Send what C and C++ code writes to file descriptors 1 and 2 to a temporary file, then drop it.
 
     Qhull (inside Open3D) prints warnings and 25-line error reports there,
@@ -57,7 +59,7 @@ def _flush_c_streams() -> None:
 
 
 @contextlib.contextmanager
-def quiet_open3d():
+def quiet_open3d() -> Iterator[Any]:
     """Open3D with its log at error level and its native output (Qhull's too) captured."""
     import open3d as o3d
 

@@ -40,8 +40,10 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -51,6 +53,12 @@ from .records import Record, option
 from .transform import FIELDS, IMF_FIELDS, field_imf
 from .viz.render import UP_AXES, VIEWS
 from .viz.viewer import VERTEX_BUDGET
+
+if TYPE_CHECKING:
+    from hht3d.geometry.surface import Surface
+    from hht3d.transform import HHTResult
+
+    View = str | Sequence[float]  # a view's name or (azimuth, elevation); an up axis's name or 3-vector
 
 __all__ = ["Format", "FormatOptions", "FORMATS", "by_suffix", "plain_formats"]
 
@@ -69,7 +77,7 @@ class FormatOptions(Record):
 
     label = "output"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         super().__post_init__()
         name = getattr(self, "field", None)
         if name is not None and name not in FIELDS and field_imf(name) is None:
@@ -95,19 +103,19 @@ class Format:
     options: type[FormatOptions] = FormatOptions
 
 
-def _field():
+def _field() -> Any:
     return option("signal", _FIELDS_TEXT)
 
 
-def _view():
+def _view() -> Any:
     return option("front", "camera direction", choices=tuple(VIEWS))
 
 
-def _up():
+def _up() -> Any:
     return option("y", "the model's up axis", choices=UP_AXES)
 
 
-def _max_vertices():
+def _max_vertices() -> Any:
     return option(VERTEX_BUDGET, "larger surfaces are shown as a decimated copy carrying the fields", minimum=4)
 
 
@@ -165,7 +173,7 @@ class _SurfacePage(_View):
     max_vertices: int = _max_vertices()
 
 
-def _hht_field(result, name: str) -> np.ndarray:
+def _hht_field(result: HHTResult, name: str) -> np.ndarray:
     fields = result.vertex_attributes()
     if name not in fields:
         raise InputError(
@@ -174,19 +182,29 @@ def _hht_field(result, name: str) -> np.ndarray:
     return fields[name]
 
 
-def _hht_ply(result, surface, path):
+def _hht_ply(result: HHTResult, surface: Surface, path: Path | str) -> Path:
     return write_ply(path, result.surface, result.vertex_attributes())
 
 
-def _hht_npz(result, surface, path):
+def _hht_npz(result: HHTResult, surface: Surface, path: Path | str) -> Path:
     return write_npz(path, result.arrays())
 
 
-def _hht_colored(result, surface, path, *, field, cmap):
+def _hht_colored(result: HHTResult, surface: Surface, path: Path | str, *, field: str, cmap: str) -> Path:
     return write_colored_ply(path, result.surface, _hht_field(result, field), cmap=cmap, name=field)
 
 
-def _hht_png(result, surface, path, *, figure, field, signal_name, view, up):
+def _hht_png(
+    result: HHTResult,
+    surface: Surface,
+    path: Path | str,
+    *,
+    figure: bool,
+    field: str,
+    signal_name: str,
+    view: View,
+    up: View,
+) -> Path:
     from .viz.figures import hht_figure, spectrum_figure
     from .viz.panels import field_figure, save_figure
 
@@ -201,44 +219,48 @@ def _hht_png(result, surface, path, *, figure, field, signal_name, view, up):
     return save_figure(fig, path)
 
 
-def _hht_html(result, surface, path, *, field, view, up, max_vertices):
+def _hht_html(
+    result: HHTResult, surface: Surface, path: Path | str, *, field: str, view: View, up: View, max_vertices: int
+) -> Path:
     return result.to_html(path, field=field, view=view, up=up, max_vertices=max_vertices)
 
 
-def _emd_npz(decomposition, surface, path):
+def _emd_npz(decomposition: Any, surface: Surface, path: Path | str) -> Path:
     return write_npz(path, {"imfs": decomposition.imfs, "residue": decomposition.residue})
 
 
-def _emd_ply(decomposition, surface, path):
+def _emd_ply(decomposition: Any, surface: Surface, path: Path | str) -> Path:
     fields = {f"imf_{k + 1}": imf for k, imf in enumerate(decomposition.imfs)}
     return write_ply(path, surface, {**fields, "residue": decomposition.residue})
 
 
-def _signal_npz(values, surface, path):
+def _signal_npz(values: np.ndarray, surface: Surface, path: Path | str) -> Path:
     return write_npz(path, {"signal": values})
 
 
-def _signal_colored(values, surface, path, *, cmap):
+def _signal_colored(values: np.ndarray, surface: Surface, path: Path | str, *, cmap: str) -> Path:
     return write_colored_ply(path, surface, values, cmap=cmap, name="signal")
 
 
-def _signal_png(values, surface, path, *, view, up, cmap, title):
+def _signal_png(
+    values: np.ndarray, surface: Surface, path: Path | str, *, view: View, up: View, cmap: str, title: str | None
+) -> Path:
     from .viz.panels import render_png
 
     return render_png(path, surface, values, view=view, up=up, cmap=cmap, title=title or f"{surface.name}: signal")
 
 
-def _surface_ply(surface, _, path):
+def _surface_ply(surface: Surface, _: Any, path: Path | str) -> Path:
     return write_ply(path, surface)
 
 
-def _surface_png(surface, _, path, *, view, up, title):
+def _surface_png(surface: Surface, _: Any, path: Path | str, *, view: View, up: View, title: str | None) -> Path:
     from .viz.panels import render_png
 
     return render_png(path, surface, None, view=view, up=up, title=title)
 
 
-def _surface_html(surface, origin, path, *, view, up, max_vertices):
+def _surface_html(surface: Surface, origin: Any, path: Path | str, *, view: View, up: View, max_vertices: int) -> Path:
     from .viz.viewer import SHAPE, surfaces_html, write_page
 
     if origin is surface:
@@ -255,7 +277,7 @@ def _surface_html(surface, origin, path, *, view, up, max_vertices):
     return surfaces_html(path, origin, surface, view=view, up=up, max_vertices=max_vertices)
 
 
-def _features_ply(features, surface, path):
+def _features_ply(features: Any, surface: Surface, path: Path | str) -> Path:
     is_feature = np.zeros(surface.n_vertices)
     is_feature[features.vertices] = 1.0
     colors = np.where(is_feature[:, None] > 0, _FEATURE_RED, _FEATURE_GREY)
@@ -267,7 +289,7 @@ def _features_ply(features, surface, path):
     )
 
 
-def _features_npz(features, surface, path):
+def _features_npz(features: Any, surface: Surface, path: Path | str) -> Path:
     return write_npz(
         path,
         {

@@ -33,10 +33,13 @@ import dataclasses
 import math
 import numbers
 import warnings
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar, TypeVar, cast
 
 from .errors import InputError, did_you_mean, shown
+
+R = TypeVar("R", bound="Record")
 
 __all__ = ["Spec", "Record", "option", "route", "renamed_keywords"]
 
@@ -55,7 +58,7 @@ class Spec:
 
     doc: str
     kind: str
-    choices: tuple = ()
+    choices: Sequence = ()
     minimum: float | None = None
     maximum: float | None = None
     open_minimum: bool = False
@@ -86,7 +89,7 @@ class Spec:
             ] + self.range_text()
         return text + (f" or {null}" if self.nullable and null else "")
 
-    def accepts(self, value) -> bool:
+    def accepts(self, value: Any) -> bool:
         """Whether ``value`` is a valid setting."""
         if value is None:
             return self.nullable
@@ -100,9 +103,9 @@ class Spec:
             return False
         if self.kind == "int" and not isinstance(value, numbers.Integral):
             return False
-        return math.isfinite(value) and self.in_range(value)
+        return math.isfinite(value) and self.in_range(cast(float, value))
 
-    def in_range(self, x) -> bool:
+    def in_range(self, x: float) -> bool:
         lo, hi = self.minimum, self.maximum
         return (lo is None or (x > lo if self.open_minimum else x >= lo)) and (
             hi is None or (x < hi if self.open_maximum else x <= hi)
@@ -110,7 +113,7 @@ class Spec:
 
 
 def option(
-    default,
+    default: Any,
     doc: str,
     *,
     choices: tuple = (),
@@ -121,7 +124,7 @@ def option(
     open_maximum: bool = False,
     nullable: bool = False,
     like: Spec | None = None,
-):
+) -> Any:
     """A dataclass field of a :class:`Record` with its :class:`Spec`.
 
     The kind follows from ``choices`` or the default's type unless given;
@@ -172,7 +175,7 @@ def route(settings: dict, *records: type[Record]) -> list[dict]:
     return [{k: v for k, v in settings.items() if k in record.specs()} for record in records]
 
 
-def _converted(spec: Spec, value):
+def _converted(spec: Spec, value: Any) -> Any:
     """A valid value with ints as ``int`` and numbers as ``float``."""
     if value is None or spec.kind not in ("int", "float"):
         return value
@@ -204,7 +207,7 @@ class Record:
     #: Former names of settings, accepted by :meth:`of` for one release with a DeprecationWarning.
     renamed: ClassVar[dict[str, str]] = {}
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name, spec in self.specs().items():
             value = getattr(self, name)
             if not spec.accepts(value):
@@ -216,15 +219,15 @@ class Record:
     @classmethod
     def specs(cls) -> dict[str, Spec]:
         """Every setting's :class:`Spec`, in field order."""
-        return {f.name: f.metadata["spec"] for f in dataclasses.fields(cls)}
+        return {f.name: f.metadata["spec"] for f in dataclasses.fields(cast(Any, cls))}  # subclasses are dataclasses
 
     @classmethod
     def defaults(cls) -> dict:
         """Every setting's default."""
-        return {f.name: f.default for f in dataclasses.fields(cls)}
+        return {f.name: f.default for f in dataclasses.fields(cast(Any, cls))}
 
     @classmethod
-    def of(cls, value=None, /, **overrides):
+    def of(cls: type[R], value: Any = None, /, **overrides: Any) -> R:
         """A record from ``None`` (the defaults), a record or a dict, with ``overrides`` applied.
 
         Raises
@@ -232,6 +235,7 @@ class Record:
         InputError
             An unknown setting (with the closest known name) or an invalid value.
         """
+        settings: dict[str, Any]
         if isinstance(value, cls):
             settings = {}
         elif value is None:
@@ -252,14 +256,14 @@ class Record:
             settings[new] = settings.pop(old)
         cls.check_names(settings)
         try:
-            return dataclasses.replace(value, **settings) if isinstance(value, cls) else cls(**settings)
+            return dataclasses.replace(cast(Any, value), **settings) if isinstance(value, cls) else cls(**settings)
         except InputError as exc:
             if not given:
                 raise
             raise InputError(f"{exc} (given as {', '.join(given)})") from None
 
     @classmethod
-    def check(cls, name: str, value):
+    def check(cls, name: str, value: Any) -> Any:
         """``value`` if it is a valid setting ``name`` of this record (ints stay ints, numbers become floats).
 
         Raises
@@ -273,7 +277,7 @@ class Record:
         return _converted(spec, value)
 
     @classmethod
-    def check_names(cls, settings) -> None:
+    def check_names(cls, settings: Iterable[str]) -> None:
         """Raise :class:`InputError` for a name that is not a setting of this record."""
         known = tuple(cls.specs())
         for key in settings:

@@ -28,6 +28,7 @@ from __future__ import annotations
 import base64
 import os
 import re
+from typing import Any
 from urllib.parse import quote, unquote
 
 __all__ = ["SECRET_NAME", "NOT_SECRET", "is_secret_name", "remember_secrets", "secret_forms", "redact"]
@@ -49,12 +50,12 @@ _USERINFO = re.compile(r"(\b[a-z][a-z0-9+.\-]*://[^\s/:@'\"]*):[^\s/@'\"]+@", re
 _seen: set[str] = set()
 
 
-def is_secret_name(name) -> bool:
+def is_secret_name(name: object) -> bool:
     """Whether an option or environment variable called ``name`` holds a secret."""
     return bool(SECRET_NAME.search(str(name))) and not NOT_SECRET.search(str(name))
 
 
-def remember_secrets(options) -> None:
+def remember_secrets(options: Any) -> None:
     """Record the secret-looking values of ``options`` (a nested ``storage_options`` mapping)."""
     if not isinstance(options, dict):
         return
@@ -82,7 +83,7 @@ def secret_forms(secret: str) -> set[str]:
     }
 
 
-def redact(text: str) -> str:
+def redact(text: object) -> str:
     """``text`` with known secrets (in any form), query values and URL passwords replaced by ``***``."""
     text = str(text)
     forms = {form for secret in _seen | _environment_secrets() for form in secret_forms(secret)}

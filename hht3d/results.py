@@ -8,7 +8,7 @@ figures and pages equal those of the result that was saved.
 
 from __future__ import annotations
 
-from pathlib import PurePosixPath
+from pathlib import Path, PurePosixPath
 
 from .errors import InputError
 from .geometry.surface import Surface
@@ -21,7 +21,7 @@ from .transform import RESULT_ARRAYS, HHTResult
 __all__ = ["load_result", "RESULT_ARRAYS"]
 
 
-def load_result(path, *, storage_options: dict | None = None) -> HHTResult:
+def load_result(path: Path | str, *, storage_options: dict | None = None) -> HHTResult:
     """The :class:`~hht3d.transform.HHTResult` saved as ``path`` (a ``.npz`` of ``HHTResult.save``).
 
     ``path`` may be an fsspec URL (``s3://bucket/out/x_hht.npz``), read with

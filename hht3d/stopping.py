@@ -18,6 +18,9 @@ import multiprocessing
 import os
 import signal
 import threading
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import Any
 
 import psutil
 
@@ -46,14 +49,14 @@ class Stopped(BaseException):
         return 128 + self.signum
 
 
-def _raise(signum, frame):
+def _raise(signum: int, frame: Any) -> None:
     for sig in SIGNALS:  # one stop at a time: a second Ctrl-C does not interrupt the cleanup
         signal.signal(sig, signal.SIG_IGN)
     raise Stopped(signum)
 
 
 @contextlib.contextmanager
-def stop_on_signals():
+def stop_on_signals() -> Iterator[None]:
     """Raise :class:`Stopped` in the main thread on the first SIGTERM or SIGINT; handlers restored after.
 
     Outside the main thread (where Python cannot set handlers) it changes nothing.
@@ -69,7 +72,7 @@ def stop_on_signals():
             signal.signal(sig, handler)
 
 
-def clean_stop(folders) -> list:
+def clean_stop(folders: Iterable[Path | str]) -> list:
     """End this process's worker processes and remove the temporary files left in ``folders``, and
     the temporary folders of downloads and uploads of this process and of its ended workers (their
     ``with`` blocks never finish: the stop ends with ``os._exit``)."""

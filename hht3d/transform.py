@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from operator import attrgetter
 from pathlib import Path
-from typing import Callable, Protocol
+from typing import Any, Callable, Protocol, cast
 
 import numpy as np
 
@@ -29,7 +29,7 @@ from .decomposition.quality import Quality, decomposition_quality
 from .errors import InputError, shown
 from .geometry.surface import Surface
 from .geometry.validation import check_signal
-from .records import route
+from .records import Record, route
 from .spectral.monogenic_signal import MonogenicSignal, monogenic_from_potential
 from .spectral.options import RIESZ_DEFAULTS, RieszOptions
 from .spectral.riesz_transform import fractional_laplacian
@@ -76,7 +76,7 @@ IMF_FIELDS = {
 }
 
 
-def field_imf(name) -> int | None:
+def field_imf(name: object) -> int | None:
     """The IMF number K of a field ``{kind}_K`` of :data:`IMF_FIELDS` (``imf_K``, ..., ``frequency_K``); else None.
 
     >>> field_imf("phase_2"), field_imf("signal"), field_imf("imf_0"), field_imf("frequncy_1")
@@ -89,7 +89,7 @@ def field_imf(name) -> int | None:
 
 
 #: The parts of :class:`HHTOptions`, by the record each holds.
-PARTS = {"emd": EMDOptions, "riesz": RieszOptions, "ensemble": EnsembleOptions}
+PARTS: dict[str, type[Record]] = {"emd": EMDOptions, "riesz": RieszOptions, "ensemble": EnsembleOptions}
 
 
 @dataclass(frozen=True)
@@ -107,7 +107,7 @@ class HHTOptions:
     ensemble: EnsembleOptions | None = None
 
     @classmethod
-    def of(cls, value=None, /, **overrides) -> "HHTOptions":
+    def of(cls, value: Any = None, /, **overrides: Any) -> "HHTOptions":
         """From ``None``, an :class:`HHTOptions` or a dict of parts (``{"emd": {...}, "riesz": ...}``)
         and/or flat settings, with flat ``overrides``; an ensemble setting turns ensemble EMD on.
 
@@ -119,9 +119,10 @@ class HHTOptions:
         if value is None or isinstance(value, cls):
             base, flat = value or cls(), {}
         elif isinstance(value, dict):
-            base = cls(
-                **{k: None if k == "ensemble" and v is None else PARTS[k].of(v) for k, v in value.items() if k in PARTS}
-            )
+            parts: dict[str, Any] = {
+                k: None if k == "ensemble" and v is None else PARTS[k].of(v) for k, v in value.items() if k in PARTS
+            }
+            base = cls(**parts)
             flat = {k: v for k, v in value.items() if k not in PARTS}
         else:
             raise InputError(f"HHT options must be an HHTOptions or a dict; got {shown(value)}")
@@ -133,7 +134,7 @@ class HHTOptions:
         )
 
 
-def hht_settings(options, overrides: dict, function: str) -> HHTOptions:
+def hht_settings(options: HHTOptions | dict | None, overrides: dict, function: str) -> HHTOptions:
     """:meth:`HHTOptions.of`, accepting for one release the former keywords ``emd=``, ``riesz=`` and
     ``ensemble=`` of ``function`` with a DeprecationWarning."""
     former = {k: overrides.pop(k) for k in PARTS if k in overrides}
@@ -177,7 +178,7 @@ class HHTResult:
 
     @classmethod
     def from_parts(
-        cls, surface: Surface, signal, decomposition, mono: MonogenicSignal, riesz_options: dict
+        cls, surface: Surface, signal: np.ndarray, decomposition: Any, mono: MonogenicSignal, riesz_options: dict
     ) -> "HHTResult":
         """Assemble a result from an :class:`~hht3d.decomposition.EMDResult` and the monogenic
         signal of its IMFs (the last of :func:`hht_stages`)."""
@@ -221,10 +222,10 @@ class HHTResult:
         ``amplitude``, ``phase``, ``frequency``, ``area``: the vertex areas), then ``faces`` of a mesh."""
         arrays = {name: np.asarray(attrgetter(source)(self)) for name, source in RESULT_ARRAYS.items()}
         if self.surface.is_mesh:
-            arrays["faces"] = self.surface.faces
+            arrays["faces"] = cast(np.ndarray, self.surface.faces)
         return arrays
 
-    def save(self, path, *, storage_options: dict | None = None) -> Path:
+    def save(self, path: Path | str, *, storage_options: dict | None = None) -> Path:
         """Write the result atomically in the format of its suffix, one of the formats of an HHT
         result that take no options (:func:`hht3d.output_formats.plain_formats`).
 
@@ -243,7 +244,7 @@ class HHTResult:
             raise InputError(f"cannot save an HHT result as {path.name!r}: use a {' or '.join(formats)} file name")
         return formats[path.suffix.lower()].write(self, self.surface, path)
 
-    def to_html(self, path, *, storage_options: dict | None = None, **options) -> Path:
+    def to_html(self, path: Path | str, *, storage_options: dict | None = None, **options: Any) -> Path:
         """Write an interactive page of every field, the marginal spectrum and the quality
         figures as one self-contained HTML file (:func:`hht3d.viz.viewer.result_html`, whose
         keyword arguments ``options`` takes: ``beside``, ``field``, ``max_vertices``, ...);
@@ -252,7 +253,7 @@ class HHTResult:
 
         return io.uploads.write_via(result_html, self, path, storage_options=storage_options, **options)
 
-    def to_open3d(self):
+    def to_open3d(self) -> Any:
         """An Open3D tensor ``TriangleMesh`` (or ``PointCloud``) carrying
         :meth:`vertex_attributes` as named (n, 1) float vertex attributes."""
         return io.surface_to_open3d(self.surface, self.vertex_attributes())
@@ -264,18 +265,18 @@ class Stages(Protocol):
     def task(self, step: str, func: Callable) -> Callable:
         """``func`` as the stage ``step``: called at once, or made a lazy task."""
 
-    def potential(self, surface, imfs, riesz: RieszOptions, backend: str | None):
+    def potential(self, surface: Surface, imfs: np.ndarray, riesz: RieszOptions, backend: str | None) -> Any:
         """``L^{-1/2}`` of the IMFs (Eq. 16): one call, or the quadrature's shift-group tasks."""
 
 
 class _Eager:
     """Runs every stage at once and adds up its wall time by step."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.seconds: dict[str, float] = {}
 
     def task(self, step: str, func: Callable) -> Callable:
-        def run(*args, **kwargs):
+        def run(*args: Any, **kwargs: Any) -> Any:
             start = time.perf_counter()
             try:
                 return func(*args, **kwargs)
@@ -284,17 +285,22 @@ class _Eager:
 
         return run
 
-    def potential(self, surface, imfs, riesz: RieszOptions, backend: str | None):
+    def potential(self, surface: Surface, imfs: np.ndarray, riesz: RieszOptions, backend: str | None) -> Any:
         return self.task("riesz", fractional_laplacian)(surface, imfs, -0.5, riesz, backend=backend)
 
 
-def _imfs(decomposition) -> np.ndarray:
+def _imfs(decomposition: Any) -> np.ndarray:
     return decomposition.imfs
 
 
 def decomposition_stage(
-    stages: Stages, surface, signal, options: EMDOptions, ensemble: EnsembleOptions | None, backend: str | None
-):
+    stages: Stages,
+    surface: Surface,
+    signal: np.ndarray,
+    options: EMDOptions,
+    ensemble: EnsembleOptions | None,
+    backend: str | None,
+) -> Any:
     """EMD (one stage ``emd``), or EEMD: one ``eemd_member`` stage per member, then ``eemd_combine``."""
     if ensemble is None:
         return stages.task("emd", emd)(surface, signal, options, backend=backend)
@@ -305,12 +311,12 @@ def decomposition_stage(
 
 def hht_stages(
     stages: Stages,
-    surface,
-    signal,
+    surface: Surface,
+    signal: np.ndarray,
     options: HHTOptions | dict | None = None,
     *,
     backend: str | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> dict:
     """The HHT's stages in order (Alg. 2), by name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
 
@@ -329,7 +335,12 @@ def hht_stages(
 
 
 def hht(
-    surface: Surface, signal, options: HHTOptions | dict | None = None, *, backend: str | None = None, **overrides
+    surface: Surface,
+    signal: np.ndarray,
+    options: HHTOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    **overrides: Any,
 ) -> HHTResult:
     """Hilbert–Huang transform of a surface signal: EMD, then Algorithm 2 on all IMFs.
 

@@ -22,7 +22,9 @@ from __future__ import annotations
 import math
 import numbers
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -96,13 +98,13 @@ class HKSOptions(Record):
 
 def imf_enhancement(
     surface: Surface,
-    imfs,
+    imfs: np.ndarray,
     options: EnhancementOptions | dict | None = None,
     *,
-    weights=None,
+    weights: np.ndarray | None = None,
     backend: str | None = None,
     name: str | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> Surface:
     """Hu et al. (2014): multiply one IMF of the mean curvature by ``factor`` and reconstruct.
 
@@ -150,12 +152,12 @@ def imf_enhancement(
 
 def manifold_harmonics_filter(
     surface: Surface,
-    gain,
+    gain: Callable[[np.ndarray], Any],
     options: HarmonicFilterOptions | dict | None = None,
     *,
     backend: str | None = None,
     name: str | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> Surface:
     """Vallet & Lévy (2008): filter the coordinates in the manifold-harmonic basis.
 
@@ -212,7 +214,9 @@ def manifold_harmonics_filter(
     )
 
 
-def heat_kernel_signature(surface: Surface, times, *, eigenpairs: int = 100, backend: str | None = None) -> np.ndarray:
+def heat_kernel_signature(
+    surface: Surface, times: float | np.ndarray, *, eigenpairs: int = 100, backend: str | None = None
+) -> np.ndarray:
     """Heat kernel signature ``k_t(x, x) = Σ_i e^{−λ_i t} φ_i(x)²`` (Sun et al. 2009).
 
     The sum runs over the kernel (``φ_0² = 1/area`` of the component) and
@@ -244,7 +248,7 @@ def heat_kernel_signature(surface: Surface, times, *, eigenpairs: int = 100, bac
 
 
 def hks_features(
-    surface: Surface, options: HKSOptions | dict | None = None, *, backend: str | None = None, **overrides
+    surface: Surface, options: HKSOptions | dict | None = None, *, backend: str | None = None, **overrides: Any
 ) -> FeatureResult:
     """Sun et al. (2009): feature points as the local maxima of the HKS at one time.
 

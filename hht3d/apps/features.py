@@ -34,7 +34,9 @@ features of a rigidly moved and uniformly scaled copy are the same vertices
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -78,7 +80,7 @@ class FeatureOptions(Record):
     merge_radius: float | None = option(None, "merge hits closer than this (model units)", kind="float", minimum=0)
 
 
-def merge_distance(radius) -> float:
+def merge_distance(radius: float | None) -> float:
     """A merge radius checked (a distance in model units, ``>= 0``); ``None`` is 0."""
     return FeatureOptions.check("merge_radius", radius) or 0.0
 
@@ -162,7 +164,12 @@ def merge_hits(points: np.ndarray, scores: np.ndarray, radius: float) -> tuple[n
 
 
 def features_from_counts(
-    surface: Surface, maxima, minima, min_count: int, merge_radius: float | None = None, scores=None
+    surface: Surface,
+    maxima: Sequence[np.ndarray],
+    minima: Sequence[np.ndarray],
+    min_count: int,
+    merge_radius: float | None = None,
+    scores: np.ndarray | None = None,
 ) -> FeatureResult:
     """Count extrema over scales, keep vertices with ``count >= min_count``, merge.
 
@@ -203,7 +210,7 @@ def features_from_counts(
 
 
 def prominent_features(
-    surface: Surface, imfs, options: FeatureOptions | dict | None = None, **overrides
+    surface: Surface, imfs: np.ndarray, options: FeatureOptions | dict | None = None, **overrides: Any
 ) -> FeatureResult:
     """Prominent features: vertices that are IMF extrema at many scales (Sec. 5.2).
 
@@ -237,7 +244,7 @@ def prominent_features(
     )
 
 
-def repeatability(points, reference, radius: float) -> float:
+def repeatability(points: np.ndarray, reference: np.ndarray, radius: float) -> float:
     """Fraction of ``points`` with a point of ``reference`` within ``radius``.
 
     The measure of the paper's Fig. 8 comparison: features found on a

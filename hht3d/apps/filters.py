@@ -43,7 +43,9 @@ parameters (as a pipeline description would give them).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -80,7 +82,7 @@ class Gain:
 
     label = "gain"
 
-    def __call__(self, omega) -> np.ndarray:
+    def __call__(self, omega: np.ndarray) -> np.ndarray:
         return self._evaluate(np.asarray(omega, dtype=np.float64))
 
     def _evaluate(self, omega: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
@@ -93,7 +95,7 @@ class Constant(Gain, Record):
 
     value: float = option(1.0, "the gain at every frequency")
 
-    def _evaluate(self, omega):
+    def _evaluate(self, omega: np.ndarray) -> np.ndarray:
         return np.full(omega.shape, self.value)
 
 
@@ -101,11 +103,11 @@ class Constant(Gain, Record):
 _FREQUENCY = Spec("a frequency, radians per unit length", "float", minimum=0)
 
 
-def _width():
+def _width() -> Any:
     return option(0.0, "width of the raised-cosine transition (0: sharp)", like=_FREQUENCY)
 
 
-def _edge(doc: str):
+def _edge(doc: str) -> Any:
     """A required edge frequency."""
     return option(dataclasses.MISSING, doc, like=_FREQUENCY)
 
@@ -128,7 +130,7 @@ class LowPass(Gain, Record):
     width: float = _width()
     stop: float = option(0.0, "gain above the cutoff")
 
-    def _evaluate(self, omega):
+    def _evaluate(self, omega: np.ndarray) -> np.ndarray:
         return 1.0 + (self.stop - 1.0) * _rise(omega, self.cutoff, self.width)
 
 
@@ -150,14 +152,18 @@ class HighBoost(Gain, Record):
     factor: float = option(2.0, "gain above the cutoff")
     width: float = _width()
 
-    def _evaluate(self, omega):
+    def _evaluate(self, omega: np.ndarray) -> np.ndarray:
         return 1.0 + (self.factor - 1.0) * _rise(omega, self.cutoff, self.width)
 
 
 class _Band(Record):
     """A band ``(low, high]``: checked like every record, then ``low < high``."""
 
-    def __post_init__(self):
+    if TYPE_CHECKING:  # the fields of the dataclasses that derive from it
+        low: float
+        high: float
+
+    def __post_init__(self) -> None:
         super().__post_init__()
         if not self.low < self.high:
             raise InputError(f"a band needs low < high, got low={self.low!r}, high={self.high!r}")
@@ -187,7 +193,7 @@ class BandStop(Gain, _Band):
     width: float = _width()
     stop: float = option(0.0, "gain inside the band")
 
-    def _evaluate(self, omega):
+    def _evaluate(self, omega: np.ndarray) -> np.ndarray:
         return 1.0 + (self.stop - 1.0) * _band(omega, self.low, self.high, self.width)
 
 
@@ -210,7 +216,7 @@ class BandBoost(Gain, _Band):
     factor: float = option(2.0, "gain inside the band")
     width: float = _width()
 
-    def _evaluate(self, omega):
+    def _evaluate(self, omega: np.ndarray) -> np.ndarray:
         return 1.0 + (self.factor - 1.0) * _band(omega, self.low, self.high, self.width)
 
 
@@ -226,7 +232,7 @@ class PiecewiseLinear(Gain):
 
     points: tuple
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         try:
             pts = np.asarray(self.points, dtype=np.float64)
         except (TypeError, ValueError):
@@ -243,7 +249,7 @@ class PiecewiseLinear(Gain):
             )
         object.__setattr__(self, "points", tuple(map(tuple, pts.tolist())))
 
-    def _evaluate(self, omega):
+    def _evaluate(self, omega: np.ndarray) -> np.ndarray:
         pts = np.asarray(self.points)
         return np.interp(omega, pts[:, 0], pts[:, 1])
 
@@ -259,7 +265,7 @@ GAINS = {
 }
 
 
-def make_gain(kind: str, **parameters) -> Gain:
+def make_gain(kind: str, **parameters: Any) -> Gain:
     """Build a gain by name (one of :data:`GAINS`) from keyword parameters.
 
     >>> make_gain("band_stop", low=8.0, high=20.0, width=2.0)
@@ -282,7 +288,7 @@ def make_gain(kind: str, **parameters) -> Gain:
     return GAINS[kind](**parameters)
 
 
-def decomposition_parts(decomposition) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def decomposition_parts(decomposition: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(imfs (k, n), residue (n,), frequency (k, n))`` from an HHT result or a tuple."""
     if isinstance(decomposition, tuple):
         if len(decomposition) != 3:
@@ -305,13 +311,13 @@ def decomposition_parts(decomposition) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return imfs, residue, frequency
 
 
-def gains_of(decomposition, gain) -> np.ndarray:
+def gains_of(decomposition: Any, gain: Callable[[np.ndarray], Any]) -> np.ndarray:
     """The gains ``μ(ω_k(v))`` (k, n) of a decomposition's instantaneous frequencies."""
     _, _, frequency = decomposition_parts(decomposition)
     return evaluate_gain(gain, frequency)
 
 
-def evaluate_gain(gain, frequency: np.ndarray) -> np.ndarray:
+def evaluate_gain(gain: Callable[[np.ndarray], Any], frequency: np.ndarray) -> np.ndarray:
     """``gain(frequency)`` checked: callable, finite, and of the frequencies' shape (a scalar spreads)."""
     if not callable(gain):
         raise InputError(f"gain must be callable on frequencies (e.g. hht3d.apps.LowPass), got {gain!r}")
@@ -325,7 +331,7 @@ def evaluate_gain(gain, frequency: np.ndarray) -> np.ndarray:
     return mu
 
 
-def filter_signal(decomposition, gain) -> np.ndarray:
+def filter_signal(decomposition: Any, gain: Callable[[np.ndarray], Any]) -> np.ndarray:
     """Filter a signal through its Hilbert spectrum (Eq. 26).
 
     Parameters

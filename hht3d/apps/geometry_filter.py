@@ -12,7 +12,9 @@ positions hold below a third of the lowest frequency the gain edits
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -27,6 +29,10 @@ from .reconstruction import (
     check_mean_curvature_signal,
     reconstruct_from_change,
 )
+
+if TYPE_CHECKING:
+    from hht3d.transform import HHTResult
+
 
 __all__ = [
     "FilterOptions",
@@ -67,7 +73,7 @@ class FilterOptions(Record):
     preserve_scale: bool = option(True, _WEIGHTS["preserve_scale"].doc, like=_WEIGHTS["preserve_scale"])
 
 
-def edit_frequency(result, gain) -> float | None:
+def edit_frequency(result: HHTResult, gain: Callable[[np.ndarray], Any]) -> float | None:
     """The lowest frequency a gain edits: the 5th percentile, by changed energy, of the
     instantaneous frequencies where ``μ(ω) ≠ 1``; ``None`` when the gain changes nothing.
 
@@ -94,14 +100,14 @@ def automatic_weight(surface: Surface, frequency: float) -> float:
 
 
 def filter_geometry(
-    result,
-    gain,
+    result: HHTResult,
+    gain: Callable[[np.ndarray], Any],
     options: FilterOptions | dict | None = None,
     *,
-    weights=None,
+    weights: np.ndarray | None = None,
     backend: str | None = None,
     name: str | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> Surface:
     """Hilbert-spectrum geometry filtering: Eq. (26) on the mean curvature, then Eq. (27).
 

@@ -77,6 +77,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -150,7 +151,7 @@ def position_weights(
     return np.where(surface.boundary_vertices, boundary, interior)
 
 
-def _weights(surface: Surface, options: ReconstructionOptions, weights) -> np.ndarray:
+def _weights(surface: Surface, options: ReconstructionOptions, weights: np.ndarray | None) -> np.ndarray:
     if weights is None:
         return position_weights(surface, options.interior_weight, options.boundary_weight)
     mu = check_signal(surface, weights, "weights")
@@ -161,13 +162,13 @@ def _weights(surface: Surface, options: ReconstructionOptions, weights) -> np.nd
 
 def reconstruct_from_change(
     surface: Surface,
-    change,
+    change: np.ndarray,
     options: ReconstructionOptions | dict | None = None,
     *,
-    weights=None,
+    weights: np.ndarray | None = None,
     backend: str | None = None,
     name: str | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> Surface:
     """New surface whose mean-curvature signal changed by ``change = s' − s`` (Eq. 27).
 
@@ -237,13 +238,13 @@ def reconstruct_from_change(
 
 def reconstruct(
     surface: Surface,
-    signal,
+    signal: np.ndarray,
     options: ReconstructionOptions | dict | None = None,
     *,
-    weights=None,
+    weights: np.ndarray | None = None,
     backend: str | None = None,
     name: str | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> Surface:
     """New surface whose mean-curvature signal (Eq. 24) is ``signal`` (Eq. 27).
 
@@ -272,7 +273,7 @@ def reconstruct(
     )
 
 
-def check_mean_curvature_signal(surface: Surface, signal) -> None:
+def check_mean_curvature_signal(surface: Surface, signal: np.ndarray) -> None:
     """Raise :class:`InputError` unless ``signal`` is the mean-curvature signal of ``surface``
     (regularized, the default, or pointwise Eq. 24 with ``min_area=0``)."""
     errors, scale = [], 0.0

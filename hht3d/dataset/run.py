@@ -19,6 +19,10 @@ or an fsspec URL is decided in one place, :class:`hht3d.io.folder.OutputFolder`.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
 from dask import delayed
 from dask.base import tokenize
 
@@ -66,7 +70,9 @@ __all__ = [
 RESULT_SUFFIXES = tuple(plain_formats("hht"))
 
 
-def output_paths(source, out_dir, formats=RESULT_SUFFIXES, pattern: str = "{stem}_hht") -> list:
+def output_paths(
+    source: Path | str, out_dir: Path | str, formats: Iterable[str] = RESULT_SUFFIXES, pattern: str = "{stem}_hht"
+) -> list:
     """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format (paths or URLs)."""
     try:
         base = str(pattern).format(stem=stem(source))
@@ -78,7 +84,7 @@ def output_paths(source, out_dir, formats=RESULT_SUFFIXES, pattern: str = "{stem
     return [join(out_dir, f"{base}{suffix}") for suffix in formats]
 
 
-def items_graph(items: dict, folder: OutputFolder, make_item, *, resume: bool = False):
+def items_graph(items: dict, folder: OutputFolder, make_item: Callable[..., Any], *, resume: bool = False) -> Any:
     """One lazy :class:`ItemSummary` per input, in a delayed list: the one resume loop.
 
     ``items`` maps each input to its output paths; ``make_item(source, paths)``
@@ -96,7 +102,7 @@ def items_graph(items: dict, folder: OutputFolder, make_item, *, resume: bool = 
     return delayed(list, pure=True)(rows)
 
 
-def _check_options(signal: str, formats) -> None:
+def _check_options(signal: str, formats: Iterable[str]) -> None:
     """An invalid option is the caller's error, found before any task is made."""
     if signal not in SIGNALS:
         raise InputError(f"unknown signal {signal!r}; run_dataset takes one of {sorted(SIGNALS)}")
@@ -107,19 +113,19 @@ def _check_options(signal: str, formats) -> None:
 
 
 def dataset_graph(
-    inputs,
-    out_dir,
+    inputs: Any,
+    out_dir: Path | str,
     *,
     signal: str = "mean_curvature",
-    formats=RESULT_SUFFIXES,
+    formats: Iterable[str] = RESULT_SUFFIXES,
     pattern: str = "{stem}_hht",
     resume: bool = False,
     overwrite: bool = False,
     load_options: dict | None = None,
     run: str | None = None,
     storage_options: dict | None = None,
-    **hht_options,
-):
+    **hht_options: Any,
+) -> Any:
     """Lazy HHT of every input file; returns a delayed list of :class:`ItemSummary`.
 
     Parameters
@@ -169,7 +175,7 @@ def dataset_graph(
     save = folder.writer(HHTResult.save)
     load_options = {**(load_options or {}), **({"storage_options": storage_options} if storage_options else {})}
 
-    def item(source, paths):
+    def item(source: Path | str, paths: Sequence[Path | str]) -> Any:
         tasks = graph.Builder(guard=lambda step, func, src=str(source): Guarded(step, func, src))
         stages = graph.transform_file(tasks, source, signal, load_options, **hht_options)
         quality = tasks.task("quality", quality_fields)(stages["hht"], stages["load"])
@@ -182,14 +188,14 @@ def dataset_graph(
 
 
 def run_dataset(
-    inputs,
-    out_dir,
+    inputs: Any,
+    out_dir: Path | str,
     *,
     scheduler: str = "processes",
     workers: int | None = None,
     address: str | None = None,
     progress: bool = True,
-    **options,
+    **options: Any,
 ) -> list[ItemSummary]:
     """Build :func:`dataset_graph`, compute it, write the summary, return its rows.
 

@@ -17,8 +17,10 @@ from __future__ import annotations
 import csv
 import io as _stdio
 import json
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from ..decomposition.quality import decomposition_quality
 from ..errors import InputError
@@ -33,6 +35,10 @@ from ..linalg.estimate import slow_fallback
 from ..redaction import redact
 from ..transform import HHTResult
 from .guard import Failure, Timed
+
+if TYPE_CHECKING:
+    from hht3d.geometry.surface import Surface
+
 
 __all__ = [
     "SUMMARY_FILES",
@@ -80,12 +86,12 @@ class ItemSummary:
     solver_advice: str | None = None
 
 
-def summary_paths(out_dir) -> list:
+def summary_paths(out_dir: Path | str) -> list:
     """``summary.json`` and ``summary.csv`` in ``out_dir`` (paths, or URLs for a URL folder)."""
     return [join(out_dir, summary) for summary in SUMMARY_FILES]
 
 
-def quality_fields(decomposition, surface) -> dict:
+def quality_fields(decomposition: Any, surface: Surface) -> dict:
     """``energy_ratio``, ``orthogonality_index``, its two parts and ``warnings`` of an EMD or HHT result."""
     if isinstance(decomposition, HHTResult):
         quality = decomposition.quality
@@ -101,7 +107,9 @@ def quality_fields(decomposition, surface) -> dict:
     }
 
 
-def item_summary(source: str, paths, surface, decomposition, quality, parts, writes) -> ItemSummary:
+def item_summary(
+    source: str, paths: Sequence[str], surface: Any, decomposition: Any, quality: Any, parts: Any, writes: Any
+) -> ItemSummary:
     """The summary row of one item from the values of its guarded tasks.
 
     ``surface`` is the load task's value, ``decomposition`` that of the last
@@ -123,13 +131,13 @@ def item_summary(source: str, paths, surface, decomposition, quality, parts, wri
     )
 
 
-def _backend_of(decomposition) -> str | None:
+def _backend_of(decomposition: Any) -> str | None:
     """The sparse solver an EMD or HHT result was computed with."""
     info = decomposition.info
     return info.get("emd", info).get("backend")
 
 
-def skipped_summary(source, paths, storage_options: dict | None = None) -> ItemSummary:
+def skipped_summary(source: Path | str, paths: Sequence[str], storage_options: dict | None = None) -> ItemSummary:
     """The row of an item whose outputs are done (``resume``): its size read from those outputs."""
     vertices = imfs = None
     for path in paths:
@@ -167,7 +175,7 @@ def written_outputs(rows: list[ItemSummary]) -> list[str]:
 
 
 def write_summary(
-    rows: list[ItemSummary], out_dir, run: str | None = None, storage_options: dict | None = None
+    rows: list[ItemSummary], out_dir: Path | str, run: str | None = None, storage_options: dict | None = None
 ) -> list:
     """Write the summary table as ``summary.json`` and ``summary.csv`` (atomically, secrets redacted).
 
@@ -214,7 +222,7 @@ def _write_remote(records: list[dict], ours: set, folder: OutputFolder) -> list:
     return [json_url, csv_url]
 
 
-def _write_tables(records: list[dict], out_dir) -> list:
+def _write_tables(records: list[dict], out_dir: Path | str) -> list:
     """``summary.json`` and ``summary.csv`` of ``records`` in a local folder, each written atomically."""
     json_path, csv_path = summary_paths(out_dir)
     with atomic_location(json_path) as tmp:
@@ -237,7 +245,7 @@ def _csv_text(records: list[dict]) -> str:
     return redact(buffer.getvalue())
 
 
-def _earlier_rows(path: Path, folder) -> list[dict]:
+def _earlier_rows(path: Path, folder: Path | str) -> list[dict]:
     """The rows of a summary hht3d wrote earlier (none if it is missing, changed or unreadable)."""
     if not is_recorded(path, folder):
         return []

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -82,7 +83,12 @@ class EMDResult:
 
 
 def emd(
-    surface: Surface, signal, options: EMDOptions | dict | None = None, *, backend: str | None = None, **overrides
+    surface: Surface,
+    signal: np.ndarray,
+    options: EMDOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    **overrides: Any,
 ) -> EMDResult:
     """Empirical mode decomposition of a signal on a surface (Sec. 4.1, Eq. 1).
 
@@ -210,7 +216,8 @@ def emd(
     sifter = Sifter(surface, options, backend)
     magnitude = float(np.max(np.abs(f)))
     unit = f / magnitude if magnitude > 0 else f
-    imfs, per_imf = [], []
+    imfs: list[np.ndarray] = []
+    per_imf: list[dict] = []
     residue = unit
     reference = sifter.energy(unit)
     if np.max(np.abs(fluctuation(surface, unit)), initial=0.0) <= FLAT_RTOL:
@@ -228,7 +235,7 @@ def emd(
             imfs.append(sifter.corrected(*sifted))
             per_imf.append(sifted[1])
             residue = unit - np.sum(imfs, axis=0)
-    imfs = np.array(imfs).reshape(len(imfs), len(f)) * (magnitude if magnitude > 0 else 1.0)
+    stacked = np.array(imfs).reshape(len(imfs), len(f)) * (magnitude if magnitude > 0 else 1.0)
     info = {
         "imfs": per_imf,
         "n_imfs": len(per_imf),
@@ -240,7 +247,7 @@ def emd(
         "max_constraint_error": sifter.max_constraint_error,
         "options": options.as_dict(),
     }
-    return result_with_quality(surface, f, imfs, info)
+    return result_with_quality(surface, f, stacked, info)
 
 
 def result_with_quality(surface: Surface, f: np.ndarray, imfs: np.ndarray, info: dict) -> EMDResult:

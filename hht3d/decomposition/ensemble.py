@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numbers
 import warnings
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -24,7 +26,9 @@ from .quality import quality_warnings_muted
 __all__ = ["eemd", "eemd_member", "combine_eemd", "ensemble_settings"]
 
 
-def ensemble_settings(options, ensemble, overrides: dict) -> tuple[EMDOptions, EnsembleOptions]:
+def ensemble_settings(
+    options: EMDOptions | dict | None, ensemble: EnsembleOptions | dict | None, overrides: dict
+) -> tuple[EMDOptions, EnsembleOptions]:
     """The EMD and ensemble records from records or dicts, each override sent to the record that has it.
 
     Raises
@@ -38,7 +42,7 @@ def ensemble_settings(options, ensemble, overrides: dict) -> tuple[EMDOptions, E
 
 def eemd_member(
     surface: Surface,
-    signal,
+    signal: np.ndarray,
     member_index: int,
     options: EMDOptions,
     ensemble: EnsembleOptions,
@@ -86,7 +90,7 @@ def eemd_member(
         return emd(surface, f + noise, options, backend=backend)
 
 
-def combine_eemd(surface: Surface, signal, members) -> EMDResult:
+def combine_eemd(surface: Surface, signal: np.ndarray, members: Sequence[Any]) -> EMDResult:
     """Average EEMD members into one decomposition.
 
     The IMFs are the member averages (members with fewer IMFs count as zero
@@ -128,12 +132,12 @@ def combine_eemd(surface: Surface, signal, members) -> EMDResult:
 
 def eemd(
     surface: Surface,
-    signal,
+    signal: np.ndarray,
     options: EMDOptions | dict | None = None,
     *,
     ensemble: EnsembleOptions | dict | None = None,
     backend: str | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> EMDResult:
     """Ensemble EMD (Wu & Huang 2009), the remedy for mode mixing.
 

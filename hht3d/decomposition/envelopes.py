@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -98,7 +99,7 @@ class _EnvelopeEnergies:
         floored = np.maximum(surface.mass_diagonal, MASS_FLOOR * np.median(surface.mass_diagonal))
         self.smoothing = self._on_pattern(keys, membrane @ sp.diags(1.0 / floored) @ membrane)
 
-    def _on_pattern(self, keys: np.ndarray, a) -> np.ndarray:
+    def _on_pattern(self, keys: np.ndarray, a: Any) -> np.ndarray:
         """The entries of ``a`` at the positions of the shared pattern (``keys``: row·n + column; zeros
         elsewhere)."""
         coo = a.tocoo()
@@ -156,7 +157,7 @@ def envelope_energies(surface: Surface) -> _EnvelopeEnergies:
 
 
 def envelope_operator(
-    surface: Surface, options: EMDOptions | dict | None = None, *, spacing: float | None = None, **overrides
+    surface: Surface, options: EMDOptions | dict | None = None, *, spacing: float | None = None, **overrides: Any
 ) -> sp.csr_matrix:
     """The energy matrix ``Q`` of the envelope interpolation (Eqs. 8–11).
 
@@ -223,12 +224,12 @@ class EnvelopeSolver:
 
 def envelope_interpolation(
     surface: Surface,
-    values,
-    constrained,
+    values: np.ndarray,
+    constrained: np.ndarray | None,
     options: EMDOptions | dict | None = None,
     *,
     backend: str | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> np.ndarray:
     """Interpolate ``values`` from the ``constrained`` vertices (Eq. 11).
 

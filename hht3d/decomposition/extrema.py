@@ -17,6 +17,7 @@ Examples
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -32,7 +33,12 @@ TIE_RTOL = 1e-9
 
 
 def local_extrema(
-    surface: Surface, f, options: EMDOptions | dict | None = None, *, tie_rtol: float = TIE_RTOL, **overrides
+    surface: Surface,
+    f: np.ndarray,
+    options: EMDOptions | dict | None = None,
+    *,
+    tie_rtol: float = TIE_RTOL,
+    **overrides: Any,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Indices of the local maxima and minima of a per-vertex signal.
 

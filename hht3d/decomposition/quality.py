@@ -30,6 +30,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -72,7 +73,7 @@ _MUTED = contextvars.ContextVar("hht3d_quality_warnings_muted", default=False)
 
 
 @contextlib.contextmanager
-def quality_warnings_muted():
+def quality_warnings_muted() -> Iterator[None]:
     """Issue no :class:`QualityWarning` inside the block, in this thread only.
 
     ``warnings.catch_warnings`` swaps the process-wide filter list, so under a
@@ -154,7 +155,7 @@ def _spike(s: np.ndarray) -> float:
     return top / p99 if p99 > 0 else (1.0 if top == 0 else float("inf"))
 
 
-def decomposition_quality(surface: Surface, signal, imfs, residue) -> Quality:
+def decomposition_quality(surface: Surface, signal: np.ndarray, imfs: np.ndarray, residue: np.ndarray) -> Quality:
     """Energy ratio, IO, energy shares and signal spike of ``signal = Σ imfs + residue``.
 
     Parameters

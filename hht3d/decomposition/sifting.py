@@ -59,6 +59,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 
@@ -100,7 +101,7 @@ class Sifter:
         self.boundary = surface.boundary_vertices
         self.max_constraint_error = 0.0
 
-    def extrema(self, h: np.ndarray):
+    def extrema(self, h: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Maximum and minimum masks plus the mask of components lacking either."""
         o = self.options
         is_max, is_min = extrema_masks(self.surface, h, o)
@@ -111,7 +112,9 @@ class Sifter:
         passive = ~(has_max & has_min)[self.labels]
         return is_max & ~passive, is_min & ~passive, passive
 
-    def envelopes(self, h: np.ndarray, is_max, is_min, passive, tension: float):
+    def envelopes(
+        self, h: np.ndarray, is_max: np.ndarray, is_min: np.ndarray, passive: np.ndarray, tension: float
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Upper and lower envelopes (Eq. 11 for ``τ = 0``) through the extrema."""
         return (self._envelope(h, is_max, passive, tension), self._envelope(h, is_min, passive, tension))
 
@@ -162,7 +165,7 @@ class Sifter:
         g = fluctuation(self.surface, f)
         return float(np.dot(self.mass * g, g))
 
-    def imf(self, residue: np.ndarray):
+    def imf(self, residue: np.ndarray) -> tuple[np.ndarray, dict] | None:
         """Sift one IMF out of ``residue``; ``None`` when it has < 2 maxima or minima.
 
         Tries the tensions of the cancellation guard in turn and keeps the
@@ -189,7 +192,7 @@ class Sifter:
                 best = (sifted, tension)
             if o.cancellation_tolerance is None or sifted.step_energy_ratio <= 1 + o.cancellation_tolerance:
                 break
-        sifted, tension = best
+        sifted, tension = cast(tuple[Any, float], best)
         return sifted.imf, {
             "sifts": sifted.sifts,
             "n_maxima": sifted.counts[0],

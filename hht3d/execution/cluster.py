@@ -18,6 +18,7 @@ from __future__ import annotations
 import asyncio
 import time
 from concurrent.futures import CancelledError
+from typing import Any
 
 import dask
 
@@ -35,7 +36,7 @@ class ClusterLost(HHT3DError):
     """The Dask cluster a run was computing on is gone (its scheduler, or every worker)."""
 
 
-def gather_bounded(client, futures, where: str) -> list:
+def gather_bounded(client: Any, futures: Any, where: str) -> list:
     """``client.gather(futures)``, checking the cluster every :data:`POLL` seconds.
 
     Raises

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import sys
 import time
+from typing import Any
 
 from dask.callbacks import Callback
 
@@ -21,14 +22,14 @@ PROGRESS_INTERVAL = 10.0
 _LOG = get_logger(PROGRESS)
 
 
-def is_terminal(stream) -> bool:
+def is_terminal(stream: Any) -> bool:
     try:
         return stream.isatty()
     except (AttributeError, ValueError):  # no isatty, or closed
         return False
 
 
-def local_progress():
+def local_progress() -> Any:
     """A redrawn bar on a terminal; rate-limited plain lines otherwise."""
     if is_terminal(sys.stderr):
         from dask.diagnostics import ProgressBar
@@ -51,21 +52,21 @@ class ProgressLines(Callback):
         self.interval = PROGRESS_INTERVAL if interval is None else interval
         self.start = self.last = time.monotonic()
 
-    def _start_state(self, dsk, state):
+    def _start_state(self, dsk: Any, state: Any) -> None:
         self.start = self.last = time.monotonic()
 
-    def _posttask(self, key, result, dsk, state, worker_id):
+    def _posttask(self, key: Any, result: Any, dsk: Any, state: Any, worker_id: Any) -> None:
         now = time.monotonic()
         if now - self.last >= self.interval:
             self.last = now
             self._line(state, now)
 
-    def _finish(self, dsk, state, errored):
+    def _finish(self, dsk: Any, state: Any, errored: bool) -> None:
         now = time.monotonic()
         if now - self.start >= self.interval and not errored:
             self._line(state, now)
 
-    def _line(self, state, now: float) -> None:
+    def _line(self, state: dict, now: float) -> None:
         done = len(state["finished"])
         total = done + sum(len(state[k]) for k in ("ready", "waiting", "running"))
         _LOG.info("%d%% of %d tasks done, %.0f s", 100 * done // max(total, 1), total, now - self.start)

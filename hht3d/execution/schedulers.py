@@ -22,7 +22,9 @@ import contextlib
 import logging
 import os
 import sys
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import dask
 
@@ -66,7 +68,7 @@ _LOG = get_logger("hht3d.execution")
 
 
 @contextlib.contextmanager
-def open_client(workers: int | None = None, address: str | None = None, *, announce: bool = True):
+def open_client(workers: int | None = None, address: str | None = None, *, announce: bool = True) -> Iterator[Any]:
     """A ``distributed.Client``: to ``address`` if given, else to a new ``LocalCluster``.
 
     The local cluster has ``workers`` single-threaded worker processes
@@ -104,13 +106,13 @@ def open_client(workers: int | None = None, address: str | None = None, *, annou
 
 
 def compute(
-    *graphs,
+    *graphs: Any,
     scheduler: str = "threads",
     workers: int | None = None,
     address: str | None = None,
     progress: bool = True,
-    client=None,
-):
+    client: Any = None,
+) -> tuple:
     """Compute Dask objects and return their values (a tuple, like ``dask.compute``).
 
     Parameters
@@ -143,17 +145,17 @@ def compute(
                     return _compute_distributed(client, graphs, progress)
                 with open_client(workers, address) as opened:
                     return _compute_distributed(opened, graphs, progress, address or "a local cluster")
-        options = {"scheduler": scheduler}
+        options: dict[str, Any] = {"scheduler": scheduler}
         if scheduler == "threads" and workers:
             options["num_workers"] = workers
         bar = local_progress() if progress else contextlib.nullcontext()
-        pool = _process_pool(workers) if scheduler == "processes" else contextlib.nullcontext()
+        pool: Any = _process_pool(workers) if scheduler == "processes" else contextlib.nullcontext()
         with bar, pool as pool:
             return dask.compute(*graphs, **options, **({"pool": pool} if pool is not None else {}))
 
 
 @contextlib.contextmanager
-def _process_pool(workers: int | None):
+def _process_pool(workers: int | None) -> Iterator[Any]:
     """A pool of ``workers`` processes (default one per core) with BLAS limited to one thread, all
     started at once with SIGINT ignored (so that Ctrl-C, sent to the whole process group, reaches the
     main process only, even while a worker is still starting)."""
@@ -172,7 +174,7 @@ def _process_pool(workers: int | None):
         pool.shutdown(wait=False, cancel_futures=True)
 
 
-def _compute_distributed(client, graphs, progress: bool, where: str = "the given client"):
+def _compute_distributed(client: Any, graphs: Sequence[Any], progress: bool, where: str = "the given client") -> tuple:
     from distributed import progress as show_progress
 
     futures = client.compute(list(graphs))

@@ -13,6 +13,8 @@ import contextlib
 import os
 import signal
 import sys
+from collections.abc import Iterator
+from types import FrameType
 
 import dask
 
@@ -78,7 +80,7 @@ def end_with_parent(parent: int | None) -> None:
 
 
 @contextlib.contextmanager
-def sigint_ignored_by_children():
+def sigint_ignored_by_children() -> Iterator[None]:
     """Worker processes started inside ignore SIGINT (an ignored signal stays ignored in a new
     interpreter), so Ctrl-C reaches the main process only, which stops them (:mod:`hht3d.stopping`).
 
@@ -122,7 +124,7 @@ def check_main_guard(what: str) -> None:
     spec = getattr(getattr(main, "__spec__", None), "name", "") or ""
     if spec == "__main__" or spec.endswith(".__main__"):  # python -m PACKAGE: spawned workers skip it
         return
-    frame = sys._getframe(1)
+    frame: FrameType | None = sys._getframe(1)
     while frame is not None and not (
         frame.f_globals is getattr(main, "__dict__", None) and frame.f_code.co_name == "<module>"
     ):
@@ -147,7 +149,7 @@ def check_main_guard(what: str) -> None:
         )
 
 
-def _is_main_test(test) -> bool:
+def _is_main_test(test: ast.expr) -> bool:
     """Whether ``test`` is ``__name__ == "__main__"`` (either way round)."""
     if not (isinstance(test, ast.Compare) and len(test.ops) == 1 and isinstance(test.ops[0], ast.Eq)):
         return False

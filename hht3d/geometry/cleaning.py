@@ -59,7 +59,7 @@ class CleanReport:
         )
 
 
-def _weld(vertices: np.ndarray):
+def _weld(vertices: np.ndarray) -> tuple[np.ndarray, int]:
     """Map vertices with identical coordinates to their first occurrence."""
     _, first, inverse = np.unique(vertices, axis=0, return_index=True, return_inverse=True)
     inverse = inverse.ravel()
@@ -67,7 +67,7 @@ def _weld(vertices: np.ndarray):
     return representative, len(vertices) - len(first)
 
 
-def clean_mesh(vertices: np.ndarray, faces: np.ndarray):
+def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, CleanReport]:
     """Weld duplicates, drop degenerate/duplicate faces and unreferenced vertices.
 
     Returns
@@ -103,7 +103,7 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray):
     return vertices[kept], old_to_kept[faces], report
 
 
-def clean_points(points: np.ndarray):
+def clean_points(points: np.ndarray) -> tuple[np.ndarray, CleanReport]:
     """Merge points at identical positions (they make the point-cloud Laplacian singular)."""
     representative, merged = _weld(points)
     kept = np.unique(representative)

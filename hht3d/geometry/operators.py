@@ -18,6 +18,8 @@ Conventions
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -41,7 +43,7 @@ __all__ = [
 ]
 
 
-def _edges(vertices: np.ndarray, faces: np.ndarray):
+def _edges(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Edge vectors opposite each corner: e[:, k] = v[k+2] - v[k+1]."""
     v = vertices[faces]  # (f, 3 corners, 3 coords)
     return np.stack([v[:, 2] - v[:, 1], v[:, 0] - v[:, 2], v[:, 1] - v[:, 0]], axis=1)
@@ -116,7 +118,7 @@ def mixed_voronoi_mass(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     # Voronoi share of corner k: edges adjacent to k are opposite k+1 and k+2
     voronoi = (sq[:, [1, 2, 0]] * cot[:, [1, 2, 0]] + sq[:, [2, 0, 1]] * cot[:, [2, 0, 1]]) / 8.0
     obtuse_corner = cot < 0
-    obtuse_face = obtuse_corner.any(axis=1)
+    obtuse_face = cast(np.ndarray, obtuse_corner.any(axis=1))
     share = np.where(obtuse_face[:, None], np.where(obtuse_corner, area[:, None] / 2, area[:, None] / 4), voronoi)
     mass = np.zeros(n)
     for k in range(3):
@@ -124,7 +126,9 @@ def mixed_voronoi_mass(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return mass
 
 
-def robust_mesh_operators(vertices: np.ndarray, faces: np.ndarray, mollify_factor: float = 1e-5):
+def robust_mesh_operators(
+    vertices: np.ndarray, faces: np.ndarray, mollify_factor: float = 1e-5
+) -> tuple[sp.csr_matrix, np.ndarray]:
     """``(L, mass_diagonal)`` from ``robust_laplacian.mesh_laplacian`` (intrinsic Delaunay)."""
     import robust_laplacian
 
@@ -134,7 +138,9 @@ def robust_mesh_operators(vertices: np.ndarray, faces: np.ndarray, mollify_facto
     return sp.csr_matrix(lap), np.asarray(mass.diagonal(), dtype=np.float64)
 
 
-def point_cloud_operators(points: np.ndarray, n_neighbors: int = 30, mollify_factor: float = 1e-5):
+def point_cloud_operators(
+    points: np.ndarray, n_neighbors: int = 30, mollify_factor: float = 1e-5
+) -> tuple[sp.csr_matrix, np.ndarray]:
     """``(L, mass_diagonal)`` from ``robust_laplacian.point_cloud_laplacian``."""
     import robust_laplacian
 
@@ -232,7 +238,9 @@ def tangent_gradient(
     return sp.csr_matrix((data, indices, indptr), shape=(3 * n, n))
 
 
-def _gradient_coefficients(vertices, normals, adj: sp.csr_matrix, first: int, last: int) -> np.ndarray:
+def _gradient_coefficients(
+    vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matrix, first: int, last: int
+) -> np.ndarray:
     """``(P^T P)^+ P_ij / |v_j - v_i|`` for the edges leaving vertices ``first..last-1``."""
     rows = np.repeat(np.arange(first, last), np.diff(adj.indptr[first : last + 1]))
     cols = adj.indices[adj.indptr[first] : adj.indptr[last]]
@@ -311,7 +319,7 @@ def corner_angles(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def grown_regions(
-    adj: sp.csr_matrix, mass: np.ndarray, seeds: np.ndarray, min_area, max_rings: int = 8
+    adj: sp.csr_matrix, mass: np.ndarray, seeds: np.ndarray, min_area: np.ndarray, max_rings: int = 8
 ) -> sp.csr_matrix:
     """Vertex regions around ``seeds``, grown ring by ring until they hold ``min_area``.
 

@@ -9,8 +9,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import InputError
@@ -78,9 +80,9 @@ def unreliable_vertices(surface: Surface, min_area: float = MIN_AREA_FRACTION) -
     area = surface.mass_diagonal
     bad = area < min_area * _reference_area(surface)
     if surface.is_mesh:
-        angles = np.degrees(ops.corner_angles(surface.vertices, surface.faces))
+        angles = np.degrees(ops.corner_angles(surface.vertices, cast(np.ndarray, surface.faces)))
         degenerate = (angles.min(axis=1) < NEEDLE_ANGLE) | (angles.max(axis=1) > CAP_ANGLE)
-        bad[surface.faces[degenerate].ravel()] = True
+        bad[cast(np.ndarray, surface.faces)[degenerate].ravel()] = True
     return bad
 
 
@@ -104,7 +106,7 @@ def _neighbour_median(surface: Surface, values: np.ndarray) -> np.ndarray:
     return out
 
 
-def _regions(surface: Surface, min_area: float):
+def _regions(surface: Surface, min_area: float) -> tuple[np.ndarray, sp.csr_matrix]:
     """Seeds (the :func:`unreliable_vertices`) and their regions: the closed 1-ring grown until it
     holds a typical area nearby (:func:`hht3d.geometry.operators.grown_regions`)."""
     seeds = np.flatnonzero(unreliable_vertices(surface, min_area))
@@ -206,16 +208,16 @@ def gaussian_curvature(surface: Surface, *, min_area: float = MIN_AREA_FRACTION)
     """
     if not surface.is_mesh:
         raise InputError(f"{surface.name}: Gaussian curvature (angle defect) needs a triangle mesh")
-    angles = ops.corner_angles(surface.vertices, surface.faces)
-    total = np.bincount(surface.faces.ravel(), weights=angles.ravel(), minlength=surface.n_vertices)
+    angles = ops.corner_angles(surface.vertices, cast(np.ndarray, surface.faces))
+    total = np.bincount(cast(np.ndarray, surface.faces).ravel(), weights=angles.ravel(), minlength=surface.n_vertices)
     defect = np.where(surface.boundary_vertices, np.pi, 2 * np.pi) - total
     if _fraction(min_area) == 0:
         return defect / surface.mass_diagonal
     return _pooled(surface, defect, min_area)
 
 
-def _fraction(min_area) -> float:
-    return CurvatureOptions.check("min_area", min_area)
+def _fraction(min_area: object) -> float:
+    return float(CurvatureOptions.check("min_area", min_area))
 
 
 def centroid_distance(surface: Surface) -> np.ndarray:
@@ -249,7 +251,7 @@ def stored(surface: Surface, name: str) -> np.ndarray:
     return check_signal(surface, surface.attributes[name], f"attribute {name!r}")
 
 
-def check_signal_path(path) -> Path:
+def check_signal_path(path: Path | str) -> Path:
     """``path`` if it names an existing ``.npy`` file; else an :class:`InputError` saying what it is."""
     path = Path(path)
     if path.suffix.lower() != ".npy":
@@ -262,7 +264,7 @@ def check_signal_path(path) -> Path:
     return path
 
 
-def load_signal(surface: Surface, path) -> np.ndarray:
+def load_signal(surface: Surface, path: Path | str) -> np.ndarray:
     """A user signal from a ``.npy`` file (one value per vertex), as written by ``numpy.save``."""
     path = check_signal_path(path)
     try:
@@ -288,7 +290,14 @@ SIGNALS = {
 }
 
 
-def signal(surface: Surface, kind: str, *, attribute: str | None = None, path=None, values=None) -> np.ndarray:
+def signal(
+    surface: Surface,
+    kind: str,
+    *,
+    attribute: str | None = None,
+    path: Path | str | None = None,
+    values: np.ndarray | None = None,
+) -> np.ndarray:
     """Compute a signal by name.
 
     ``kind`` is one of :data:`SIGNALS`, or ``"stored"`` (with ``attribute``),
@@ -309,15 +318,15 @@ def signal(surface: Surface, kind: str, *, attribute: str | None = None, path=No
     if kind in SIGNALS:
         return SIGNALS[kind](surface)
     if kind == "stored":
-        return stored(surface, attribute)
+        return stored(surface, cast(str, attribute))  # checked there
     if kind == "file":
-        return load_signal(surface, path)
+        return load_signal(surface, cast("Path | str", path))
     if kind == "array":
-        return check_signal(surface, values)
+        return check_signal(surface, cast(np.ndarray, values))
     raise InputError(f"unknown signal {kind!r}; choose one of {sorted(SIGNALS) + ['stored', 'file', 'array']}")
 
 
-def fluctuation(surface: Surface, f) -> np.ndarray:
+def fluctuation(surface: Surface, f: np.ndarray) -> np.ndarray:
     """``f`` (n,) or (k, n) minus its area-weighted mean on each connected component.
 
     ``f − Σ_c 1_c (1_cᵀ M f)/(1_cᵀ M 1_c)`` is M-orthogonal to the kernel of

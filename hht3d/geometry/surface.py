@@ -9,7 +9,9 @@ process, which rebuilds what it needs.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 import scipy.sparse as sp
@@ -77,17 +79,17 @@ class Surface:
 
     def __init__(
         self,
-        vertices,
-        faces=None,
+        vertices: np.ndarray,
+        faces: np.ndarray | None = None,
         *,
-        normals=None,
-        colors=None,
-        attributes=None,
+        normals: np.ndarray | None = None,
+        colors: np.ndarray | None = None,
+        attributes: dict | None = None,
         laplacian: str = "cotan",
         n_neighbors: int = 30,
         name: str | None = None,
         clean_report: CleanReport | None = None,
-    ):
+    ) -> None:
         self.name = name or "surface"
         self.vertices = _as_vertices(vertices, self.name)
         n = len(self.vertices)
@@ -113,7 +115,15 @@ class Surface:
 
     # -- construction -----------------------------------------------------------------
     @classmethod
-    def cleaned(cls, vertices, faces=None, *, colors=None, attributes=None, **options) -> "Surface":
+    def cleaned(
+        cls,
+        vertices: np.ndarray,
+        faces: np.ndarray | None = None,
+        *,
+        colors: np.ndarray | None = None,
+        attributes: dict | None = None,
+        **options: Any,
+    ) -> "Surface":
         """Clean the arrays (see :mod:`hht3d.geometry.cleaning`) and build a surface.
 
         Per-vertex colours and attributes follow the kept vertices; the
@@ -139,14 +149,14 @@ class Surface:
         )
 
     # -- pickling: operators and factorizations are rebuilt where needed ----------------
-    def __getstate__(self):
+    def __getstate__(self) -> dict:
         state = self.__dict__.copy()
         normals = self.cache.get("normals")
         state["cache"] = {} if normals is None else {"normals": normals}
         return state
 
     def __repr__(self) -> str:
-        kind = f"mesh, {len(self.faces)} faces" if self.is_mesh else "point cloud"
+        kind = f"mesh, {len(self._triangles)} faces" if self.is_mesh else "point cloud"
         return f"Surface({self.name!r}: {self.n_vertices} vertices, {kind})"
 
     # -- basic properties -------------------------------------------------------------
@@ -155,10 +165,15 @@ class Surface:
         return self.faces is not None
 
     @property
+    def _triangles(self) -> np.ndarray:
+        """:attr:`faces` where :attr:`is_mesh` was checked (for the type checker)."""
+        return cast(np.ndarray, self.faces)
+
+    @property
     def n_vertices(self) -> int:
         return len(self.vertices)
 
-    def _cached(self, key, build):
+    def _cached(self, key: str, build: Callable[[], Any]) -> Any:
         if key not in self.cache:
             self.cache[key] = build()
         return self.cache[key]
@@ -174,24 +189,24 @@ class Surface:
 
     def _build_normals(self) -> np.ndarray:
         if self.is_mesh:
-            return ops.vertex_normals(self.vertices, self.faces)
+            return ops.vertex_normals(self.vertices, self._triangles)
         return estimate_point_normals(self.vertices)
 
     @property
     def face_areas(self) -> np.ndarray:
         self._require_mesh("face areas")
-        return self._cached("face_areas", lambda: ops.face_areas(self.vertices, self.faces))
+        return self._cached("face_areas", lambda: ops.face_areas(self.vertices, self._triangles))
 
     # -- operators --------------------------------------------------------------------
     def _operators(self) -> _Operators:
-        def build():
+        def build() -> _Operators:
             if not self.is_mesh:
                 lap, mass = ops.point_cloud_operators(self.vertices, self.n_neighbors)
             elif self.laplacian == "robust":
-                lap, mass = ops.robust_mesh_operators(self.vertices, self.faces)
+                lap, mass = ops.robust_mesh_operators(self.vertices, self._triangles)
             else:
-                lap = ops.cotan_laplacian(self.vertices, self.faces)
-                mass = ops.mixed_voronoi_mass(self.vertices, self.faces)
+                lap = ops.cotan_laplacian(self.vertices, self._triangles)
+                mass = ops.mixed_voronoi_mass(self.vertices, self._triangles)
             if not np.all(mass > 0):
                 hint = (
                     "load with clean=True to remove unreferenced vertices"
@@ -232,7 +247,7 @@ class Surface:
         k = int(k)
         return self.adjacency if k == 1 else self._cached(f"ring:{k}", lambda: ops.k_ring(self.adjacency, k))
 
-    def _components(self):
+    def _components(self) -> Any:
         return self._cached("components", lambda: ops.connected_components(self.adjacency))
 
     @property
@@ -249,7 +264,7 @@ class Surface:
         """Mask of boundary vertices (always all-False for point clouds)."""
         if not self.is_mesh:
             return np.zeros(self.n_vertices, dtype=bool)
-        return self._cached("boundary", lambda: ops.boundary_vertices(self.n_vertices, self.faces))
+        return self._cached("boundary", lambda: ops.boundary_vertices(self.n_vertices, self._triangles))
 
     def gradient(self, kind: str = "lsq") -> sp.csr_matrix:
         """Per-vertex tangent gradient operator ``(3n, n)``.
@@ -264,13 +279,13 @@ class Surface:
             )
         if kind == "fem":
             self._require_mesh("the FEM gradient")
-            return self._cached("gradient:fem", lambda: ops.vertex_fem_gradient(self.vertices, self.faces))
+            return self._cached("gradient:fem", lambda: ops.vertex_fem_gradient(self.vertices, self._triangles))
         raise InputError(f"unknown gradient kind {kind!r}; choose 'lsq' or 'fem'")
 
     def face_gradient(self) -> sp.csr_matrix:
         """Per-face P1 gradient operator ``(3f, n)`` (meshes only)."""
         self._require_mesh("the per-face gradient")
-        return self._cached("gradient:face", lambda: ops.face_gradient(self.vertices, self.faces))
+        return self._cached("gradient:face", lambda: ops.face_gradient(self.vertices, self._triangles))
 
     def _require_mesh(self, what: str) -> None:
         if not self.is_mesh:
@@ -294,7 +309,7 @@ def _check_cloud(points: np.ndarray, n_neighbors: int, name: str) -> None:
 MAX_COORDINATE = 1e75
 
 
-def _as_vertices(vertices, name: str) -> np.ndarray:
+def _as_vertices(vertices: np.ndarray, name: str) -> np.ndarray:
     try:
         v = np.array(vertices, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -318,7 +333,7 @@ def _as_vertices(vertices, name: str) -> np.ndarray:
     return v
 
 
-def _as_faces(faces, n: int, name: str):
+def _as_faces(faces: np.ndarray | None, n: int, name: str) -> np.ndarray | None:
     if faces is None:
         return None
     f = np.asarray(faces)
@@ -335,7 +350,7 @@ def _as_faces(faces, n: int, name: str):
     return f
 
 
-def _as_per_vertex(values, n: int, width, what: str, name: str) -> np.ndarray:
+def _as_per_vertex(values: np.ndarray, n: int, width: int | None, what: str, name: str) -> np.ndarray:
     a = np.asarray(values, dtype=np.float64)
     expected = (n,) if width is None else (n, width)
     if a.shape != expected:

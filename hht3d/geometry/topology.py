@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
@@ -11,7 +13,7 @@ from .surface import Surface
 __all__ = ["edge_face_counts", "describe"]
 
 
-def edge_face_counts(faces: np.ndarray):
+def edge_face_counts(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unique undirected edges ``(e, 2)`` and how many faces use each."""
     e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
     return np.unique(e, axis=0, return_counts=True)
@@ -22,7 +24,7 @@ def _non_manifold_vertices(surface: Surface) -> int:
     import open3d as o3d
 
     mesh = o3d.geometry.TriangleMesh(
-        o3d.utility.Vector3dVector(surface.vertices), o3d.utility.Vector3iVector(surface.faces)
+        o3d.utility.Vector3dVector(surface.vertices), o3d.utility.Vector3iVector(cast(np.ndarray, surface.faces))
     )
     return len(mesh.get_non_manifold_vertices())
 
@@ -43,7 +45,7 @@ def describe(surface: Surface) -> dict:
         info["cleaning"] = surface.clean_report.summary()
     if not surface.is_mesh:
         return info
-    edges, counts = edge_face_counts(surface.faces)
+    edges, counts = edge_face_counts(cast(np.ndarray, surface.faces))
     boundary = edges[counts == 1]
     n = surface.n_vertices
     loops = 0
@@ -53,9 +55,9 @@ def describe(surface: Surface) -> dict:
         loops = len(np.unique(labels[np.unique(boundary)]))
     info.update(
         {
-            "faces": len(surface.faces),
+            "faces": len(cast(np.ndarray, surface.faces)),
             "edges": len(edges),
-            "euler_characteristic": n - len(edges) + len(surface.faces),
+            "euler_characteristic": n - len(edges) + len(cast(np.ndarray, surface.faces)),
             "boundary_loops": loops,
             "boundary_vertices": int(surface.boundary_vertices.sum()),
             "non_manifold_edges": int(np.sum(counts > 2)),

@@ -19,7 +19,7 @@ from .surface import Surface
 __all__ = ["check_surface", "check_signal", "as_signals", "as_imfs"]
 
 
-def check_surface(surface) -> Surface:
+def check_surface(surface: object) -> Surface:
     """``surface`` if it is an :class:`~hht3d.geometry.surface.Surface`.
 
     Examples
@@ -36,7 +36,7 @@ def check_surface(surface) -> Surface:
     return surface
 
 
-def check_signal(surface: Surface, values, what: str = "signal") -> np.ndarray:
+def check_signal(surface: Surface, values: np.ndarray, what: str = "signal") -> np.ndarray:
     """One finite real float per vertex of ``surface``, as an ``(n,)`` float64 array.
 
     Complex values are refused rather than cut to their real part; a wrong
@@ -66,7 +66,7 @@ def check_signal(surface: Surface, values, what: str = "signal") -> np.ndarray:
     return a
 
 
-def as_signals(surface: Surface, f, what: str = "signal") -> tuple[np.ndarray, bool]:
+def as_signals(surface: Surface, f: np.ndarray, what: str = "signal") -> tuple[np.ndarray, bool]:
     """``f`` as a finite ``(k, n)`` float array, and whether it was a single ``(n,)`` signal."""
     try:
         a = np.asarray(f, dtype=np.float64)
@@ -83,7 +83,7 @@ def as_signals(surface: Surface, f, what: str = "signal") -> tuple[np.ndarray, b
     return np.atleast_2d(a), a.ndim == 1
 
 
-def as_imfs(surface: Surface, imfs) -> np.ndarray:
+def as_imfs(surface: Surface, imfs: np.ndarray) -> np.ndarray:
     """At least one finite IMF as a ``(k, n)`` array, from an array, an EMD or an HHT result."""
     a = getattr(imfs, "imfs", imfs)
     try:

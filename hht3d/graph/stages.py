@@ -40,8 +40,10 @@ from __future__ import annotations
 
 import functools
 import inspect
+from pathlib import Path
 from typing import Any, Callable, ParamSpec
 
+import numpy as np
 from dask.delayed import Delayed
 
 from .. import apps
@@ -121,7 +123,7 @@ def mirror(
     """
     signature = inspect.signature(func).replace(return_annotation="Delayed")
 
-    def lazy(*args, **kwargs):
+    def lazy(*args: Any, **kwargs: Any) -> Any:
         bound = signature.bind(*args, **kwargs)
         bound.apply_defaults()
         if settle is not None:
@@ -131,8 +133,8 @@ def mirror(
         return build(_PLAIN, *bound.args, **bound.kwargs)
 
     functools.update_wrapper(lazy, func)
-    del lazy.__wrapped__  # the twin's signature is its own
-    lazy.__signature__ = signature
+    delattr(lazy, "__wrapped__")  # the twin's signature is its own
+    setattr(lazy, "__signature__", signature)
     lazy.__module__ = __name__
     eager = inspect.cleandoc(func.__doc__ or "").split("\nExamples\n--------")[0].rstrip()
     lazy.__doc__ = f"Lazy :func:`{func.__module__}.{func.__name__}`: {tasks}.\n\n{eager}\n"
@@ -141,7 +143,7 @@ def mirror(
     return lazy
 
 
-def _load_tasks(builder: Builder, path, options=None, **keywords):
+def _load_tasks(builder: Builder, path: Path | str, options: Any = None, **keywords: Any) -> Any:
     return builder.task("load", _load)(str(path), options, **keywords)
 
 
@@ -154,7 +156,7 @@ def _with_operators(surface: Surface) -> Surface:
     return surface
 
 
-def operators(surface):
+def operators(surface: Surface) -> Any:
     """Lazy operator build; later tasks in the same process reuse them (:func:`resident`)."""
     return _PLAIN.task("operators", _with_operators)(surface)
 
@@ -172,8 +174,14 @@ def _settle_eemd(arguments: dict) -> None:
 
 
 def _eemd_tasks(
-    builder: Builder, surface, signal, options: EMDOptions, *, ensemble: EnsembleOptions, backend: str | None = None
-):
+    builder: Builder,
+    surface: Surface,
+    signal: np.ndarray,
+    options: EMDOptions,
+    *,
+    ensemble: EnsembleOptions,
+    backend: str | None = None,
+) -> Any:
     return decomposition_stage(builder, surface, signal, options, ensemble, backend)
 
 
@@ -184,12 +192,12 @@ eemd = mirror(_eemd, _eemd_tasks, settle=_settle_eemd, tasks="one task per membe
 
 def monogenic(
     surface: Surface,
-    imfs,
+    imfs: np.ndarray,
     options: RieszOptions | dict | None = None,
     *,
     backend: str | None = None,
     riesz_tasks: int | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> Delayed:
     """Lazy :func:`hht3d.spectral.monogenic`: the shift-group tasks of :func:`riesz_potential`
     (``riesz_tasks`` of them, default one per worker), then one task of
@@ -205,13 +213,13 @@ monogenic_from_potential = mirror(_monogenic_from_potential)
 
 def transform(
     builder: Builder,
-    surface,
-    signal,
+    surface: Surface,
+    signal: np.ndarray,
     options: HHTOptions | dict | None = None,
     *,
     backend: str | None = None,
     riesz_tasks: int | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> dict:
     """The tasks of one HHT by stage name (:func:`hht3d.transform.hht_stages`): ``emd``, ``imfs``,
     ``riesz``, ``monogenic``, ``hht``.  Settings (as for :func:`hht3d.hht`) are checked now, before
@@ -221,7 +229,7 @@ def transform(
 
 
 def transform_file(
-    builder: Builder, path, signal: str = "mean_curvature", load_options: dict | None = None, **options
+    builder: Builder, path: Path | str, signal: str = "mean_curvature", load_options: dict | None = None, **options: Any
 ) -> dict:
     """:func:`transform` of one file's signal, with its ``load`` and ``signal`` tasks."""
     surface = _load_tasks(builder, path, **(load_options or {}))
@@ -231,12 +239,12 @@ def transform_file(
 
 def hht(
     surface: Surface,
-    signal,
+    signal: np.ndarray,
     options: HHTOptions | dict | None = None,
     *,
     backend: str | None = None,
     riesz_tasks: int | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> Delayed:
     """Lazy :func:`hht3d.hht`: the tasks of :func:`transform` (``riesz_tasks`` shift groups of the
     Riesz quadrature, default one per worker).  Arguments as the eager function's.
@@ -261,7 +269,7 @@ def hht(
     return transform(_PLAIN, surface, signal, options, backend=backend, riesz_tasks=riesz_tasks)["hht"]
 
 
-def save(result, path, *, storage_options: dict | None = None):
+def save(result: HHTResult, path: Path | str, *, storage_options: dict | None = None) -> Any:
     """Lazy :meth:`HHTResult.save <hht3d.transform.HHTResult.save>` (atomic PLY or npz write; ``path``
     may be an fsspec URL, written by the worker with ``storage_options``); returns the path."""
     return _PLAIN.task("save", HHTResult.save)(result, str(path), storage_options=storage_options)

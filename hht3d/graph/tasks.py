@@ -21,7 +21,9 @@ import contextlib
 import functools
 import threading
 from collections import OrderedDict
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from dask import delayed
@@ -35,6 +37,10 @@ from ..spectral.options import RieszOptions
 from ..spectral.quadrature import combine_quadrature_parts, quadrature_part, quadrature_plan
 from ..spectral.riesz_transform import fractional_laplacian
 from ..spectral.shifts import shift_analysis
+
+if TYPE_CHECKING:
+    from hht3d.spectral.quadrature import QuadraturePlan
+
 
 __all__ = [
     "Builder",
@@ -85,11 +91,15 @@ class Builder:
         Shift-group tasks of the Riesz quadrature (:func:`riesz_potential`).
     """
 
-    def __init__(self, guard=None, riesz_tasks: int | None = None):
+    def __init__(
+        self,
+        guard: Callable[..., Callable[..., Any]] | None = None,
+        riesz_tasks: int | None = None,
+    ) -> None:
         self.guard = guard
         self.riesz_tasks = GraphOptions.check("riesz_tasks", riesz_tasks)
 
-    def task(self, step: str, func):
+    def task(self, step: str, func: Callable[..., Any]) -> Callable[..., Any]:
         """A ``dask.delayed`` of ``func`` named after ``step``.
 
         In-memory surfaces and arrays among its arguments enter the graph once,
@@ -98,12 +108,12 @@ class Builder:
         func = _OnWorker(func)
         wrapped = delayed(func if self.guard is None else self.guard(step, func), pure=True)
 
-        def call(*args, **kwargs):
+        def call(*args: Any, **kwargs: Any) -> Any:
             return wrapped(*map(as_key, args), **{k: as_key(v) for k, v in kwargs.items()})
 
         return call
 
-    def potential(self, surface, imfs, riesz: RieszOptions, backend: str | None):
+    def potential(self, surface: Surface, imfs: np.ndarray, riesz: RieszOptions, backend: str | None) -> Any:
         """``L^{-1/2}`` of the IMFs as :func:`riesz_potential`'s tasks (the ``Stages`` of
         :func:`hht3d.transform.hht_stages`)."""
         return riesz_potential(surface, imfs, riesz, backend=backend, riesz_tasks=self.riesz_tasks, builder=self)
@@ -139,17 +149,17 @@ def resident(surface: Surface) -> Surface:
 class _OnWorker:
     """A task function that receives its surfaces through :func:`resident`."""
 
-    def __init__(self, func):
+    def __init__(self, func: Callable[..., Any]):
         self.func = func
         functools.update_wrapper(self, func)
 
-    def __call__(self, *args, **kwargs):
-        def local(value):
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        def local(value: Any) -> Any:
             return resident(value) if isinstance(value, Surface) else value
 
         return self.func(*map(local, args), **{k: local(v) for k, v in kwargs.items()})
 
-    def __dask_tokenize__(self):
+    def __dask_tokenize__(self) -> tuple:
         return "hht3d.graph.tasks._OnWorker", tokenize(self.func)
 
 
@@ -160,13 +170,13 @@ class _SharedAnalysis:
     it in one process (threads) take turns.
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._lock = threading.Lock()
         self._symbolic = None
 
     @classmethod
     @contextlib.contextmanager
-    def of(cls, surface: Surface, backend: str | None):
+    def of(cls, surface: Surface, backend: str | None) -> Iterator[Any]:
         backend = default_backend() if backend is None else backend
         with _RESIDENT_LOCK:
             shared = surface.cache.setdefault(f"graph:shift_analysis:{backend}", cls())
@@ -176,24 +186,26 @@ class _SharedAnalysis:
             yield shared._symbolic
 
 
-def _quadrature_plan(surface: Surface, tol: float, backend: str | None):
+def _quadrature_plan(surface: Surface, tol: float, backend: str | None) -> QuadraturePlan:
     """:func:`hht3d.spectral.quadrature_plan` with this process's shared shift analysis."""
     with _SharedAnalysis.of(surface, backend) as symbolic:
         return quadrature_plan(surface, tol, symbolic=symbolic)
 
 
-def _quadrature_part(surface: Surface, f, plan, group: int, groups: int, backend: str | None):
+def _quadrature_part(
+    surface: Surface, f: np.ndarray, plan: QuadraturePlan, group: int, groups: int, backend: str | None
+) -> np.ndarray:
     """:func:`hht3d.spectral.quadrature_part` with this process's shared shift analysis."""
     with _SharedAnalysis.of(surface, backend) as symbolic:
         return quadrature_part(surface, f, plan, group, groups, symbolic=symbolic)
 
 
-def from_surface(surface: Surface):
+def from_surface(surface: Surface) -> Any:
     """Put an in-memory surface into the graph once, as a single key."""
     return delayed(surface, name=f"surface-{surface.name}-{id(surface):x}")
 
 
-def as_key(value):
+def as_key(value: Any) -> Any:
     """A surface or array as one graph key (Delayed objects and small values pass through)."""
     if isinstance(value, Surface):
         return from_surface(value)
@@ -203,15 +215,15 @@ def as_key(value):
 
 
 def riesz_potential(
-    surface,
-    imfs,
+    surface: Surface,
+    imfs: np.ndarray,
     options: RieszOptions | dict | None = None,
     *,
     backend: str | None = None,
     riesz_tasks: int | None = None,
     builder: Builder | None = None,
-    **overrides,
-):
+    **overrides: Any,
+) -> Any:
     """Lazy ``L^{-1/2}`` of all IMFs, ``(k, n)``, with the ``potential``, ``tol`` and ``eigenpairs`` of
     ``options`` (:class:`~hht3d.spectral.options.RieszOptions`, with ``overrides``).
 

@@ -23,6 +23,7 @@ import re
 import tempfile
 import threading
 import uuid
+from collections.abc import Callable, Collection, Iterable, Iterator
 from pathlib import Path
 
 import psutil
@@ -65,7 +66,7 @@ def _prefix(name: str) -> str:
 
 
 @contextlib.contextmanager
-def atomic_path(path):
+def atomic_path(path: Path | str) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it to ``path`` on success.
 
     On any exception the temporary file is removed and ``path`` is untouched.
@@ -130,7 +131,9 @@ def _create(path: Path, folder: int | None) -> str:
     raise FileExistsError(f"no free temporary name beside {path.name}")
 
 
-def _at(operation, folder: int | None, name: str, target: str | None, tmp: Path, path: Path | None) -> None:
+def _at(
+    operation: Callable[..., None], folder: int | None, name: str, target: str | None, tmp: Path, path: Path | None
+) -> None:
     """``operation`` (os.replace or os.unlink) on the temporary file, relative to the open ``folder`` if any."""
     if folder is None:
         operation(tmp, *([path] if path is not None else []))
@@ -140,13 +143,13 @@ def _at(operation, folder: int | None, name: str, target: str | None, tmp: Path,
         operation(name, target, src_dir_fd=folder, dst_dir_fd=folder)
 
 
-def confined(path, folder) -> Path | None:
+def confined(path: Path | str, folder: Path | str) -> Path | None:
     """``path`` resolved (symlinks followed) if it lies inside ``folder`` resolved, else ``None``."""
     resolved, root = Path(os.path.realpath(path)), Path(os.path.realpath(folder))
     return resolved if resolved == root or root in resolved.parents else None
 
 
-def check_inside(tmp, path, folder) -> None:
+def check_inside(tmp: Path, path: Path | str, folder: Path | str) -> None:
     """Refuse, just before its rename, a temporary file of ``path`` that no longer lies inside ``folder``
     (a subfolder swapped for a link after the output locations were checked).
 
@@ -167,7 +170,7 @@ _BEFORE_RENAME = threading.local()
 
 
 @contextlib.contextmanager
-def before_rename(hook):
+def before_rename(hook: Callable[[Path, Path | str], None] | None) -> Iterator[None]:
     """Call ``hook(tmp, path)`` in this thread before each rename of :func:`atomic_path`, once the
     temporary file is complete (``None``: nothing); the manifest records writes this way
     (:func:`hht3d.io.manifest.recording`)."""
@@ -178,7 +181,7 @@ def before_rename(hook):
         _BEFORE_RENAME.hook = previous
 
 
-def _record(tmp, path) -> None:
+def _record(tmp: Path, path: Path | str) -> None:
     hook = getattr(_BEFORE_RENAME, "hook", None)
     if hook is not None:
         hook(tmp, path)
@@ -189,7 +192,7 @@ def _alive(pid: int) -> bool:
     return psutil.pid_exists(pid)
 
 
-def remove_stale_parts(folders, own=()) -> list[Path]:
+def remove_stale_parts(folders: Iterable[Path | str], own: Collection[int] = ()) -> list[Path]:
     """Remove the temporary files of :func:`atomic_path` in ``folders`` (not below) whose writing
     process has ended, or is one of ``own`` (pids of this run stopping); return what was removed."""
     removed = []
@@ -214,7 +217,7 @@ def _cannot_write(path: Path, exc: OSError) -> OutputError:
     )
 
 
-def check_output_paths(paths) -> None:
+def check_output_paths(paths: Iterable[Path | str]) -> None:
     """Check, creating nothing, that files can be written at ``paths`` (their folders may not exist yet).
 
     For each path: it must not be a folder; the nearest existing folder

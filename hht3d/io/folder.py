@@ -23,7 +23,9 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Callable, Iterable
 from pathlib import Path, PurePosixPath
+from typing import Any, cast
 
 from ..errors import OutputError
 from . import storage, uploads
@@ -48,15 +50,15 @@ class Uploaded:
     """A writer whose last positional argument is a URL: written locally, then uploaded
     (:func:`hht3d.io.uploads.write_via`; a picklable task function)."""
 
-    def __init__(self, write, storage_options: dict | None):
+    def __init__(self, write: Callable[..., Any], storage_options: dict | None):
         self.write, self.storage_options = write, storage_options or None
         self.__name__ = getattr(write, "__name__", "write")
         self.__module__, self.__qualname__ = write.__module__, write.__qualname__
 
-    def __dask_tokenize__(self):
+    def __dask_tokenize__(self) -> tuple:
         return (self.write.__module__, self.write.__qualname__, repr(sorted((self.storage_options or {}).items())))
 
-    def __call__(self, *args, **kwargs):
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
         return uploads.write_via(self.write, *args, storage_options=self.storage_options, **kwargs)
 
 
@@ -76,14 +78,19 @@ class OutputFolder:
     """
 
     def __init__(
-        self, location, *, storage_options: dict | None = None, run: str | None = None, allow_outside: bool = False
+        self,
+        location: Path | str,
+        *,
+        storage_options: dict | None = None,
+        run: str | None = None,
+        allow_outside: bool = False,
     ):
         self.location, self.storage_options = storage.local_path(location), storage_options or None
         self.is_url, self.allow_outside = storage.is_url(self.location), allow_outside
         self.run = run or new_run_id()
         self._known: dict | None = None
 
-    def prepare(self, paths, *, overwrite: bool = False) -> None:
+    def prepare(self, paths: Iterable[Path | str], *, overwrite: bool = False) -> None:
         """Before a run: the outputs can be written; locally, none replaces a file hht3d did not write
         (unless ``overwrite``) and temporary files that killed runs left in their folders are removed.
 
@@ -99,40 +106,45 @@ class OutputFolder:
         self.check_overwrites(paths, overwrite=overwrite)
         remove_stale_parts(self.part_folders(paths))
 
-    def finish(self, paths, written=()) -> None:
+    def finish(self, paths: Iterable[Path | str], written: Iterable[Path | str] = ()) -> None:
         """After a run: remove the temporary files that workers killed mid-write left (a nanny
         restarts such a worker and its task runs again elsewhere); a URL folder has none here, and
         records the ``written`` outputs in its manifest object (:meth:`record`)."""
         remove_stale_parts(self.part_folders(paths))
         if self.is_url:
-            self.record(written)
+            self.record(cast(Iterable[str], written))  # a URL folder's outputs are URLs
 
-    def record(self, urls) -> None:
+    def record(self, urls: Iterable[str]) -> None:
         """Add the objects ``urls`` of a URL folder, as they are now, to its manifest object (written last,
         merged with other runs' entries; :func:`hht3d.io.uploads.update_object`)."""
         found = {}
         for url in urls:
-            key, sums = storage.under(url, self.location), _digest_of(url, self.storage_options)
+            key, sums = storage.under(url, self._url), _digest_of(url, self.storage_options)
             if key is not None and sums is not None:
                 found[key] = sums
         if found:
             uploads.update_object(
-                storage.join(self.location, MANIFEST),
+                cast(str, storage.join(self._url, MANIFEST)),
                 lambda old: updated(self._parsed(old), found, self.run).encode(),
                 self.storage_options,
             )
 
-    def recorded(self, url) -> bool:
+    def recorded(self, url: str) -> bool:
         """Whether a URL folder's manifest object records ``url`` as it is now (same size and SHA-256)."""
         if self._known is None:
-            fs, path = storage.filesystem(storage.join(self.location, MANIFEST), self.storage_options)
+            fs, path = storage.filesystem(cast(str, storage.join(self._url, MANIFEST)), self.storage_options)
             try:
                 fs.invalidate_cache()
                 self._known = self._parsed(fs.cat_file(path))
             except Exception:  # the back-ends raise many types: no manifest counts as empty
                 self._known = {}
-        entry = self._known.get(storage.under(url, self.location))
+        entry: Any = self._known.get(storage.under(url, self._url))
         return bool(entry) and _digest_of(url, self.storage_options, entry["size"]) == (entry["size"], entry["sha256"])
+
+    @property
+    def _url(self) -> str:
+        """The location of a URL folder (for the type checker)."""
+        return cast(str, self.location)
 
     @staticmethod
     def _parsed(data: bytes | None) -> dict:
@@ -142,7 +154,7 @@ class OutputFolder:
         except ValueError:
             return {}
 
-    def check_overwrites(self, paths, *, overwrite: bool = False) -> None:
+    def check_overwrites(self, paths: Iterable[Path | str], *, overwrite: bool = False) -> None:
         """Locally, refuse to replace a file hht3d did not write (:func:`hht3d.io.manifest.check_overwrites`);
         a URL folder checks nothing here (no rule protects an object hht3d did not write).
 
@@ -153,22 +165,22 @@ class OutputFolder:
         if not self.is_url:
             check_overwrites(paths, self.location, overwrite)
 
-    def part_folders(self, paths) -> set:
+    def part_folders(self, paths: Iterable[Path | str]) -> set:
         """The local folders where writes of ``paths`` leave temporary files (none for a URL folder,
         whose temporary files are in the system's temporary folder)."""
         return set() if self.is_url else {Path(self.location), *(Path(p).parent for p in paths)}
 
-    def done(self, paths) -> bool:
+    def done(self, paths: Iterable[Path | str]) -> bool:
         """Whether an input with these outputs is finished (``resume``): locally, every output is
         recorded complete in the manifest (same size and checksum); for a URL, likewise in its manifest
         object (:meth:`recorded`)."""
         if self.is_url:
-            return all(self.recorded(p) for p in paths)
+            return all(self.recorded(cast(str, p)) for p in paths)
         if self._known is None:
             self._known = entries(self.location)
         return all(is_recorded(p, self.location, self._known) for p in paths)
 
-    def writer(self, write):
+    def writer(self, write: Callable[..., Any]) -> Callable[..., Any]:
         """``write`` as a task function writing into this folder: recorded locally, uploaded to a URL."""
         if self.is_url:
             return Uploaded(write, self.storage_options)
@@ -189,7 +201,13 @@ def _digest_of(url: str, storage_options: dict | None, size: int | None = None) 
         return None
 
 
-def check_locations(items: dict, folder, *, allow_outside: bool = False, where=lambda source, path: str(path)) -> None:
+def check_locations(
+    items: dict,
+    folder: Path | str,
+    *,
+    allow_outside: bool = False,
+    where: Callable[[Any, Any], str] = lambda source, path: str(path),
+) -> None:
     """Refuse, before anything is computed, outputs that no file system takes, that resolve outside a
     local ``folder`` (unless ``allow_outside``), or that are one of the inputs.
 
@@ -202,7 +220,7 @@ def check_locations(items: dict, folder, *, allow_outside: bool = False, where=l
     OutputError
     """
 
-    def real(location):
+    def real(location: Path | str) -> str:
         return str(location) if storage.is_url(location) else os.path.realpath(location)
 
     folder = storage.local_path(folder)
@@ -220,11 +238,11 @@ def check_locations(items: dict, folder, *, allow_outside: bool = False, where=l
                 )
 
 
-def _check_inside(path, folder, where: str) -> None:
+def _check_inside(path: Path | str, folder: Path | str, where: str) -> None:
     """Refuse an output outside ``folder``: locally after links, for a URL by its normalised key."""
     if not storage.is_url(path):
         check_output_location(path, folder, where)
-    elif storage.under(path, folder) is None:
+    elif storage.under(path, cast(str, folder)) is None:  # a URL folder's outputs are URLs
         raise OutputError(
             f"{where}: {path} leaves the output folder {folder}; write inside it (or set outputs.allow_outside: true)"
         )

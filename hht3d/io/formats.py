@@ -36,7 +36,7 @@ NAME_MAX = 255
 PATH_MAX = 4096
 
 
-def short(path) -> str:
+def short(path: Path | str) -> str:
     """A path for a message, cut if absurdly long."""
     return one_line(path, MAX_SHOWN)
 
@@ -83,7 +83,7 @@ def check_regular_file(path: Path, what: str = "a mesh or point-cloud file") -> 
         raise InputError(f"{shown}: is {kind}, not a regular file; give {what}")
 
 
-def checked_name(key) -> str:
+def checked_name(key: object) -> str:
     """``key`` if it is usable as a written PLY property, else an :class:`InputError`."""
     if not _NAME.match(str(key)) or key in PLY_RESERVED:
         raise InputError(

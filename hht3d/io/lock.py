@@ -17,16 +17,17 @@ import socket
 import stat
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 try:  # POSIX
     import fcntl
 except ImportError:  # Windows
-    fcntl = None
+    fcntl = None  # type: ignore[assignment]  # the module or None, by platform
 try:  # Windows
     import msvcrt
 except ImportError:  # POSIX
-    msvcrt = None
+    msvcrt = None  # type: ignore[assignment]  # the module or None, by platform
 
 from ..errors import OutputError, one_line
 from ..logs import get_logger
@@ -46,7 +47,7 @@ _HELD = threading.local()
 
 
 @contextlib.contextmanager
-def folder_lock(folder, run: str | None = None):
+def folder_lock(folder: Path | str, run: str | None = None) -> Iterator[None]:
     """An exclusive lock on ``folder`` (made if missing) between processes, threads and runs;
     taken again by the thread holding it, it is a no-op.
 

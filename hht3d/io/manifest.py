@@ -31,7 +31,9 @@ import re
 import stat
 import time
 import uuid
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
+from typing import Any, BinaryIO
 
 from ..errors import OutputError
 from .atomic import atomic_path, before_rename, check_inside, confined
@@ -61,13 +63,13 @@ def new_run_id() -> str:
     return f"{time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())}-{uuid.uuid4().hex[:8]}"
 
 
-def _key(path, folder) -> str | None:
+def _key(path: Path | str, folder: Path | str) -> str | None:
     """``path`` relative to ``folder`` after links (POSIX separators), or ``None`` if it lies outside."""
     real = confined(path, folder)
     return None if real is None else Path(os.path.relpath(real, os.path.realpath(folder))).as_posix()
 
 
-def _entry_key(key) -> str | None:
+def _entry_key(key: object) -> str | None:
     """A manifest key normalised lexically, or ``None`` if it is not a relative path staying in its folder."""
     if not isinstance(key, str) or not key or "\0" in key or "\\" in key or key.startswith("/") or ":" in key[:2]:
         return None
@@ -75,7 +77,7 @@ def _entry_key(key) -> str | None:
     return None if norm in (".", "..") or norm.startswith("../") else norm
 
 
-def _well_formed(entry) -> bool:
+def _well_formed(entry: Any) -> bool:
     return (
         isinstance(entry, dict)
         and type(entry.get("size")) is int
@@ -85,7 +87,7 @@ def _well_formed(entry) -> bool:
     )
 
 
-def valid_entries(data, inside=lambda key: True) -> dict:
+def valid_entries(data: Any, inside: Callable[[str], bool] = lambda key: True) -> dict:
     """The entries of a parsed manifest that are well formed (a positive integer size, a SHA-256) and whose
     key is a relative path staying in the folder, lexically and by ``inside(key)``; the rest are ignored,
     as is a manifest that is not a mapping with ``files``: nothing they name counts as written by hht3d."""
@@ -100,7 +102,7 @@ def valid_entries(data, inside=lambda key: True) -> dict:
     return found
 
 
-def entries(folder) -> dict:
+def entries(folder: Path | str) -> dict:
     """The manifest's valid entries by relative path (:func:`valid_entries`; empty without a readable manifest
     that is a regular file), keeping only those that resolve inside ``folder`` after links."""
     path = Path(folder) / MANIFEST
@@ -113,7 +115,7 @@ def entries(folder) -> dict:
     return valid_entries(data, lambda key: confined(Path(folder) / key, folder) is not None)
 
 
-def digest(handle) -> tuple[int, str]:
+def digest(handle: BinaryIO) -> tuple[int, str]:
     """Size and SHA-256 of what an open binary file holds, read to its end."""
     sha = hashlib.sha256()
     size = 0
@@ -123,12 +125,12 @@ def digest(handle) -> tuple[int, str]:
     return size, sha.hexdigest()
 
 
-def _digest(path) -> tuple[int, str]:
+def _digest(path: Path | str) -> tuple[int, str]:
     with open(path, "rb") as handle:
         return digest(handle)
 
 
-def is_recorded(path, folder, known: dict | None = None) -> bool:
+def is_recorded(path: Path | str, folder: Path | str, known: dict | None = None) -> bool:
     """Whether ``path`` is a complete file that hht3d wrote: recorded inside ``folder``, same size and checksum."""
     entry = (entries(folder) if known is None else known).get(_key(path, folder))
     try:
@@ -139,7 +141,9 @@ def is_recorded(path, folder, known: dict | None = None) -> bool:
         return False
 
 
-def record(paths, folder, run: str, *, named=None) -> None:
+def record(
+    paths: Iterable[Path | str], folder: Path | str, run: str, *, named: Sequence[Path | str] | None = None
+) -> None:
     """Add complete files to the manifest of ``folder`` (under its lock; the manifest is written atomically).
 
     ``named`` gives the names to record them under (default ``paths``): a
@@ -164,12 +168,12 @@ def updated(files: dict, found: dict, run: str) -> str:
     return json.dumps({"version": 1, "files": files}, indent=1)
 
 
-def recording(folder, run: str, *, confine: bool = True):
+def recording(folder: Path | str, run: str, *, confine: bool = True) -> Any:
     """Record the atomic writes of this thread in the manifest of ``folder`` (see :class:`Recorded`); with
     ``confine``, refuse at its rename a file that no longer resolves inside ``folder``
     (:func:`hht3d.io.atomic.check_inside`)."""
 
-    def hook(tmp, path):
+    def hook(tmp: Path, path: Path | str) -> None:
         if confine:
             check_inside(tmp, path, folder)
         record([tmp], folder, run, named=[path])
@@ -186,20 +190,20 @@ class Recorded:
     ``folder`` at that point is refused (:func:`recording`).
     """
 
-    def __init__(self, write, folder, run: str, *, allow_outside: bool = False):
+    def __init__(self, write: Callable[..., Any], folder: Path | str, run: str, *, allow_outside: bool = False):
         self.write, self.folder, self.run, self.allow_outside = write, str(folder), run, allow_outside
         self.__name__ = getattr(write, "__name__", "write")
         self.__module__, self.__qualname__ = write.__module__, write.__qualname__
 
-    def __dask_tokenize__(self):
+    def __dask_tokenize__(self) -> tuple:
         return (self.write.__module__, self.write.__qualname__, self.folder, self.run, self.allow_outside)
 
-    def __call__(self, *args, **kwargs):
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
         with recording(self.folder, self.run, confine=not self.allow_outside):
             return self.write(*args, **kwargs)
 
 
-def recorded_names(folder) -> set[str]:
+def recorded_names(folder: Path | str) -> set[str]:
     """Names of the files directly in ``folder`` that a manifest of it or of a folder above records."""
     real = Path(os.path.realpath(folder))
     names = set()
@@ -213,7 +217,7 @@ def recorded_names(folder) -> set[str]:
     return names
 
 
-def check_overwrites(paths, folder, overwrite: bool) -> None:
+def check_overwrites(paths: Iterable[Path | str], folder: Path | str, overwrite: bool) -> None:
     """Refuse to replace an existing file that hht3d did not write (unless ``overwrite``).
 
     Raises

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..errors import InputError
@@ -12,7 +14,7 @@ from .write import per_vertex
 __all__ = ["surface_from_open3d", "surface_to_open3d"]
 
 
-def surface_from_open3d(geometry, *, clean: bool = True, name: str | None = None, **options) -> Surface:
+def surface_from_open3d(geometry: Any, *, clean: bool = True, name: str | None = None, **options: Any) -> Surface:
     """Build a surface from an Open3D legacy or tensor ``TriangleMesh`` / ``PointCloud``.
 
     Colours and (tensor geometries) every other float vertex attribute are
@@ -21,7 +23,7 @@ def surface_from_open3d(geometry, *, clean: bool = True, name: str | None = None
     import open3d as o3d
 
     if isinstance(geometry, o3d.geometry.TriangleMesh):
-        data = {"vertices": np.asarray(geometry.vertices), "faces": np.asarray(geometry.triangles)}
+        data: dict[str, Any] = {"vertices": np.asarray(geometry.vertices), "faces": np.asarray(geometry.triangles)}
         if geometry.has_vertex_colors():
             data["colors"] = np.asarray(geometry.vertex_colors)
     elif isinstance(geometry, o3d.geometry.PointCloud):
@@ -32,10 +34,11 @@ def surface_from_open3d(geometry, *, clean: bool = True, name: str | None = None
             data["colors"] = np.asarray(geometry.colors)
     elif isinstance(geometry, (o3d.t.geometry.TriangleMesh, o3d.t.geometry.PointCloud)):
         is_mesh = isinstance(geometry, o3d.t.geometry.TriangleMesh)
-        attrs = geometry.vertex if is_mesh else geometry.point
+        tensors: Any = geometry  # the stubs' union has no common attributes
+        attrs = tensors.vertex if is_mesh else tensors.point
         data = {
             "vertices": attrs["positions"].numpy(),
-            "faces": geometry.triangle["indices"].numpy() if is_mesh and "indices" in geometry.triangle else None,
+            "faces": tensors.triangle["indices"].numpy() if is_mesh and "indices" in tensors.triangle else None,
         }
         n = len(data["vertices"])
         for key in list(attrs):
@@ -54,20 +57,21 @@ def surface_from_open3d(geometry, *, clean: bool = True, name: str | None = None
     return build(**data, name=name, **options)
 
 
-def surface_to_open3d(surface: Surface, attributes: dict | None = None):
+def surface_to_open3d(surface: Surface, attributes: dict | None = None) -> Any:
     """Tensor ``TriangleMesh``/``PointCloud`` carrying the surface's attributes and ``attributes``
     as (n, 1) float vertex attributes."""
     import open3d as o3d
     import open3d.core as o3c
 
-    geometry = o3d.t.geometry.TriangleMesh() if surface.is_mesh else o3d.t.geometry.PointCloud()
+    geometry: Any = o3d.t.geometry.TriangleMesh() if surface.is_mesh else o3d.t.geometry.PointCloud()
     store = geometry.vertex if surface.is_mesh else geometry.point
-    store["positions"] = o3c.Tensor(surface.vertices)
-    store["normals"] = o3c.Tensor(surface.normals)
+    tensor: Any = o3c.Tensor  # its stubs take no ndarray
+    store["positions"] = tensor(surface.vertices)
+    store["normals"] = tensor(surface.normals)
     if surface.colors is not None:
-        store["colors"] = o3c.Tensor(surface.colors)
+        store["colors"] = tensor(surface.colors)
     if surface.is_mesh:
-        geometry.triangle["indices"] = o3c.Tensor(surface.faces)
+        geometry.triangle["indices"] = tensor(surface.faces)
     for key, values in {**surface.attributes, **(attributes or {})}.items():
-        store[checked_name(key)] = o3c.Tensor(per_vertex(surface, key, values)[:, None])
+        store[checked_name(key)] = tensor(per_vertex(surface, key, values)[:, None])
     return geometry

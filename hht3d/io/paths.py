@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import glob
 import os
+from collections.abc import Collection, Iterable
 from pathlib import Path
+from typing import Any
 
 from ..errors import InputError, OutputError, one_line, shown
 from .atomic import confined
@@ -34,7 +36,7 @@ from .manifest import recorded_names
 __all__ = ["NAME_MAX", "PATH_MAX", "confined", "check_output_location", "check_name", "resolve_inputs", "short"]
 
 
-def check_output_location(path, folder, where: str) -> None:
+def check_output_location(path: Path | str, folder: Path | str, where: str) -> None:
     """Refuse an output that resolves outside ``folder`` (``where`` names the step or output).
 
     Raises
@@ -49,7 +51,7 @@ def check_output_location(path, folder, where: str) -> None:
         )
 
 
-def check_name(path, where: str) -> None:
+def check_name(path: Path | str, where: str) -> None:
     """Refuse a path that no file system takes: control characters, a component or the whole too long.
 
     Raises
@@ -71,7 +73,7 @@ def check_name(path, where: str) -> None:
             )
 
 
-def resolve_inputs(spec) -> list[Path]:
+def resolve_inputs(spec: Any) -> list[Path]:
     """Expand an input spec into files: a file, a folder (its mesh/point files),
     a glob pattern, or a list of these.  Order is sorted and duplicates dropped.
 
@@ -105,7 +107,7 @@ def resolve_inputs(spec) -> list[Path]:
     return _once(found)
 
 
-def _input_files(text: str, usable) -> list[Path]:
+def _input_files(text: str, usable: Collection[str]) -> list[Path]:
     """The usable files of one input spec: the named file, a folder's, or a glob's."""
     path = Path(text)
     if path.is_dir():
@@ -121,7 +123,7 @@ def _input_files(text: str, usable) -> list[Path]:
     raise InputError(f"{text}: no such file or folder")
 
 
-def _not_outputs(paths) -> list[Path]:
+def _not_outputs(paths: Iterable[Path]) -> list[Path]:
     """``paths`` without those recorded by a manifest of their folder, sorted, each file once."""
     names: dict[Path, set] = {}
     kept = []
@@ -134,7 +136,7 @@ def _not_outputs(paths) -> list[Path]:
     return _once(sorted(kept))
 
 
-def _once(paths) -> list[Path]:
+def _once(paths: Iterable[Path]) -> list[Path]:
     """Each file once: of the paths reaching one real file, the shortest, in the first one's place."""
     chosen: dict[str, Path] = {}
     for path in paths:

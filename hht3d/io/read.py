@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -71,12 +72,12 @@ class LoadOptions(SurfaceOptions):
 
 
 def load(
-    path,
+    path: Path | str,
     options: LoadOptions | dict | None = None,
     *,
     name: str | None = None,
     storage_options: dict | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> Surface:
     """Load a triangle mesh or point cloud as a :class:`~hht3d.geometry.surface.Surface`.
 
@@ -129,7 +130,9 @@ def load(
         data = _read_open3d_points(path)
     if len(data["vertices"]) == 0:
         raise InputError(f"{path}: the file holds no vertices (empty or unreadable geometry)")
-    settings = dict(laplacian=options.laplacian, n_neighbors=options.n_neighbors, name=name or path.stem)
+    settings: dict[str, Any] = dict(
+        laplacian=options.laplacian, n_neighbors=options.n_neighbors, name=name or path.stem
+    )
     try:
         surface = Surface.cleaned(**data, **settings) if options.clean else Surface(**data, **settings)
     except InputError as exc:
@@ -148,7 +151,7 @@ def _read_ply(path: Path) -> dict:
     names = vertex.dtype.names or ()
     if not {"x", "y", "z"} <= set(names):
         raise InputError(f"{path}: PLY vertices lack x, y, z properties (found {names})")
-    data = {
+    data: dict[str, Any] = {
         "vertices": np.column_stack([vertex["x"], vertex["y"], vertex["z"]]).astype(np.float64),
         "faces": _ply_faces(ply, path),
     }
@@ -157,7 +160,7 @@ def _read_ply(path: Path) -> dict:
         data["colors"] = rgb / 255.0 if np.issubdtype(vertex["red"].dtype, np.integer) else rgb
     if data["faces"] is None and {"nx", "ny", "nz"} <= set(names):
         data["normals"] = np.column_stack([vertex["nx"], vertex["ny"], vertex["nz"]])
-    attributes = {}
+    attributes: dict[str, np.ndarray] = {}
     for key in names:
         if key not in PLY_RESERVED and vertex[key].dtype.kind in "biuf":
             attributes.setdefault(usable_name(key), np.asarray(vertex[key], dtype=np.float64))
@@ -178,7 +181,7 @@ class PlyHeader:
 _MAX_HEADER = 1 << 20
 
 
-def read_ply_header(path) -> PlyHeader:
+def read_ply_header(path: Path | str) -> PlyHeader:
     """The header of a PLY file, without reading its data (cheap for any file size).
 
     Raises
@@ -188,7 +191,10 @@ def read_ply_header(path) -> PlyHeader:
     """
     path = Path(path)
     check_regular_file(path, "a PLY file")
-    counts, properties, per_element, element = {}, [], {}, None
+    counts: dict[str, int] = {}
+    properties: list[Any] = []
+    per_element: dict[str, Any] = {}
+    element = None
     try:
         with open(path, "rb") as handle:
             lines = handle.read(_MAX_HEADER).split(b"\n")
@@ -278,7 +284,7 @@ def _pcd_points(path: Path) -> int:
     return 0
 
 
-def read_npz(path) -> dict[str, np.ndarray]:
+def read_npz(path: Path | str) -> dict[str, np.ndarray]:
     """Every array of a ``.npz`` file (no pickled objects).
 
     Raises
@@ -297,7 +303,7 @@ def read_npz(path) -> dict[str, np.ndarray]:
         raise InputError(f"{path}: not a readable .npz file ({one_line(exc)})") from None
 
 
-def read_npz_shapes(path) -> dict[str, tuple[int, ...]]:
+def read_npz_shapes(path: Path | str) -> dict[str, tuple[int, ...]]:
     """The shape of every array in a ``.npz`` file, from the array headers alone (no data is read).
 
     Raises
@@ -326,7 +332,7 @@ def read_npz_shapes(path) -> dict[str, tuple[int, ...]]:
     return shapes
 
 
-def _ply_faces(ply, path: Path):
+def _ply_faces(ply: Any, path: Path) -> np.ndarray | None:
     if "face" not in ply or ply["face"].count == 0:
         return None
     face = ply["face"].data

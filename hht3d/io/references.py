@@ -20,6 +20,7 @@ from __future__ import annotations
 import json
 import os
 import struct
+from collections.abc import Collection
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
@@ -126,7 +127,7 @@ def _gltf_uris(path: Path, binary: bool) -> list[str]:
     return uris
 
 
-def _directives(path, keywords) -> list[str]:
+def _directives(path: Path | str, keywords: Collection[str]) -> list[str]:
     """The arguments of the lines of a text file (OBJ, MTL) starting with one of ``keywords``."""
     found = []
     try:

@@ -24,7 +24,9 @@ import os
 import posixpath
 import shutil
 import tempfile
+from collections.abc import Callable, Collection, Iterator
 from pathlib import Path, PurePosixPath
+from typing import Any, TypeGuard
 from urllib.parse import urlsplit
 
 from ..errors import HHT3DError, InputError, one_line
@@ -65,18 +67,18 @@ EXTRAS = {
 _GLOB = "*?["
 
 
-def is_url(location) -> bool:
+def is_url(location: Path | str) -> TypeGuard[str]:
     """Whether ``location`` is an fsspec URL (``protocol://...``) rather than a local path; a ``file://``
     URL is the local path it names (:func:`local_path`), with every local rule."""
     return isinstance(location, str) and "://" in location and not _is_file_url(location)
 
 
-def _is_file_url(location) -> bool:
+def _is_file_url(location: Path | str) -> TypeGuard[str]:
     """``file://`` or ``local://``: fsspec's names for the local file system."""
     return isinstance(location, str) and location.split("://", 1)[0].lower() in ("file", "local")
 
 
-def local_path(location):
+def local_path(location: Path | str) -> Path | str:
     """``location`` as hht3d takes it wherever a location enters: a ``file://`` (or ``local://``) URL as
     the local :class:`~pathlib.Path` it names, anything else unchanged.
 
@@ -117,7 +119,7 @@ def options_for(url: str, storage_options: dict | None) -> dict:
     return options
 
 
-def filesystem(url: str, storage_options: dict | None = None):
+def filesystem(url: str, storage_options: dict | None = None) -> tuple[Any, str]:
     """``(fs, path)`` of a URL; a missing back-end names the pip command that installs it.
 
     ``storage_options``: as for :func:`options_for`.
@@ -150,17 +152,17 @@ def _key(url: str) -> str:
     return urlsplit(url.split("::")[-1]).path
 
 
-def file_name(location) -> str:
+def file_name(location: Path | str) -> str:
     """File name of a path or URL (a URL's query string left out)."""
     return PurePosixPath(_key(location)).name if is_url(location) else Path(location).name
 
 
-def stem(location) -> str:
+def stem(location: Path | str) -> str:
     """File name without its suffix."""
     return PurePosixPath(file_name(location)).stem
 
 
-def parent_name(location) -> str:
+def parent_name(location: Path | str) -> str:
     """Name of the folder holding a path or URL (a bucket's name for a top-level object)."""
     if not is_url(location):
         return Path(location).parent.name
@@ -169,7 +171,7 @@ def parent_name(location) -> str:
     return parent or url.netloc
 
 
-def join(folder, file_name: str):
+def join(folder: Path | str, file_name: str) -> Path | str:
     """``folder / file_name``: a Path for a local folder, a URL string for a URL (its key normalised:
     no ``.`` or ``..`` left in it, which a tool syncing the bucket would follow)."""
     folder = local_path(folder)
@@ -204,7 +206,7 @@ def _access_error(exc: Exception) -> str:
     return one_line(f"{type(exc).__name__}: {exc}")
 
 
-def resolve_locations(spec, storage_options: dict | None = None) -> list:
+def resolve_locations(spec: Any, storage_options: dict | None = None) -> list:
     """:func:`hht3d.io.paths.resolve_inputs` for paths and URLs: files, folders, globs, lists.
 
     URLs come back as URLs (``s3://bucket/scans/a.ply``), local files as Paths.
@@ -216,13 +218,13 @@ def resolve_locations(spec, storage_options: dict | None = None) -> list:
         the store cannot be listed.
     """
     specs = [spec] if isinstance(spec, (str, Path)) else list(spec)
-    found = []
+    found: list[Path | str] = []
     for item in map(local_path, specs):
         found.extend(_remote_inputs(item, storage_options) if is_url(item) else resolve_inputs(item))
     return list(dict.fromkeys(found))
 
 
-def _remote_inputs(url: str, storage_options) -> list[str]:
+def _remote_inputs(url: str, storage_options: dict | None) -> list[str]:
     fs, path = filesystem(url, storage_options)
     usable = set(MESH_EXTENSIONS + POINT_CLOUD_EXTENSIONS)
     try:
@@ -250,7 +252,7 @@ def _remote_inputs(url: str, storage_options) -> list[str]:
     return matches
 
 
-def _as_written(url: str, fs, path: str) -> str:
+def _as_written(url: str, fs: Any, path: str) -> str:
     """A listed object's URL with the protocol the user wrote (``az://``, not the back-end's ``abfs://``)."""
     full = fs.unstrip_protocol(path)
     written = url.split("::")[-1].split("://", 1)[0]
@@ -261,13 +263,13 @@ def _as_written(url: str, fs, path: str) -> str:
 TEMPORARY_PREFIX = "hht3d-"
 
 
-def temporary_folder():
+def temporary_folder() -> tempfile.TemporaryDirectory[str]:
     """A temporary folder named after this process, so that a stop can find it after its owner
     (a thread or worker process ended without running its cleanup, :func:`remove_temporary_folders`)."""
     return tempfile.TemporaryDirectory(prefix=f"{TEMPORARY_PREFIX}{os.getpid()}-")
 
 
-def remove_temporary_folders(pids) -> list[Path]:
+def remove_temporary_folders(pids: Collection[int]) -> list[Path]:
     """Remove the temporary folders of :func:`temporary_folder` made by the processes ``pids``."""
     removed = []
     for pid in pids:
@@ -278,7 +280,7 @@ def remove_temporary_folders(pids) -> list[Path]:
 
 
 @contextlib.contextmanager
-def local_copy(location, storage_options: dict | None = None, *, head: int | None = None):
+def local_copy(location: Path | str, storage_options: dict | None = None, *, head: int | None = None) -> Iterator[Path]:
     """A local path holding ``location``'s bytes (the first ``head`` only if given); removed afterwards.
 
     A local path is yielded as it is.
@@ -305,7 +307,7 @@ def local_copy(location, storage_options: dict | None = None, *, head: int | Non
         yield local
 
 
-def load_url(load, url: str, storage_options: dict | None = None, **options):
+def load_url(load: Callable[..., Any], url: str, storage_options: dict | None = None, **options: Any) -> Any:
     """``load`` (:func:`hht3d.io.read.load`) of a URL through a temporary local copy; messages name the URL."""
     with local_copy(url, storage_options) as local:
         try:

@@ -18,7 +18,9 @@ from __future__ import annotations
 
 import contextlib
 import uuid
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path, PurePosixPath
+from typing import Any
 
 from ..errors import HHT3DError, OutputError
 from ..redaction import redact
@@ -36,7 +38,7 @@ _UPDATE_TRIES = 20
 
 
 @contextlib.contextmanager
-def atomic_location(location, storage_options: dict | None = None):
+def atomic_location(location: Path | str, storage_options: dict | None = None) -> Iterator[Path]:
     """Like :func:`hht3d.io.atomic.atomic_path`, for a path or URL: yield a temporary local path.
 
     For a URL, the file is uploaded once the block succeeds; on an exception
@@ -59,7 +61,7 @@ def atomic_location(location, storage_options: dict | None = None):
         _upload(fs, str(local), path, location)
 
 
-def _upload(fs, local: str, path: str, location: str) -> None:
+def _upload(fs: Any, local: str, path: str, location: str) -> None:
     """Put ``local`` at ``path``, so that no object appears under ``path`` before it is complete."""
     try:
         if _protocol(location) in _ATOMIC_UPLOAD:
@@ -83,7 +85,7 @@ def _upload(fs, local: str, path: str, location: str) -> None:
         fs.invalidate_cache(str(PurePosixPath(path).parent))
 
 
-def write_via(write, *args, storage_options: dict | None = None, **options):
+def write_via(write: Callable[..., Any], *args: Any, storage_options: dict | None = None, **options: Any) -> Any:
     """``write(*args, **options)`` whose last positional argument is a path or URL; returns it.
 
     A URL is written by ``write`` to a temporary local file, then uploaded
@@ -98,7 +100,7 @@ def write_via(write, *args, storage_options: dict | None = None, **options):
     return location
 
 
-def update_object(url: str, update, storage_options: dict | None = None) -> None:
+def update_object(url: str, update: Callable[[Any], Any], storage_options: dict | None = None) -> None:
     """Replace the object at ``url`` by ``update(its bytes, or None if missing)``, other writers' changes kept.
 
     On S3 the write is conditional (``If-Match`` the ETag read, ``If-None-Match``
@@ -140,7 +142,7 @@ def _came_first(exc: Exception) -> bool:
     return isinstance(exc, FileExistsError) or "pre-condition" in str(exc).lower() or "412" in str(exc)
 
 
-def check_outputs(locations, storage_options: dict | None = None) -> None:
+def check_outputs(locations: Iterable[Path | str], storage_options: dict | None = None) -> None:
     """:func:`hht3d.io.atomic.check_output_paths` for paths and URLs, creating nothing that stays.
 
     For URLs: the bucket (or container) exists and a probe object can be
@@ -158,7 +160,7 @@ def check_outputs(locations, storage_options: dict | None = None) -> None:
         _check_remote_folder(folder, storage_options)
 
 
-def _check_remote_folder(folder: str, storage_options) -> None:
+def _check_remote_folder(folder: str, storage_options: dict | None) -> None:
     fs, path = filesystem(folder + "/", storage_options)
     bucket = path.strip("/").split("/", 1)[0]
     protocol = _protocol(folder)

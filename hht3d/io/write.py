@@ -6,6 +6,7 @@ Every write is atomic (:func:`hht3d.io.atomic.atomic_path`).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -17,14 +18,16 @@ from .formats import checked_name
 __all__ = ["per_vertex", "write_ply", "write_npz", "field_colors", "write_colored_ply"]
 
 
-def per_vertex(surface: Surface, key: str, values) -> np.ndarray:
+def per_vertex(surface: Surface, key: str, values: np.ndarray) -> np.ndarray:
     a = np.asarray(values, dtype=np.float64)
     if a.shape != (surface.n_vertices,):
         raise InputError(f"attribute {key!r} has shape {a.shape}; expected ({surface.n_vertices},)")
     return a
 
 
-def write_ply(path, surface: Surface, attributes: dict | None = None, *, colors=None) -> Path:
+def write_ply(
+    path: Path | str, surface: Surface, attributes: dict | None = None, *, colors: np.ndarray | None = None
+) -> Path:
     """Write the surface with named float64 per-vertex ``attributes`` to a binary PLY.
 
     Positions and normals are float64; ``colors`` (n, 3) in [0, 1] (default:
@@ -51,7 +54,7 @@ def write_ply(path, surface: Surface, attributes: dict | None = None, *, colors=
         vertex[key] = values
     elements = [PlyElement.describe(vertex, "vertex")]
     if surface.is_mesh:
-        face = np.empty(len(surface.faces), dtype=[("vertex_indices", "i4", (3,))])
+        face = np.empty(len(cast(np.ndarray, surface.faces)), dtype=[("vertex_indices", "i4", (3,))])
         face["vertex_indices"] = surface.faces
         elements.append(PlyElement.describe(face, "face"))
     with atomic_path(path) as tmp:
@@ -59,14 +62,14 @@ def write_ply(path, surface: Surface, attributes: dict | None = None, *, colors=
     return Path(path)
 
 
-def write_npz(path, arrays: dict) -> Path:
+def write_npz(path: Path | str, arrays: dict) -> Path:
     """Write a compressed ``.npz`` of named arrays atomically."""
     with atomic_path(path) as tmp, open(tmp, "wb") as handle:
-        np.savez_compressed(handle, **{k: np.asarray(v) for k, v in arrays.items()})
+        np.savez_compressed(handle, **{k: np.asarray(v) for k, v in arrays.items()})  # type: ignore[arg-type]  # numpy's stub: **kwds could reach allow_pickle
     return Path(path)
 
 
-def field_colors(values, *, cmap: str = "viridis", limits=None) -> np.ndarray:
+def field_colors(values: np.ndarray, *, cmap: str = "viridis", limits: tuple[float, float] | None = None) -> np.ndarray:
     """Map a scalar field to RGB in [0, 1]; default limits: 1st and 99th percentile."""
     import matplotlib
 
@@ -81,7 +84,13 @@ def field_colors(values, *, cmap: str = "viridis", limits=None) -> np.ndarray:
 
 
 def write_colored_ply(
-    path, surface: Surface, values, *, cmap: str = "viridis", limits=None, name: str = "field"
+    path: Path | str,
+    surface: Surface,
+    values: np.ndarray,
+    *,
+    cmap: str = "viridis",
+    limits: tuple[float, float] | None = None,
+    name: str = "field",
 ) -> Path:
     """Write a PLY whose vertex colours show one field (for any mesh viewer); the raw
     values are kept as attribute ``name``."""

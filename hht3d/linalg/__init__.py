@@ -6,6 +6,8 @@
 * :mod:`~hht3d.linalg.pardiso`, :mod:`~hht3d.linalg.cholmod`, :mod:`~hht3d.linalg.superlu` — the backends.
 """
 
+from typing import Any
+
 from . import backends
 from .backends import (
     BACKEND_VARIABLE,
@@ -34,7 +36,7 @@ from .factor import Factor
 from .symbolic import SymbolicFactorization, factorize
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:
     if name == "BACKENDS":  # deprecated in 0.2.0
         return backends._deprecated_backends()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

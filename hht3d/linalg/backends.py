@@ -55,6 +55,7 @@ import threading
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from ..errors import InputError
 from .cholmod import CHOLMOD_LOCK, CholmodPattern
@@ -115,7 +116,7 @@ class Backend:
     pattern: Callable = field(repr=False)
     lock: threading.RLock | None = field(default=None, repr=False, compare=False)
 
-    def module(self):
+    def module(self) -> Any:
         """The first of :attr:`modules`, all imported on first use; ``None`` if one is absent."""
         if self.name not in _MODULES:
             try:
@@ -266,7 +267,7 @@ def _deprecated_backends() -> tuple[str, ...]:
     return tuple(SOLVER_BACKENDS)
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:
     if name == "BACKENDS":  # deprecated in 0.2.0
         return _deprecated_backends()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

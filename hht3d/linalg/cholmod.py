@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -25,7 +26,7 @@ class CholmodPattern:
     place, so (as with PARDISO) only the latest factor is valid.
     """
 
-    def __init__(self, pattern: sp.csr_matrix, module):
+    def __init__(self, pattern: sp.csr_matrix, module: Any) -> None:
         self.n = pattern.shape[0]
         self._cvxopt, self._cholmod = module, module.cholmod
         self._lower = UpperTriangle(pattern)  # CSR upper == CSC lower

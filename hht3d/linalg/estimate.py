@@ -24,6 +24,7 @@ import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 from ..errors import InputError
 from . import backends
@@ -202,7 +203,7 @@ def slow_fallback(vertices: int, backend: str | None = None) -> str | None:
     if cost is None or not cost.slow or vertices <= SLOW_FALLBACK_VERTICES:
         return None
     faster = [name for name, c in COSTS.items() if not c.slow and name in backends.SOLVER_BACKENDS]
-    found = estimate_hht(vertices, backend)
+    found = cast(Estimate, estimate_hht(vertices, backend))  # calibrated: COSTS has the backend
     return (
         f"{backend} is a slow sparse solver for {vertices:,} vertices (the HHT needs {found.describe()}); "
         f"pip install 'hht3d[fast]' for {' or '.join(faster)}"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -13,7 +15,7 @@ __all__ = ["Factor", "Pattern", "UpperTriangle", "Latest"]
 class Factor:
     """A numeric factorization of one SPD matrix; ``solve`` takes (n,) or (n, k)."""
 
-    def __init__(self, solve, n: int):
+    def __init__(self, solve: Callable[[np.ndarray], np.ndarray], n: int) -> None:
         self._solve = solve
         self.n = n
 
@@ -65,12 +67,12 @@ class Latest:
 
     def __init__(self, backend: str):
         self._backend = backend
-        self._current = None
+        self._current: object | None = None
 
-    def claim(self):
+    def claim(self) -> object:
         self._current = token = object()
         return token
 
-    def check(self, token) -> None:
+    def check(self, token: object) -> None:
         if self._current is not token:
             raise NumericalError(f"this {self._backend} factor was replaced by a later factorization")

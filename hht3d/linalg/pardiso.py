@@ -7,6 +7,7 @@ import functools
 import os
 import threading
 import weakref
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -23,7 +24,7 @@ PARDISO_LOCK = threading.RLock()
 
 
 @functools.lru_cache(maxsize=1)
-def _locate_mkl(pypardiso) -> None:
+def _locate_mkl(pypardiso: Any) -> None:
     """Find MKL's runtime once per process and tell pypardiso where it is.
 
     pypardiso otherwise searches the whole installation tree for ``mkl_rt``
@@ -42,7 +43,7 @@ class PardisoPattern:
     convert them on every call: two index-sized copies per solve).
     """
 
-    def __init__(self, pattern: sp.csr_matrix, module):
+    def __init__(self, pattern: sp.csr_matrix, module: Any) -> None:
         self.n = pattern.shape[0]
         self._upper = UpperTriangle(pattern)
         self._error = module.pardiso_wrapper.PyPardisoError
@@ -98,11 +99,11 @@ class PardisoPattern:
         return Factor(solve, self.n)
 
 
-def _free(solver) -> None:
+def _free(solver: Any) -> None:
     """Release all of MKL's memory for ``solver``'s handle (PARDISO phase -1)."""
     with PARDISO_LOCK:
         solver.free_memory(True)
 
 
-def _int32(value: int):
+def _int32(value: int) -> Any:
     return ctypes.byref(ctypes.c_int32(value))

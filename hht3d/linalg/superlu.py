@@ -18,6 +18,8 @@ by that ordering through a fixed index map and factorizes it with
 
 from __future__ import annotations
 
+from typing import Any, cast
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -33,13 +35,13 @@ SUPERLU_OPTIONS = {"diag_pivot_thresh": 0.0, "options": {"SymmetricMode": True}}
 class SuperLUPattern:
     """SuperLU on one pattern: ordered on the first matrix, that ordering reused."""
 
-    def __init__(self, pattern: sp.csr_matrix, module):
+    def __init__(self, pattern: sp.csr_matrix, module: Any) -> None:
         self._pattern = Pattern(pattern)
         self._splu = module.splu
         self._order: np.ndarray | None = None  # new position -> old index
         self._permuted: tuple | None = None  # CSC indptr, indices and data map of P A Pᵀ
 
-    def _run(self, csc: sp.csc_matrix, permc_spec: str):
+    def _run(self, csc: sp.csc_matrix, permc_spec: str) -> Any:
         try:
             return self._splu(csc, permc_spec=permc_spec, **SUPERLU_OPTIONS)
         except RuntimeError as exc:  # "Factor is exactly singular": not positive definite
@@ -60,7 +62,7 @@ class SuperLUPattern:
             lu = self._run(a.tocsc(), "MMD_AT_PLUS_A")
             self._analyse(a, lu.perm_c)
             return Factor(lu.solve, n)
-        indptr, indices, source = self._permuted
+        indptr, indices, source = cast(tuple[np.ndarray, np.ndarray, np.ndarray], self._permuted)  # set with _order
         lu = self._run(sp.csc_matrix((a.data[source], indices, indptr), shape=a.shape), "NATURAL")
         order = self._order
 

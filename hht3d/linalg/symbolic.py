@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -44,7 +46,7 @@ class SymbolicFactorization:
     lock, so tasks of the threads scheduler may share the process safely.
     """
 
-    def __init__(self, pattern, backend: str | None = None):
+    def __init__(self, pattern: Any, backend: str | None = None) -> None:
         pattern = _as_square_csr(pattern)
         self.backend = backends.check_backend(backend)
         check_memory(pattern.shape[0], self.backend)
@@ -55,7 +57,7 @@ class SymbolicFactorization:
             self._impl = entry.pattern(pattern, entry.module())
         self.n_factorizations = 0
 
-    def factorize(self, a) -> Factor:
+    def factorize(self, a: Any) -> Factor:
         """Numerically factorize ``a`` (same pattern as analysed)."""
         a = _as_square_csr(a)
         with self._lock:
@@ -64,12 +66,12 @@ class SymbolicFactorization:
         return Factor(_holding(self._lock, factor._solve), factor.n)
 
 
-def factorize(a, backend: str | None = None) -> Factor:
+def factorize(a: Any, backend: str | None = None) -> Factor:
     """Factorize one SPD sparse matrix (analysis and numeric phase)."""
     return SymbolicFactorization(a, backend).factorize(a)
 
 
-def _holding(lock, solve):
+def _holding(lock: Any, solve: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
     """``solve`` called with ``lock`` held."""
 
     def locked(b: np.ndarray) -> np.ndarray:
@@ -79,7 +81,7 @@ def _holding(lock, solve):
     return locked
 
 
-def _as_square_csr(a) -> sp.csr_matrix:
+def _as_square_csr(a: Any) -> sp.csr_matrix:
     a = sp.csr_matrix(a, dtype=np.float64)
     if a.shape[0] != a.shape[1]:
         raise InputError(f"matrix must be square, got shape {a.shape}")

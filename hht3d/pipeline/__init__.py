@@ -20,6 +20,8 @@ and runs it on any scheduler of :mod:`hht3d.execution`.
 This layer adds configuration only: nothing in the core knows YAML exists.
 """
 
+from typing import Any
+
 from ..output_formats import FORMATS, Format
 from .document import apply_overrides
 from .params import Param
@@ -50,7 +52,7 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:
     """``Execution``, the former name of :class:`ExecutionOptions`, for one release."""
     if name == "Execution":
         import warnings

@@ -11,6 +11,8 @@ Nothing here knows what a pipeline contains.
 from __future__ import annotations
 
 import re
+from collections.abc import Collection, Iterable
+from typing import Any
 
 import yaml
 
@@ -37,7 +39,7 @@ class YAMLMapping(dict):
         self.where = where
         self.key_where: dict = {}
 
-    def at(self, key) -> str:
+    def at(self, key: Any) -> str:
         return self.key_where.get(key, self.where)
 
 
@@ -53,7 +55,7 @@ class _YAMLSyntaxError(PipelineError):
     """Text that is not YAML (``--set`` then takes it as a plain string)."""
 
 
-def _expanded_size(node, sizes: dict, source: str) -> int:
+def _expanded_size(node: Any, sizes: dict, source: str) -> int:
     """How many values ``node`` stands for once every alias is expanded (memoised by node)."""
     key = id(node)
     if key in sizes:
@@ -81,7 +83,7 @@ def _expanded_size(node, sizes: dict, source: str) -> int:
     return sizes[key]
 
 
-def read_yaml(text: str, source: str):
+def read_yaml(text: str, source: str) -> Any:
     """Parse YAML, keeping ``source:line`` of every mapping key; duplicate keys are errors.
 
     Floats are read as YAML 1.2 does (``1e-8`` is a number, not text).
@@ -97,13 +99,13 @@ def read_yaml(text: str, source: str):
         nesting too deep.
     """
 
-    def place(node) -> str:
+    def place(node: Any) -> str:
         return f"{source}:{node.start_mark.line + 1}" if "\n" in text.strip() else source
 
     class Loader(yaml.SafeLoader):
         nodes = 0
 
-        def compose_node(self, parent, index):
+        def compose_node(self, parent: Any, index: Any) -> Any:
             self.nodes += 1
             if self.nodes > MAX_YAML_VALUES:
                 raise PipelineError(
@@ -113,13 +115,13 @@ def read_yaml(text: str, source: str):
                 )
             return super().compose_node(parent, index)
 
-        def get_single_node(self):
+        def get_single_node(self) -> Any:
             node = super().get_single_node()
             if node is not None:
                 _expanded_size(node, {}, source)
             return node
 
-    def mapping(loader, node):
+    def mapping(loader: Any, node: Any) -> Any:
         loader.flatten_mapping(node)
         result = YAMLMapping(place(node))
         for key_node, value_node in node.value:
@@ -150,7 +152,7 @@ def read_yaml(text: str, source: str):
 
 
 # -- --set overrides ---------------------------------------------------------------------------------
-def apply_overrides(document, overrides) -> None:
+def apply_overrides(document: Any, overrides: Iterable[str]) -> None:
     """Apply ``key.path=value`` overrides in place (values parsed as YAML).
 
     A path component names a mapping key, a list index, or the ``id`` (or
@@ -173,7 +175,7 @@ def apply_overrides(document, overrides) -> None:
         _assign(node, keys[-1], value, where)
 
 
-def _child(node, key: str, dotted: str, where: str):
+def _child(node: Any, key: str, dotted: str, where: str) -> Any:
     if isinstance(node, list):
         return node[_index(node, key, dotted, where)]
     if not isinstance(node, dict):
@@ -195,7 +197,7 @@ def _index(items: list, key: str, dotted: str, where: str) -> int:
     return names.index(key)
 
 
-def _assign(node, key: str, value, where: str) -> None:
+def _assign(node: Any, key: str, value: Any, where: str) -> None:
     if isinstance(node, list):
         node[_index(node, key, key, where)] = value
     elif isinstance(node, dict):
@@ -206,28 +208,28 @@ def _assign(node, key: str, value, where: str) -> None:
         raise PipelineError(f"{where}: cannot set {shown(key)} inside a {type(node).__name__}")
 
 
-def at(mapping, key=None) -> str:
+def at(mapping: Any, key: Any = None) -> str:
     """Where ``mapping`` (or its ``key``) came from: ``file:line``, or ``--set`` for values an override made."""
     if isinstance(mapping, YAMLMapping):
         return mapping.at(key) if key is not None else mapping.where
     return "--set"
 
 
-def known_keys(mapping, known, what: str) -> None:
+def known_keys(mapping: Any, known: Collection[str], what: str) -> None:
     """Refuse a key of ``mapping`` not among ``known`` (``what`` names the mapping), with a "did you mean"."""
     for key in mapping:
         if key not in known:
             raise PipelineError(f"{at(mapping, key)}: unknown key {shown(key)} in {what}{did_you_mean(key, known)}")
 
 
-def as_mapping(value, where: str, what: str) -> dict:
+def as_mapping(value: Any, where: str, what: str) -> dict:
     """``value`` if it is a mapping, else an error naming ``where`` and ``what``."""
     if not isinstance(value, dict):
         raise PipelineError(f"{where}: {what} must be a mapping (key: value lines), got {shown(value)}")
     return value
 
 
-def add_implicit_load(document) -> None:
+def add_implicit_load(document: Any) -> None:
     """Steps without a ``load`` start with ``{id: load, op: load}`` (which ``--set`` can then reach)."""
     steps = document.get("steps")
     if isinstance(steps, list) and not any(isinstance(e, dict) and e.get("op") == "load" for e in steps):

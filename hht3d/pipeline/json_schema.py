@@ -30,6 +30,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from collections.abc import Iterable
+from typing import Any
 
 from ..apps.filters import GAINS
 from ..output_formats import FORMATS
@@ -46,7 +48,7 @@ def param_schema(param: Param) -> dict:
     """The JSON Schema of one parameter's values."""
     nullable = param.default is None or param.nullable
     if param.kind == "choice":
-        schema = {"enum": [*param.choices, *([None] if nullable else [])]}
+        schema: dict[str, Any] = {"enum": [*param.choices, *([None] if nullable else [])]}
     elif param.kind == "gain":
         schema = {"$ref": "#/$defs/gain"}
     else:
@@ -61,11 +63,11 @@ def param_schema(param: Param) -> dict:
     return schema
 
 
-def _is_json(value) -> bool:
+def _is_json(value: Any) -> bool:
     return value is None or isinstance(value, (bool, int, float, str))
 
 
-def _object(params, *, description: str | None = None, extra: dict | None = None) -> dict:
+def _object(params: Iterable[Any], *, description: str | None = None, extra: dict | None = None) -> dict:
     """An object of these parameters and no others (``extra``: more properties)."""
     schema = {
         "type": "object",
@@ -84,7 +86,7 @@ def _gain_schema() -> dict:
     branches = []
     for kind, cls in GAINS.items():
         fields = dataclasses.fields(cls)
-        properties = {"kind": {"const": kind}}
+        properties: dict[str, Any] = {"kind": {"const": kind}}
         for f in fields:
             properties[f.name] = (
                 {

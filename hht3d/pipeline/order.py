@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 from ..errors import PipelineError
 from .document import at
 from .plan import FILE, Step
@@ -9,7 +12,7 @@ from .plan import FILE, Step
 __all__ = ["run_order"]
 
 
-def run_order(steps: list[Step], entries) -> tuple[Step, ...]:
+def run_order(steps: list[Step], entries: Sequence[Any]) -> tuple[Step, ...]:
     """Steps in list order, each moved after the steps it uses; a cycle is an error."""
     by_id = {s.id: s for s in steps}
     done: dict[str, bool] = {}  # False while on the current path

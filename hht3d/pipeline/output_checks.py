@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import string
 from pathlib import Path
+from typing import Any
 
 from ..errors import InputError, OutputError, PipelineError, shown
 from ..io.folder import check_locations
@@ -31,7 +32,7 @@ OUTPUTS_KEYS = ("folder", "summary", "allow_outside", "files")
 FILE_KEYS = ("from", "path", "format")
 
 
-def check_plan_outputs(plan: Pipeline, doc) -> None:
+def check_plan_outputs(plan: Pipeline, doc: dict) -> None:
     """Refuse outputs that clash, that no file system takes, that leave the folder, that are inputs,
     or that cannot be written; each message names the output entry, its step and the resolved path.
 
@@ -40,7 +41,7 @@ def check_plan_outputs(plan: Pipeline, doc) -> None:
     PipelineError
     """
     _distinct_paths(plan, doc)
-    block = doc.get("outputs")
+    block: Any = doc.get("outputs")
     entries = block["files"]
 
     def where(source: Path, path: Path) -> str:
@@ -60,7 +61,7 @@ def check_plan_outputs(plan: Pipeline, doc) -> None:
         raise PipelineError(f"{at(block, 'folder')}: outputs: {exc}") from None
 
 
-def read_outputs(doc, steps: tuple[Step, ...], source: str):
+def read_outputs(doc: dict, steps: tuple[Step, ...], source: str) -> tuple[Path | str, Any, Any, Any]:
     """The outputs block: ``(folder, summary, allow_outside, files)``, each file entry checked."""
     block = doc.get("outputs")
     if not isinstance(block, dict) or not block.get("files"):
@@ -85,7 +86,7 @@ def read_outputs(doc, steps: tuple[Step, ...], source: str):
     return folder if is_url(folder) else Path(folder), summary, outside, files
 
 
-def _output(entry, steps: dict, last: str) -> Output:
+def _output(entry: Any, steps: dict, last: str) -> Output:
     step_id = entry.get("from", last)
     if not isinstance(step_id, str) or step_id not in steps:
         raise PipelineError(
@@ -143,7 +144,7 @@ def _imf_exists(options: dict, step: Step, where: str) -> None:
         )
 
 
-def _format_from(path: str, entry, formats: dict) -> str:
+def _format_from(path: str, entry: Any, formats: dict) -> str:
     suffix = Path(path).suffix.lower()
     if suffix == ".ply" and ("field" in entry or "cmap" in entry):
         return "colored_ply"
@@ -175,8 +176,8 @@ def _placeholders(path: str, where: str) -> None:
             )
 
 
-def _distinct_paths(plan: Pipeline, doc) -> None:
-    seen: dict[Path, Path] = {}
+def _distinct_paths(plan: Pipeline, doc: dict) -> None:
+    seen: dict[Path | str, Path | str] = {}
     for source in plan.inputs:
         for path in plan.output_paths(source):
             if path in seen:

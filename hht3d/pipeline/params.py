@@ -10,7 +10,9 @@ adds the closest known name to messages about unknown names.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from ..apps.filters import GAINS, make_gain
 from ..errors import InputError, PipelineError, did_you_mean, one_line, shown
@@ -32,7 +34,7 @@ REQUIRED = _Required()
 KINDS = (*RECORD_KINDS, "gain")
 
 
-def yaml_text(value) -> str:
+def yaml_text(value: Any) -> str:
     """A value as it would be written in YAML (``null``, ``true``, ``0.2``, ``cotan``)."""
     if value is None:
         return "null"
@@ -41,7 +43,7 @@ def yaml_text(value) -> str:
     return str(value)
 
 
-def _what(value) -> str:
+def _what(value: Any) -> str:
     """How a YAML value reads in a message: ``'six' (a string)``, ``null``."""
     names = {
         str: "a string",
@@ -71,19 +73,19 @@ class Param:
     kind: str
     doc: str
     default: object = REQUIRED
-    choices: tuple = ()
+    choices: Sequence = ()
     minimum: float | None = None
     maximum: float | None = None
     open_minimum: bool = False
     open_maximum: bool = False
     nullable: bool = False
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.kind not in KINDS:
             raise ValueError(f"parameter {self.name}: unknown kind {self.kind!r}")
 
     @classmethod
-    def of_spec(cls, name: str, spec: Spec, default) -> "Param":
+    def of_spec(cls, name: str, spec: Spec, default: Any) -> "Param":
         """The parameter of a record's setting: its spec under ``name`` with ``default``."""
         return cls(name, default=default, **dataclasses.asdict(spec))
 
@@ -114,7 +116,7 @@ class Param:
         text = self.kind + self.spec.range_text()
         return f"{text} or null" if self.spec.nullable else text
 
-    def check(self, value, where: str):
+    def check(self, value: Any, where: str) -> Any:
         """The checked value (ints stay ints, gains become :class:`~hht3d.apps.Gain` objects).
 
         Raises
@@ -134,7 +136,7 @@ class Param:
         raise PipelineError(f"{where}: parameter {self.name} must be {expected}; got {_what(value)}{hint}")
 
 
-def _gain(value, where: str):
+def _gain(value: Any, where: str) -> Any:
     """A gain from ``{kind: NAME, PARAM: VALUE, ...}``."""
     if not isinstance(value, dict) or "kind" not in value:
         raise PipelineError(

@@ -94,7 +94,7 @@ class Pipeline:
     name: str
     source: str
     execution: ExecutionOptions
-    inputs: tuple[Path, ...]
+    inputs: tuple[Path | str, ...]
     steps: tuple[Step, ...]
     outputs: tuple[Output, ...]
     folder: Path | str
@@ -105,11 +105,11 @@ class Pipeline:
     def step(self, step_id: str) -> Step:
         return next(s for s in self.steps if s.id == step_id)
 
-    def output_paths(self, source: Path) -> list[Path]:
+    def output_paths(self, source: Path | str) -> list[Path | str]:
         """The files the pipeline writes for one input, in the order of :attr:`outputs`."""
         return [o.resolve(self.folder, source, self.name) for o in self.outputs]
 
-    def written_paths(self) -> list[Path]:
+    def written_paths(self) -> list[Path | str]:
         """Every file a run writes: the outputs of every input, then the summary files if any."""
         outputs = [path for source in self.inputs for path in self.output_paths(source)]
         return outputs + (summary_paths(self.folder) if self.summary else [])

@@ -43,6 +43,9 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, cast
+
+import numpy as np
 
 from .. import graph, linalg
 from ..apps import (
@@ -69,6 +72,11 @@ from ..spectral.options import RieszOptions
 from ..transform import decomposition_stage
 from .params import REQUIRED, Param, did_you_mean, record_params
 
+if TYPE_CHECKING:
+    from hht3d.geometry.surface import Surface
+    from hht3d.graph.tasks import Builder
+
+
 __all__ = ["Slot", "Operation", "OPERATIONS", "RENAMED", "operation"]
 
 
@@ -76,7 +84,7 @@ class _Solvers(Sequence):
     """The names of :data:`hht3d.linalg.backends.SOLVER_BACKENDS`, read at each use, so that a backend
     registered after import is a ``backend:`` choice too (availability is checked when a step runs)."""
 
-    def __getitem__(self, index):
+    def __getitem__(self, index: Any) -> Any:
         return tuple(linalg.backends.SOLVER_BACKENDS)[index]
 
     def __len__(self) -> int:
@@ -135,14 +143,14 @@ class Operation:
     check: Callable | None = field(default=None, repr=False)
     vertices: Callable | None = field(default=None, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if (self.func is None) == (self.build is None):
             raise ValueError(f"operation {self.name}: give exactly one of func and build")
 
     def param(self, name: str) -> Param | None:
         return next((p for p in self.params if p.name == name), None)
 
-    def tasks(self, builder, inputs: dict, params: dict) -> dict:
+    def tasks(self, builder: Builder, inputs: dict, params: dict) -> dict:
         """The step's lazy tasks by name, its result under ``"result"``.
 
         ``inputs`` are the slots' values by slot name, ``params`` the checked parameters.
@@ -150,7 +158,7 @@ class Operation:
         args = [inputs[slot.name] for slot in self.slots]
         if self.func is not None:
             return {"result": builder.task(self.name, self.func)(*args, **params)}
-        made = self.build(builder, *args, **params)
+        made = cast(Callable[..., Any], self.build)(builder, *args, **params)  # func or build is set
         return made if isinstance(made, dict) else {"result": made}
 
     def fewest_vertices(self, params: dict) -> tuple[str, int] | None:
@@ -206,7 +214,7 @@ _GAIN = Param(
 
 
 # -- checks and builders -------------------------------------------------------------------------
-def _check_signal(params, where):
+def _check_signal(params: dict, where: str) -> None:
     kind = params["kind"]
     needs = {"stored": "attribute", "file": "path"}
     for name in ("attribute", "path"):
@@ -224,14 +232,22 @@ def _check_signal(params, where):
             raise PipelineError(f"{where}: {exc}") from None
 
 
-def _eigenpair_vertices(params) -> tuple[str, int] | None:
+def _eigenpair_vertices(params: dict) -> tuple[str, int] | None:
     """``k`` eigenpairs exclude the constant mode, so need ``k + 1`` vertices (with potential spectral)."""
     if params.get("potential", "spectral") != "spectral":
         return None
     return "eigenpairs", params["eigenpairs"] + 1
 
 
-def _hht_tasks(builder, surface, signal, *, backend, riesz_tasks, **settings):
+def _hht_tasks(
+    builder: Builder,
+    surface: Surface,
+    signal: np.ndarray,
+    *,
+    backend: str | None,
+    riesz_tasks: int | None,
+    **settings: Any,
+) -> dict:
     """The HHT's stages (:func:`hht3d.graph.transform`) from the step's flat settings; EEMD when
     ``ensemble_size`` is given."""
     if settings["ensemble_size"] is None:
@@ -240,7 +256,7 @@ def _hht_tasks(builder, surface, signal, *, backend, riesz_tasks, **settings):
     return {**stages, "result": stages["hht"]}
 
 
-def _eemd_tasks(builder, surface, signal, *, backend, **settings):
+def _eemd_tasks(builder: Builder, surface: Surface, signal: np.ndarray, *, backend: str | None, **settings: Any) -> Any:
     """EEMD's member and averaging tasks from the step's flat settings."""
     return decomposition_stage(builder, surface, signal, *ensemble_settings(None, None, settings), backend)
 

@@ -12,11 +12,16 @@ solver checks again before its first factorization).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import InputError, PipelineError, one_line
 from ..io import read_ply_header
 from ..linalg import available_memory, check_memory, estimate_hht
 from .plan import Pipeline
+
+if TYPE_CHECKING:
+    from hht3d.pipeline.plan import Step
+
 
 __all__ = ["DECOMPOSING_OPS", "input_sizes", "resource_lines", "check_resources"]
 
@@ -24,7 +29,7 @@ __all__ = ["DECOMPOSING_OPS", "input_sizes", "resource_lines", "check_resources"
 DECOMPOSING_OPS = ("emd", "eemd", "hht")
 
 
-def _decomposing(plan: Pipeline):
+def _decomposing(plan: Pipeline) -> Step | None:
     """The pipeline's first decomposing step (its ``backend`` parameter is the solver), or ``None``."""
     return next((s for s in plan.steps if s.op.name in DECOMPOSING_OPS), None)
 

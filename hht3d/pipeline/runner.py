@@ -19,7 +19,9 @@ written by upload.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from dask import delayed
 from dask.base import tokenize
@@ -37,14 +39,15 @@ from .validation import EXECUTION
 __all__ = ["output_folder", "pipeline_graph", "run_pipeline", "failures"]
 
 
-def _guarded(source: Path, label):
+def _guarded(source: Path, label: Callable[..., str]) -> Builder:
     """A task builder whose tasks are guarded with the input file; ``label(task)`` names the step."""
     return Builder(guard=lambda task, func: Guarded(label(task), func, str(source)))
 
 
-def _item(plan: Pipeline, folder: OutputFolder, source: Path, paths: list[Path]):
+def _item(plan: Pipeline, folder: OutputFolder, source: Path, paths: list[Path]) -> Any:
     """The lazy :class:`~hht3d.dataset.summary.ItemSummary` of one input file."""
-    results, parts = {}, {}
+    results: dict[str, Any] = {}
+    parts: dict[str, Any] = {}
     for step in plan.steps:
         builder = _guarded(source, lambda task, s=step: s.id if task in (s.op.name, s.id) else f"{s.id} ({task})")
         inputs = {slot: str(source) if ref == FILE else results[ref] for slot, ref in step.refs.items()}
@@ -82,7 +85,7 @@ def output_folder(plan: Pipeline, run: str | None = None) -> OutputFolder:
     return OutputFolder(plan.folder, storage_options=plan.storage_options, run=run, allow_outside=plan.allow_outside)
 
 
-def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder | None = None):
+def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder | None = None) -> Any:
     """The pipeline as one lazy list of :class:`~hht3d.dataset.summary.ItemSummary`, one per input file.
 
     Parameters

@@ -21,7 +21,7 @@ from .document import at
 __all__ = ["storage_options"]
 
 
-def storage_options(doc) -> dict:
+def storage_options(doc: dict) -> dict:
     """The checked ``storage_options`` of a pipeline document (``{}`` if absent).
 
     Raises

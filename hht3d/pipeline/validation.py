@@ -54,6 +54,7 @@ from __future__ import annotations
 
 import string
 from pathlib import Path
+from typing import Any, Iterable, Sequence, cast
 
 from ..errors import InputError, PipelineError, shown
 from ..io import data_path, read_ply_header
@@ -93,7 +94,7 @@ MAX_ID = 64
 
 
 # -- validation -----------------------------------------------------------------------------------
-def load_pipeline(path, overrides=()) -> Pipeline:
+def load_pipeline(path: Path | str, overrides: Iterable[str] = ()) -> Pipeline:
     """Read, override and validate a pipeline file.
 
     Parameters
@@ -120,7 +121,7 @@ def load_pipeline(path, overrides=()) -> Pipeline:
     return parse_pipeline(text, source=str(path), overrides=overrides)
 
 
-def parse_pipeline(text: str, *, source: str = "<pipeline>", overrides=()) -> Pipeline:
+def parse_pipeline(text: str, *, source: str = "<pipeline>", overrides: Iterable[str] = ()) -> Pipeline:
     """Validate pipeline YAML given as text; see :func:`load_pipeline`."""
     document = read_yaml(text, source)
     if not isinstance(document, dict):
@@ -176,10 +177,10 @@ class Validator:
 
     def __init__(self, source: str):
         self.source = source
-        self.inputs: tuple[Path, ...] = ()
-        self._vertex_counts: dict[Path, int] | None = None
+        self.inputs: tuple[Path | str, ...] = ()
+        self._vertex_counts: dict[Path | str, int] | None = None
 
-    def pipeline(self, doc) -> Pipeline:
+    def pipeline(self, doc: dict) -> Pipeline:
         known_keys(doc, TOP_KEYS, "the pipeline")
         self._version(doc)
         name = doc.get("name", Path(self.source).stem)
@@ -205,7 +206,7 @@ class Validator:
         check_plan_outputs(plan, doc)
         return plan
 
-    def _version(self, doc) -> None:
+    def _version(self, doc: dict) -> None:
         if "version" not in doc:
             raise PipelineError(f"{self.source}: missing 'version: {VERSION}' (the schema version) at the top")
         if doc["version"] != VERSION or isinstance(doc["version"], bool):
@@ -214,16 +215,16 @@ class Validator:
                 f"this hht3d reads version {VERSION}"
             )
 
-    def _execution(self, block) -> ExecutionOptions:
+    def _execution(self, block: Any) -> ExecutionOptions:
         block = as_mapping(block, at(block), "execution")
         known_keys(block, [p.name for p in EXECUTION], "execution")
-        values = {
+        values: dict[str, Any] = {
             p.name: p.check(block[p.name], f"{at(block, p.name)}: execution") if p.name in block else p.default
             for p in EXECUTION
         }
         return ExecutionOptions(**values)
 
-    def _inputs(self, doc) -> tuple[Path | str, ...]:
+    def _inputs(self, doc: dict) -> tuple[Path | str, ...]:
         if "inputs" not in doc or doc["inputs"] in (None, [], ""):
             raise PipelineError(
                 f"{self.source}: missing inputs: give a file, a folder, a glob, a list of them, or {{builtin: spot}}"
@@ -235,7 +236,7 @@ class Validator:
             name = spec.get("builtin")
             if name not in models:
                 raise PipelineError(
-                    f"{at(spec, 'builtin')}: unknown builtin model {shown(name)}{did_you_mean(name, models)}"
+                    f"{at(spec, 'builtin')}: unknown builtin model {shown(name)}{did_you_mean(cast(str, name), models)}"
                 )
             return (models[name],)
         items = spec if isinstance(spec, list) else [spec]
@@ -249,7 +250,7 @@ class Validator:
             raise PipelineError(f"{where}: inputs: {exc}") from None
 
     # -- steps ----------------------------------------------------------------------------------
-    def _steps(self, doc, execution: ExecutionOptions) -> tuple[Step, ...]:
+    def _steps(self, doc: dict, execution: ExecutionOptions) -> tuple[Step, ...]:
         raw = doc.get("steps")
         if not isinstance(raw, list) or not raw:
             raise PipelineError(
@@ -270,7 +271,7 @@ class Validator:
         ]
         return run_order(steps, entries)
 
-    def _step(self, entry, execution: ExecutionOptions):
+    def _step(self, entry: Any, execution: ExecutionOptions) -> tuple[str, Any, dict, tuple]:
         known_keys(entry, STEP_KEYS, "a step")
         where = at(entry, "op")
         if "op" not in entry:
@@ -321,20 +322,20 @@ class Validator:
                     f"{source} has {count}; lower {name} below {count}"
                 )
 
-    def _counts(self) -> dict[Path, int]:
+    def _counts(self) -> dict[Path | str, int]:
         """Vertex counts of the PLY inputs, from their headers (others, and unreadable ones, are left out:
         the load step reports those)."""
         if self._vertex_counts is None:
             self._vertex_counts = {}
             for source in self.inputs:
-                if not is_url(source) and source.suffix.lower() == ".ply":  # URLs: the load step reports
+                if not is_url(source) and cast(Path, source).suffix.lower() == ".ply":  # URLs: the load step reports
                     try:
                         self._vertex_counts[source] = read_ply_header(source).counts.get("vertex", 0)
                     except InputError:
                         continue
         return self._vertex_counts
 
-    def _refs(self, entries, parsed, i: int) -> dict:
+    def _refs(self, entries: Sequence[Any], parsed: Sequence[Any], i: int) -> dict:
         entry, (step_id, op, _, _) = entries[i], parsed[i]
         kinds = {p[0]: p[1].output for p in parsed}
         context = f"{at(entry, 'from')}: step {shown(step_id)} (op {op.name})"
@@ -357,7 +358,7 @@ class Validator:
                 refs[slot.name] = earlier[-1]
         return refs
 
-    def _explicit_refs(self, entry, op, kinds: dict, context: str) -> dict:
+    def _explicit_refs(self, entry: Any, op: Any, kinds: dict, context: str) -> dict:
         given = entry.get("from")
         if given is None:
             return {}
@@ -394,6 +395,6 @@ class Validator:
         return ", ".join(f"{name} ({' or '.join(s.kinds)})" for name, s in slots.items()) or "no step results"
 
     @staticmethod
-    def _known_step(ref, kinds: dict, context: str, what: str) -> None:
+    def _known_step(ref: Any, kinds: dict, context: str, what: str) -> None:
         if not isinstance(ref, str) or ref not in kinds:
             raise PipelineError(f"{context}: {what} refers to unknown step {shown(ref)}{did_you_mean(ref, kinds)}")

@@ -7,6 +7,8 @@ quadrature; :func:`smallest_eigenpairs` the paper's truncated basis
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg as spla
@@ -109,7 +111,7 @@ def _arpack_smallest(
     mbar: float,
     return_vectors: bool,
     tol: float = 0.0,
-):
+) -> Any:
     """The ``k`` smallest non-zero generalized eigenpairs by shift-invert Lanczos.
 
     Lanczos Ritz values of ``(L + s M)⁻¹M`` never exceed its largest
@@ -253,6 +255,8 @@ def smallest_eigenpairs(surface: Surface, count: int, *, backend: str | None = N
     return cached[0][:count], cached[1][:, :count]
 
 
-def apply_eigenpairs(surface: Surface, g: np.ndarray, values, vectors, power: float) -> np.ndarray:
+def apply_eigenpairs(
+    surface: Surface, g: np.ndarray, values: np.ndarray, vectors: np.ndarray, power: float
+) -> np.ndarray:
     coefficients = (g * surface.mass_diagonal) @ vectors  # (k, p) = gᵀ M Φ
     return (coefficients * values**power) @ vectors.T

@@ -71,6 +71,7 @@ from __future__ import annotations
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 import scipy.sparse as sp
@@ -101,7 +102,11 @@ _THREAD_EDGES = 4_000_000
 
 
 def instantaneous_frequency(
-    surface: Surface, signals, riesz, options: RieszOptions | dict | None = None, **overrides
+    surface: Surface,
+    signals: np.ndarray,
+    riesz: np.ndarray | None,
+    options: RieszOptions | dict | None = None,
+    **overrides: Any,
 ) -> np.ndarray:
     """Instantaneous frequency ``ω = |∇φ|`` (Eq. 23) of ``k`` signals from their Riesz transforms.
 
@@ -324,7 +329,9 @@ def _orientation(st: _Stencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
     return o
 
 
-def _unwrapped_fit(st: _Stencil, f_i, f_j, q_i, q_j, guess) -> np.ndarray:
+def _unwrapped_fit(
+    st: _Stencil, f_i: np.ndarray, f_j: np.ndarray, q_i: np.ndarray, q_j: np.ndarray, guess: np.ndarray | None
+) -> np.ndarray:
     """Gradient (n, 3) fitted to the edge increments ``arg(z_j z̄_i)``, ``z = f + i q`` at the
     edges' ends, each shifted by the whole turns that bring it closest to the gradient's
     prediction ``∇ψ_i · (x_j − x_i)``.
@@ -341,7 +348,7 @@ def _unwrapped_fit(st: _Stencil, f_i, f_j, q_i, q_j, guess) -> np.ndarray:
                 break
             turns = new_turns
         grad = (st.fit @ (increment + 2 * np.pi * turns)).reshape(st.n, 3)
-    return grad
+    return cast(np.ndarray, grad)  # the loop runs at least once
 
 
 def _riesz_response(st: _Stencil, grad: np.ndarray, energy: np.ndarray) -> np.ndarray:

@@ -22,6 +22,7 @@ signal.  Frequencies are in radians per model unit of length.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -97,7 +98,12 @@ class MonogenicSignal:
 
 
 def monogenic(
-    surface: Surface, imfs, options: RieszOptions | dict | None = None, *, backend: str | None = None, **overrides
+    surface: Surface,
+    imfs: np.ndarray,
+    options: RieszOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    **overrides: Any,
 ) -> MonogenicSignal:
     """Monogenic signal of every IMF: Algorithm 2, steps 2–5 (Eqs. 20–23).
 
@@ -151,12 +157,16 @@ def monogenic(
     return monogenic_from_potential(surface, f, potential, options)
 
 
-def _signals(surface: Surface, imfs) -> np.ndarray:
+def _signals(surface: Surface, imfs: np.ndarray) -> np.ndarray:
     return as_signals(check_surface(surface), imfs, "imfs")[0]
 
 
 def monogenic_from_potential(
-    surface: Surface, imfs, potential, options: RieszOptions | dict | None = None, **overrides
+    surface: Surface,
+    imfs: np.ndarray,
+    potential: np.ndarray,
+    options: RieszOptions | dict | None = None,
+    **overrides: Any,
 ) -> MonogenicSignal:
     """Monogenic signal from precomputed ``L^{-1/2}`` of the IMFs (Eqs. 16, 20–23).
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import Any
 
 from ..records import Record, option
 
@@ -82,7 +83,7 @@ class RieszOptions(Record):
 RIESZ_DEFAULTS = RieszOptions()
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:
     """``METHODS``, the former name of :data:`POTENTIALS`, for one release."""
     if name == "METHODS":
         warnings.warn("hht3d.spectral.METHODS is now POTENTIALS", DeprecationWarning, stacklevel=2)

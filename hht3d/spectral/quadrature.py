@@ -9,6 +9,7 @@ independent, so a scheduler can split them into groups
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -126,7 +127,7 @@ def quadrature_plan(
 
 def quadrature_part(
     surface: Surface,
-    f,
+    f: np.ndarray,
     plan: QuadraturePlan,
     group: int = 0,
     groups: int = 1,
@@ -165,7 +166,7 @@ def quadrature_part(
     return total.T.reshape(g.shape)
 
 
-def combine_quadrature_parts(surface: Surface, parts) -> np.ndarray:
+def combine_quadrature_parts(surface: Surface, parts: Sequence[np.ndarray]) -> np.ndarray:
     """``L^{-1/2} f̃`` from all :func:`quadrature_part` results (kernel removed again)."""
     return fluctuation(surface, np.sum(parts, axis=0))
 

@@ -31,7 +31,7 @@ def resolvable_frequency(surface: Surface) -> np.ndarray:
     return resolvable_from_area(surface.mass_diagonal)
 
 
-def resolvable_from_area(area) -> np.ndarray:
+def resolvable_from_area(area: np.ndarray) -> np.ndarray:
     """``π/√A_v`` for vertex areas ``A_v`` (:func:`resolvable_frequency` without the surface)."""
     return np.pi / np.sqrt(np.asarray(area, dtype=np.float64))
 
@@ -77,7 +77,9 @@ class ResolutionReport:
         )
 
 
-def resolution_report(frequency, resolvable, weights=None) -> ResolutionReport:
+def resolution_report(
+    frequency: np.ndarray, resolvable: np.ndarray, weights: np.ndarray | None = None
+) -> ResolutionReport:
     """Which instantaneous frequencies exceed the resolution limit of their vertex.
 
     Parameters

@@ -60,6 +60,8 @@ task.  :func:`fractional_laplacian` does the same with one group.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..errors import InputError
@@ -75,12 +77,12 @@ __all__ = ["fractional_laplacian", "riesz", "vertex_gradient"]
 
 def fractional_laplacian(
     surface: Surface,
-    f,
+    f: np.ndarray,
     power: float = -0.5,
     options: RieszOptions | dict | None = None,
     *,
     backend: str | None = None,
-    **overrides,
+    **overrides: Any,
 ) -> np.ndarray:
     """Apply ``L^{power}`` of the generalized problem ``L φ = λ M φ`` (Eqs. 13, 15, 18).
 
@@ -150,7 +152,12 @@ def fractional_laplacian(
 
 
 def riesz(
-    surface: Surface, f, options: RieszOptions | dict | None = None, *, backend: str | None = None, **overrides
+    surface: Surface,
+    f: np.ndarray,
+    options: RieszOptions | dict | None = None,
+    *,
+    backend: str | None = None,
+    **overrides: Any,
 ) -> np.ndarray:
     """Riesz transform ``R f = ∇ L^{-1/2} f`` (Eqs. 14, 16; Eq. 18 with ``potential="spectral"``).
 

@@ -67,7 +67,7 @@ def shifted_matrix(surface: Surface, sigma: float) -> sp.csr_matrix:
 def shifted_solve(
     surface: Surface,
     sigma: float,
-    rhs,
+    rhs: np.ndarray,
     *,
     backend: str | None = None,
     symbolic: linalg.SymbolicFactorization | None = None,

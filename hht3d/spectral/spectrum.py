@@ -21,6 +21,7 @@ above them (their frequencies are aliased).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -57,7 +58,7 @@ class HilbertSpectrum:
     area: np.ndarray
     resolvable: np.ndarray | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.frequency.shape != self.amplitude.shape or self.frequency.ndim != 2:
             raise InputError(
                 f"frequency {self.frequency.shape} and amplitude {self.amplitude.shape} must both have shape (k, n)"
@@ -77,13 +78,13 @@ class HilbertSpectrum:
     @property
     def resolvable_frequency(self) -> float:
         """The surface's resolution limit: the median over vertices of ``π/√A_v``."""
-        return float(np.median(self.resolvable))
+        return float(np.median(cast(np.ndarray, self.resolvable)))
 
     @property
     def resolution(self) -> ResolutionReport:
         """Vertex–IMF pairs whose frequency exceeds their vertex's limit, and their share of
         the energy ``a² A_v``: frequencies the surface cannot resolve, reported, not dropped."""
-        return resolution_report(self.frequency, self.resolvable, self._relative_energy() * self.area)
+        return resolution_report(self.frequency, cast(np.ndarray, self.resolvable), self._relative_energy() * self.area)
 
     @property
     def energy(self) -> np.ndarray:
@@ -127,7 +128,7 @@ class HilbertSpectrum:
         low_f, high_f = frequency[order[low]], frequency[order[min(high, len(order) - 1)]]
         return (float(low_f), float(high_f)) if high_f > low_f else (float(frequency.min()), float(frequency.max()))
 
-    def bin_edges(self, bins: int = 64, scale: str = "linear", limits=None) -> np.ndarray:
+    def bin_edges(self, bins: int = 64, scale: str = "linear", limits: tuple[float, float] | None = None) -> np.ndarray:
         """Frequency bin edges (bins + 1,).
 
         Parameters
@@ -157,7 +158,9 @@ class HilbertSpectrum:
             return np.geomspace(low, high, int(bins) + 1)
         return np.linspace(low, high, int(bins) + 1)
 
-    def distribution(self, bins: int = 64, scale: str = "linear", limits=None):
+    def distribution(
+        self, bins: int = 64, scale: str = "linear", limits: tuple[float, float] | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Space–frequency–energy distribution ``H(ω, v)``.
 
         Frequencies outside the limits are left out (as in ``numpy.histogram``;
@@ -178,7 +181,9 @@ class HilbertSpectrum:
         np.add.at(h, (index[inside], vertex[inside]), self.energy[inside])
         return edges, h
 
-    def marginal(self, bins: int = 64, scale: str = "linear", limits=None):
+    def marginal(
+        self, bins: int = 64, scale: str = "linear", limits: tuple[float, float] | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Area-weighted marginal spectrum ``h(ω) = Σ_v A_v H(ω, v)``.
 
         Returns

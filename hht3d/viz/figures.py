@@ -21,7 +21,9 @@ Figures are Matplotlib ``Figure`` objects drawn with the Agg canvas (no
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -54,7 +56,9 @@ class _Grid:
     """Pixel layout of the composite: a title band, then three rows of panels, each a title,
     an image and a horizontal colour bar below it."""
 
-    def __init__(self, columns: int, image_aspect: float, size, dpi: float, panel_width: int):
+    def __init__(
+        self, columns: int, image_aspect: float, size: tuple[float, float] | None, dpi: float, panel_width: int
+    ) -> None:
         width, height = (columns * panel_width, None) if size is None else check_size(size)
         self.column_width = width / columns
         self.font = font_points(self.column_width, dpi)
@@ -103,16 +107,16 @@ class _Grid:
 def hht_figure(
     result: HHTResult,
     *,
-    size=None,
+    size: tuple[float, float] | None = None,
     dpi: float = 100,
     panel_width: int = 240,
-    view="front",
-    up="y",
+    view: str | Sequence[float] = "front",
+    up: str | Sequence[float] = "y",
     backend: str = "auto",
     supersample: int = 2,
     signal_name: str = "signal",
-    percentiles=PERCENTILES,
-):
+    percentiles: tuple[float, float] = PERCENTILES,
+) -> Any:
     """The composite figure of the paper's Fig. 4 as a Matplotlib ``Figure``.
 
     Row 1: the shaded model, the signal, IMF 1 … k (finest first) and the
@@ -162,7 +166,10 @@ def hht_figure(
     )
     draw_image(fig, grid.image_box(0, 0), drawer.render(), title="model", font=grid.font)
     mono = result.monogenic
-    panels = [(0, 1, result.signal, signal_name, {}), (0, k + 2, result.residue, "residue", {})]
+    panels: list[tuple[int, int, np.ndarray, str, dict]] = [
+        (0, 1, result.signal, signal_name, {}),
+        (0, k + 2, result.residue, "residue", {}),
+    ]
     for i in range(k):
         panels += [
             (0, i + 2, result.imfs[i], f"IMF {i + 1}", {"cmap": IMF_CMAP, "symmetric": True}),
@@ -181,8 +188,14 @@ def hht_figure(
 
 # -- Hilbert spectrum plots ------------------------------------------------------------------------
 def spectrum_figure(
-    result: HHTResult, *, bins: int = 64, scale: str = "log", limits=None, size=(1400, 520), dpi: float = 100
-):
+    result: HHTResult,
+    *,
+    bins: int = 64,
+    scale: str = "log",
+    limits: tuple[float, float] | None = None,
+    size: tuple[float, float] = (1400, 520),
+    dpi: float = 100,
+) -> Any:
     """Plots of the Hilbert spectrum as a Matplotlib ``Figure``.
 
     Left: the area-weighted marginal spectrum ``h(ω) = Σ_v A_v H(ω, v)``.
@@ -258,13 +271,21 @@ def spectrum_figure(
     return fig
 
 
-def _plot_marginal(axes, edges, share, font: float) -> None:
+def _plot_marginal(axes: Any, edges: np.ndarray, share: np.ndarray, font: float) -> None:
     axes.stairs(share, edges, fill=True, color="#4c72b0", alpha=0.35)
     axes.stairs(share, edges, color="#1f3f73", linewidth=1.2)
     axes.set_title(r"marginal spectrum $h(\omega) = \sum_v A_v\, H(\omega, v)$", fontsize=font)
 
 
-def _plot_imfs(axes, spectrum: HilbertSpectrum, edges, scale: str, limits, total: float, font: float) -> None:
+def _plot_imfs(
+    axes: Any,
+    spectrum: HilbertSpectrum,
+    edges: np.ndarray,
+    scale: str,
+    limits: tuple[float, float] | None,
+    total: float,
+    font: float,
+) -> None:
     import matplotlib
 
     k = spectrum.frequency.shape[0]
@@ -289,16 +310,16 @@ def _plot_imfs(axes, spectrum: HilbertSpectrum, edges, scale: str, limits, total
 # -- the standard set --------------------------------------------------------------------------------
 def write_figures(
     result: HHTResult,
-    folder,
+    folder: Path | str,
     *,
     stem: str | None = None,
-    view="front",
-    up="y",
+    view: str | Sequence[float] = "front",
+    up: str | Sequence[float] = "y",
     backend: str = "auto",
     dpi: float = 100,
-    hht_size=None,
-    spectrum_size=(1400, 520),
-    field_size=(900, 800),
+    hht_size: tuple[float, float] | None = None,
+    spectrum_size: tuple[float, float] = (1400, 520),
+    field_size: tuple[float, float] = (900, 800),
     bins: int = 64,
     scale: str = "log",
     signal_name: str = "signal",

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import base64
 import re
+from collections.abc import Iterable, Sequence
+from typing import Any, cast
 
 import numpy as np
 
@@ -41,7 +43,7 @@ _GROUPS = {
 }
 
 
-def typed(values) -> dict:
+def typed(values: np.ndarray) -> dict:
     """plotly.js's typed-array form: little-endian float32 in base64."""
     raw = np.ascontiguousarray(values, dtype="<f4").tobytes()
     return {"dtype": "f4", "bdata": base64.b64encode(raw).decode("ascii")}
@@ -64,10 +66,10 @@ def field_title(name: str) -> tuple[str, str]:
     return f"IMF {k}" if kind == "imf" else f"{kind} {k}", _GROUPS[kind]
 
 
-def order(names) -> list[str]:
+def order(names: Iterable[str]) -> list[str]:
     """Signal, IMFs, residue, then amplitude, phase and frequency of each IMF, then the rest."""
 
-    def key(name):
+    def key(name: str) -> tuple[int, int]:
         match = _GROUPED.match(name)
         if match is not None:
             kind, k = match.groups()
@@ -103,7 +105,7 @@ def _trace(shown: Shown, index: int, label: str) -> dict:
     )
 
 
-def figure_json(shown: list[Shown], labels: list[str], view, up) -> str:
+def figure_json(shown: list[Shown], labels: list[str], view: str | Sequence[float], up: str | Sequence[float]) -> str:
     import plotly.graph_objects as go
     import plotly.io as pio
 
@@ -111,7 +113,7 @@ def figure_json(shown: list[Shown], labels: list[str], view, up) -> str:
     eye = dict(zip("xyz", (EYE_DISTANCE * cam.toward).tolist()))
     cam_up = dict(zip("xyz", cam.up.tolist()))
     hidden = {"visible": False, "showspikes": False}
-    layout = {"margin": {"l": 0, "r": 0, "t": 28, "b": 0}, "uirevision": "hht3d", "annotations": []}
+    layout: dict[str, Any] = {"margin": {"l": 0, "r": 0, "t": 28, "b": 0}, "uirevision": "hht3d", "annotations": []}
     width = 1.0 / len(shown)
     for index, label in enumerate(labels):
         name = "scene" if index == 0 else f"scene{index + 1}"
@@ -189,5 +191,5 @@ def quality_data(quality: Quality) -> dict:
 
 
 def size_text(surface: Surface) -> str:
-    kind = f"{len(surface.faces):,} triangles" if surface.is_mesh else "point cloud"
+    kind = f"{len(cast(np.ndarray, surface.faces)):,} triangles" if surface.is_mesh else "point cloud"
     return f"{surface.n_vertices:,} vertices, {kind}"

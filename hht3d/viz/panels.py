@@ -8,7 +8,9 @@ Figures are Matplotlib ``Figure`` objects drawn with the Agg canvas (no
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,6 +19,10 @@ from ..geometry.surface import Surface
 from ..io.atomic import atomic_path
 from .render import PERCENTILES, ColorScale, Rendering, color_scale, model_aspect, renderer
 from .render.image import check_field, check_size
+
+if TYPE_CHECKING:
+    from hht3d.transform import HHTResult
+
 
 __all__ = [
     "font_points",
@@ -38,7 +44,13 @@ def font_points(width_pixels: float, dpi: float) -> float:
 
 
 def draw_colorbar(
-    fig, box, scale: ColorScale, *, label: str | None = None, orientation: str = "vertical", font: float = 10.0
+    fig: Any,
+    box: Sequence[float],
+    scale: ColorScale,
+    *,
+    label: str | None = None,
+    orientation: str = "vertical",
+    font: float = 10.0,
 ) -> None:
     """A colour bar in ``box`` (figure fractions ``[left, bottom, width, height]``) with three
     ticks: the limits and the middle (0 for a symmetric scale)."""
@@ -62,7 +74,9 @@ def _tick_label(value: float, scale: ColorScale) -> str:
     return f"{value:.2e}"
 
 
-def draw_image(fig, box, rendering: Rendering, *, title: str | None = None, font: float = 10.0) -> None:
+def draw_image(
+    fig: Any, box: Sequence[float], rendering: Rendering, *, title: str | None = None, font: float = 10.0
+) -> None:
     """Show a rendering in ``box`` (figure fractions) on white, with an optional title."""
     axes = fig.add_axes(box)
     axes.imshow(rendering.rgb(), interpolation="none")
@@ -73,22 +87,22 @@ def draw_image(fig, box, rendering: Rendering, *, title: str | None = None, font
 
 def field_figure(
     surface: Surface,
-    values=None,
+    values: np.ndarray | None = None,
     *,
     title: str | None = None,
     label: str | None = None,
-    size=(800, 800),
+    size: tuple[float, float] = (800, 800),
     dpi: float = 100,
-    view="front",
-    up="y",
+    view: str | Sequence[float] = "front",
+    up: str | Sequence[float] = "y",
     cmap: str | None = None,
-    limits=None,
+    limits: tuple[float, float] | None = None,
     symmetric: bool | None = None,
-    percentiles=PERCENTILES,
+    percentiles: tuple[float, float] = PERCENTILES,
     backend: str = "auto",
     supersample: int = 2,
     point_size: float | None = None,
-):
+) -> Any:
     """A Matplotlib ``Figure`` of one field on the model with a title and a colour bar.
 
     Parameters
@@ -149,18 +163,18 @@ def field_figure(
     return fig
 
 
-def fractions(box, width: float, height: float) -> list[float]:
+def fractions(box: Sequence[float], width: float, height: float) -> list[float]:
     """Pixel box ``(left, bottom, width, height)`` → figure fractions."""
     left, bottom, w, h = box
     return [left / width, bottom / height, w / width, h / height]
 
 
-def check_dpi(dpi) -> None:
+def check_dpi(dpi: float) -> None:
     if not (isinstance(dpi, (int, float)) and 10 <= dpi <= 1200):
         raise InputError(f"dpi must be a number in [10, 1200], got {dpi!r}")
 
 
-def save_figure(fig, path) -> Path:
+def save_figure(fig: Any, path: Path | str) -> Path:
     """Write a Matplotlib figure to a PNG atomically at its own size and dpi; returns the path."""
     path = png_path(path)
     with atomic_path(path) as tmp:
@@ -168,7 +182,7 @@ def save_figure(fig, path) -> Path:
     return path
 
 
-def render_png(path, surface: Surface, values=None, **options):
+def render_png(path: Path | str, surface: Surface, values: np.ndarray | None = None, **options: Any) -> Path:
     """Render a field with a title and a colour bar to a PNG (atomically); returns the path.
 
     ``options`` are those of :func:`field_figure` (``title``, ``label``,
@@ -178,13 +192,13 @@ def render_png(path, surface: Surface, values=None, **options):
     return save_figure(field_figure(surface, values, **options), path)
 
 
-def png_path(path) -> Path:
+def png_path(path: Path | str) -> Path:
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise InputError(f"{path}: figures are written as PNG; use a .png file name")
     return path
 
 
-def check_result(result) -> None:
+def check_result(result: HHTResult) -> None:
     if not all(hasattr(result, name) for name in ("surface", "imfs", "monogenic", "spectrum")):
         raise InputError(f"expected an HHTResult (from hht3d.transform.hht), got {type(result).__name__}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -47,7 +48,7 @@ class Shown:
     def decimated(self) -> bool:
         return len(self.source) < self.n_original
 
-    def carry(self, values) -> np.ndarray:
+    def carry(self, values: np.ndarray) -> np.ndarray:
         """``values`` (n,) of the original vertices at the drawn vertices (m,)."""
         return np.asarray(values)[self.source]
 
@@ -80,7 +81,7 @@ def shown_copy(surface: Surface, max_vertices: int = VERTEX_BUDGET) -> Shown:
     from scipy.spatial import cKDTree
 
     mesh = o3d.geometry.TriangleMesh(
-        o3d.utility.Vector3dVector(surface.vertices), o3d.utility.Vector3iVector(surface.faces)
+        o3d.utility.Vector3dVector(surface.vertices), o3d.utility.Vector3iVector(cast(np.ndarray, surface.faces))
     )
     if n > CLUSTER_ABOVE * max_vertices:  # a voxel per two kept vertices' worth of area
         mesh = mesh.simplify_vertex_clustering(voxel_size=float(np.sqrt(surface.face_areas.sum() / (2 * max_vertices))))
@@ -94,7 +95,7 @@ def shown_copy(surface: Surface, max_vertices: int = VERTEX_BUDGET) -> Shown:
     return Shown(vertices, np.asarray(small.triangles), nearest, n)
 
 
-def color_limits(values, percentiles=PERCENTILES) -> dict:
+def color_limits(values: np.ndarray, percentiles: tuple[float, float] = PERCENTILES) -> dict:
     """Colour limits of a field in both scales and the one chosen by default.
 
     Returns

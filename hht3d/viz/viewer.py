@@ -46,7 +46,9 @@ the spectrum and the quality figures always come from every vertex.
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -57,10 +59,11 @@ from ..io.atomic import atomic_path
 from ..io.read import load as load_surface
 from ..io.read import read_npz
 from ..spectral.spectrum import HilbertSpectrum
+from ..transform import HHTResult
 from .page import viewer_page
 from .page_data import colorscale, field_title, figure_json, order, quality_data, size_text, spectrum_data, typed
 from .render import PERCENTILES, SEQUENTIAL_CMAP, SYMMETRIC_CMAP, camera
-from .shown import VERTEX_BUDGET, color_limits, shown_copy
+from .shown import VERTEX_BUDGET, Shown, color_limits, shown_copy
 
 __all__ = ["PAGE_BUDGETS", "SHAPE", "write_page", "result_html", "surfaces_html", "read_fields", "file_html"]
 
@@ -79,19 +82,19 @@ _STACKED = {"imfs": "imf", "amplitude": "amplitude", "phase": "phase", "frequenc
 
 
 def write_page(
-    path,
-    surfaces,
+    path: Path | str,
+    surfaces: Sequence[Surface],
     fields: dict,
     *,
     title: str,
-    labels=None,
+    labels: Sequence[str] | None = None,
     spectrum: HilbertSpectrum | None = None,
     quality: Quality | None = None,
     field: str | None = None,
     max_vertices: int = VERTEX_BUDGET,
-    percentiles=PERCENTILES,
-    view="front",
-    up="y",
+    percentiles: tuple[float, float] = PERCENTILES,
+    view: str | Sequence[float] = "front",
+    up: str | Sequence[float] = "y",
 ) -> Path:
     """Write the viewer page of one or more surfaces sharing per-vertex fields, atomically.
 
@@ -151,12 +154,13 @@ def write_page(
         )
     camera(view, up)  # checks view and up before the expensive part
     shown = [shown_copy(s, max_vertices) for s in surfaces]
-    copies, copy_of = [], []
-    for s in shown:
-        same = next((c for c, other in enumerate(copies) if np.array_equal(other.source, s.source)), None)
+    copies: list[Shown] = []
+    copy_of: list[int] = []
+    for one in shown:
+        same = next((c for c, other in enumerate(copies) if np.array_equal(other.source, one.source)), None)
         copy_of.append(len(copies) if same is None else same)
         if same is None:
-            copies.append(s)
+            copies.append(one)
     shares = {}
     if quality is not None:
         shares = {f"imf_{k + 1}": share for k, share in enumerate(quality.energy_share[:-1])}
@@ -221,15 +225,15 @@ def write_page(
 
 # -- entry points ------------------------------------------------------------------------------
 def result_html(
-    result,
-    path,
+    result: HHTResult,
+    path: Path | str,
     *,
-    beside=None,
+    beside: Any = None,
     field: str | None = None,
     max_vertices: int = VERTEX_BUDGET,
-    percentiles=PERCENTILES,
-    view="front",
-    up="y",
+    percentiles: tuple[float, float] = PERCENTILES,
+    view: str | Sequence[float] = "front",
+    up: str | Sequence[float] = "y",
 ) -> Path:
     """The page of an HHT result: every field, the marginal spectrum and the quality figures.
 
@@ -263,14 +267,14 @@ def result_html(
 
 
 def surfaces_html(
-    path,
+    path: Path | str,
     original: Surface,
     changed: Surface,
     *,
     max_vertices: int = VERTEX_BUDGET,
-    percentiles=PERCENTILES,
-    view="front",
-    up="y",
+    percentiles: tuple[float, float] = PERCENTILES,
+    view: str | Sequence[float] = "front",
+    up: str | Sequence[float] = "y",
 ) -> Path:
     """The page of a filtered or reconstructed surface beside the original.
 
@@ -294,7 +298,7 @@ def surfaces_html(
     )
 
 
-def read_fields(path) -> tuple[Surface, dict, np.ndarray | None]:
+def read_fields(path: Path | str) -> tuple[Surface, dict, np.ndarray | None]:
     """A surface, its per-vertex fields and stored vertex areas, from a saved file.
 
     ``.npz`` files as :meth:`HHTResult.save <hht3d.transform.HHTResult.save>`
@@ -331,7 +335,7 @@ def read_fields(path) -> tuple[Surface, dict, np.ndarray | None]:
     return surface, fields, None if area is None or area.shape != (n,) else area
 
 
-def _decomposition(surface: Surface, fields: dict, area):
+def _decomposition(surface: Surface, fields: dict, area: np.ndarray | None) -> tuple[Any, Any]:
     """The spectrum and quality of the IMFs among ``fields`` (``None`` for what they lack)."""
     k = 0
     while all(f"{kind}_{k + 1}" in fields for kind in ("imf", "amplitude", "frequency")):
@@ -349,14 +353,14 @@ def _decomposition(surface: Surface, fields: dict, area):
 
 
 def file_html(
-    source,
-    path=None,
+    source: Path | str,
+    path: Path | str | None = None,
     *,
     field: str | None = None,
     max_vertices: int = VERTEX_BUDGET,
-    percentiles=PERCENTILES,
-    view="front",
-    up="y",
+    percentiles: tuple[float, float] = PERCENTILES,
+    view: str | Sequence[float] = "front",
+    up: str | Sequence[float] = "y",
 ) -> Path:
     """The page of a saved result or surface file (see :func:`read_fields`).
 

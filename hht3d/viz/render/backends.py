@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
+import numpy as np
+
 from ...errors import InputError
 from ...geometry.surface import Surface
 from .colors import PERCENTILES, color_scale
@@ -25,13 +29,13 @@ def available_backends() -> list[str]:
 def renderer(
     surface: Surface,
     *,
-    view="front",
-    up="y",
-    size=(800, 800),
+    view: str | Sequence[float] = "front",
+    up: str | Sequence[float] = "y",
+    size: tuple[int, int] = (800, 800),
     backend: str = "auto",
     supersample: int = 2,
     point_size: float | None = None,
-):
+) -> SoftwareRenderer | Open3DRenderer:
     """A renderer of ``surface`` from one view; call ``.render(values, scale)`` per field.
 
     Parameters
@@ -66,15 +70,15 @@ def renderer(
 
 def render(
     surface: Surface,
-    values=None,
+    values: np.ndarray | None = None,
     *,
-    view="front",
-    up="y",
-    size=(800, 800),
+    view: str | Sequence[float] = "front",
+    up: str | Sequence[float] = "y",
+    size: tuple[int, int] = (800, 800),
     cmap: str | None = None,
-    limits=None,
+    limits: tuple[float, float] | None = None,
     symmetric: bool | None = None,
-    percentiles=PERCENTILES,
+    percentiles: tuple[float, float] = PERCENTILES,
     backend: str = "auto",
     supersample: int = 2,
     point_size: float | None = None,

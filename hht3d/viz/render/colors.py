@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -36,7 +37,7 @@ class ColorScale:
     vmin: float
     vmax: float
 
-    def __call__(self, values) -> np.ndarray:
+    def __call__(self, values: np.ndarray) -> np.ndarray:
         """RGB in [0, 1] of ``values`` (any shape) → shape ``values.shape + (3,)``."""
         import matplotlib
 
@@ -46,7 +47,7 @@ class ColorScale:
         rgb[np.isnan(values)] = BAD_COLOR
         return rgb
 
-    def mappable(self):
+    def mappable(self) -> Any:
         """A Matplotlib ``ScalarMappable`` for ``Figure.colorbar``."""
         from matplotlib.cm import ScalarMappable
         from matplotlib.colors import Normalize
@@ -55,7 +56,12 @@ class ColorScale:
 
 
 def color_scale(
-    values, *, cmap: str | None = None, limits=None, symmetric: bool | None = None, percentiles=PERCENTILES
+    values: np.ndarray,
+    *,
+    cmap: str | None = None,
+    limits: tuple[float, float] | None = None,
+    symmetric: bool | None = None,
+    percentiles: tuple[float, float] = PERCENTILES,
 ) -> ColorScale:
     """Choose colour limits for a field: robust percentiles, symmetric about 0 for signed fields.
 
@@ -110,7 +116,7 @@ def _check_cmap(cmap: str) -> None:
         )
 
 
-def _checked_limits(limits) -> tuple[float, float]:
+def _checked_limits(limits: Any) -> tuple[float, float]:
     try:
         vmin, vmax = (float(v) for v in limits)
     except (TypeError, ValueError):
@@ -120,7 +126,7 @@ def _checked_limits(limits) -> tuple[float, float]:
     return vmin, vmax
 
 
-def _checked_percentiles(percentiles) -> tuple[float, float]:
+def _checked_percentiles(percentiles: tuple[float, float]) -> tuple[float, float]:
     try:
         low, high = (float(p) for p in percentiles)
     except (TypeError, ValueError):

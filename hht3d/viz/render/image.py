@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -56,7 +57,7 @@ class Rendering:
         """Pixels mostly covered by the model (h, w) bool."""
         return self.rgba[..., 3] > 0.5
 
-    def rgb(self, background=(1.0, 1.0, 1.0)) -> np.ndarray:
+    def rgb(self, background: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> np.ndarray:
         """The image over a background colour as (h, w, 3) uint8."""
         alpha = self.rgba[..., 3:]
         mixed = self.rgba[..., :3] * alpha + np.asarray(background, dtype=np.float64) * (1 - alpha)
@@ -84,7 +85,7 @@ def lambert(normals: np.ndarray, light: np.ndarray) -> np.ndarray:
     return AMBIENT + (1 - AMBIENT) * np.abs(normals @ light)
 
 
-def check_size(size) -> tuple[int, int]:
+def check_size(size: Any) -> tuple[int, int]:
     try:
         width, height = (int(s) for s in size)
     except (TypeError, ValueError):
@@ -94,7 +95,7 @@ def check_size(size) -> tuple[int, int]:
     return width, height
 
 
-def check_field(surface: Surface, values) -> np.ndarray:
+def check_field(surface: Surface, values: np.ndarray) -> np.ndarray:
     try:
         field = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError):
@@ -107,7 +108,7 @@ def check_field(surface: Surface, values) -> np.ndarray:
     return field
 
 
-def splat_radius(surface: Surface, point_size, pixels_per_unit: float, supersample: int) -> float:
+def splat_radius(surface: Surface, point_size: float | None, pixels_per_unit: float, supersample: int) -> float:
     """Disc radius in supersampled pixels: ``point_size / 2`` output pixels, or by default
     0.8 × the median nearest-neighbour spacing (at least one output pixel)."""
     if point_size is not None:

@@ -8,6 +8,8 @@ import os
 import subprocess
 import sys
 import threading
+from collections.abc import Iterator
+from typing import Any, cast
 
 import numpy as np
 
@@ -21,7 +23,7 @@ __all__ = ["Open3DRenderer", "open3d_problem"]
 
 
 @contextlib.contextmanager
-def _quiet_stdout():
+def _quiet_stdout() -> Iterator[None]:
     """Silence C-level writes to stdout (Filament prints its engine set-up there)."""
     sys.stdout.flush()
     saved = os.dup(1)
@@ -44,11 +46,11 @@ class _Offscreen:
     """
 
     lock = threading.Lock()
-    renderer = None
+    renderer: Any = None
     size: tuple[int, int] | None = None
 
     @classmethod
-    def get(cls, width: int, height: int):
+    def get(cls, width: int, height: int) -> Any:
         """The offscreen renderer at this size; call with :attr:`lock` held."""
         if cls.size != (width, height):
             import open3d as o3d
@@ -100,7 +102,9 @@ class Open3DRenderer:
 
     name = "open3d"
 
-    def __init__(self, surface: Surface, cam: Camera, size, *, point_size: float | None = None):
+    def __init__(
+        self, surface: Surface, cam: Camera, size: tuple[int, int], *, point_size: float | None = None
+    ) -> None:
         from open3d.visualization import rendering
 
         self.surface, self.camera = surface, cam
@@ -115,7 +119,7 @@ class Open3DRenderer:
         self._material.point_size = 2 * splat_radius(surface, point_size, self._framing.pixels_per_unit, 1)
         self._shade = lambert(surface.normals, cam.light)
 
-    def _aim(self, offscreen) -> None:
+    def _aim(self, offscreen: Any) -> None:
         """White background, no tone mapping, and an orthographic view of the framed box with
         the eye one depth range before the nearest point."""
         from open3d.visualization import rendering
@@ -137,7 +141,7 @@ class Open3DRenderer:
         )
         offscreen.scene.camera.look_at(center, center + depth_range * cam.toward, cam.up)
 
-    def render(self, values=None, scale: ColorScale | None = None) -> Rendering:
+    def render(self, values: np.ndarray | None = None, scale: ColorScale | None = None) -> Rendering:
         """Draw ``values`` (n,) with ``scale`` (default: :func:`hht3d.viz.render.color_scale` of the values), or the
         plain shaded model when ``values`` is None."""
         if values is None:
@@ -159,13 +163,14 @@ class Open3DRenderer:
         alpha = (depth < 1.0).astype(np.float64)[..., None]
         return Rendering(np.concatenate([image, alpha], axis=2), scale, self.name)
 
-    def _geometry(self, colors: np.ndarray):
+    def _geometry(self, colors: np.ndarray) -> Any:
         import open3d as o3d
 
         vectors = o3d.utility.Vector3dVector
+        geometry: Any
         if self.surface.is_mesh:
             geometry = o3d.geometry.TriangleMesh(
-                vectors(self.surface.vertices), o3d.utility.Vector3iVector(self.surface.faces)
+                vectors(self.surface.vertices), o3d.utility.Vector3iVector(cast(np.ndarray, self.surface.faces))
             )
             geometry.vertex_colors = vectors(colors)
         else:

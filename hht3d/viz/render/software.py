@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -30,7 +32,15 @@ class SoftwareRenderer:
 
     name = "software"
 
-    def __init__(self, surface: Surface, cam: Camera, size, *, supersample: int = 2, point_size: float | None = None):
+    def __init__(
+        self,
+        surface: Surface,
+        cam: Camera,
+        size: tuple[int, int],
+        *,
+        supersample: int = 2,
+        point_size: float | None = None,
+    ) -> None:
         self.surface, self.camera = surface, cam
         self.width, self.height = check_size(size)
         if not isinstance(supersample, (int, np.integer)) or not 1 <= supersample <= 4:
@@ -44,7 +54,7 @@ class SoftwareRenderer:
         self.point_size = _check_point_size(point_size)
         self._fragments: _Fragments | None = None
 
-    def render(self, values=None, scale: ColorScale | None = None) -> Rendering:
+    def render(self, values: np.ndarray | None = None, scale: ColorScale | None = None) -> Rendering:
         """Draw ``values`` (n,) with ``scale`` (default: :func:`hht3d.viz.render.color_scale` of the values), or the
         plain shaded model when ``values`` is None."""
         fragments = self._rasterized()
@@ -75,7 +85,7 @@ class SoftwareRenderer:
         framing = Framing(projected[:, :2], width, height)
         xy, depth = framing.pixels(projected[:, :2]), projected[:, 2]
         if self.surface.is_mesh:
-            pixel, vertex, weight = _rasterize_triangles(xy, depth, self.surface.faces, width, height)
+            pixel, vertex, weight = _rasterize_triangles(xy, depth, cast(np.ndarray, self.surface.faces), width, height)
         else:
             radius = splat_radius(self.surface, self.point_size, framing.pixels_per_unit, s)
             pixel, vertex, weight = _rasterize_points(xy, depth * framing.pixels_per_unit, radius, width, height)
@@ -85,7 +95,7 @@ class SoftwareRenderer:
         return _Fragments(pixel, vertex, weight, lambert(normals, self.camera.light))
 
 
-def _check_point_size(point_size):
+def _check_point_size(point_size: float | None) -> float | None:
     if point_size is None:
         return None
     if not (isinstance(point_size, (int, float, np.number)) and 0 < point_size <= 64):
@@ -101,18 +111,18 @@ class _DepthBuffer:
         self.owner = np.full(n_pixels, -1, dtype=np.int64)
         self.weights = np.zeros((n_pixels, 2), dtype=np.float32)
 
-    def offer(self, pixel, depth, owner, weights) -> None:
+    def offer(self, pixel: np.ndarray, depth: np.ndarray, owner: np.ndarray, weights: np.ndarray) -> None:
         np.maximum.at(self.depth, pixel, depth)
         nearest = depth >= self.depth[pixel]
         self.owner[pixel[nearest]] = owner[nearest]
         self.weights[pixel[nearest]] = weights[nearest]
 
-    def covered(self):
+    def covered(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         pixel = np.flatnonzero(self.owner >= 0)
         return pixel, self.owner[pixel], self.weights[pixel].astype(np.float64)
 
 
-def _chunks(counts: np.ndarray, budget: int = 2_000_000):
+def _chunks(counts: np.ndarray, budget: int = 2_000_000) -> Iterator[slice]:
     """Split items into consecutive runs whose counts sum to about ``budget``."""
     ends = np.searchsorted(np.cumsum(counts), np.arange(budget, counts.sum() + budget, budget), side="right")
     start = 0
@@ -122,7 +132,7 @@ def _chunks(counts: np.ndarray, budget: int = 2_000_000):
             start = end
 
 
-def _expand(low: np.ndarray, span: np.ndarray):
+def _expand(low: np.ndarray, span: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every pixel of each item's box: (item index, column, row) for boxes ``low + [0, span)``."""
     counts = span[:, 0] * span[:, 1]
     item = np.repeat(np.arange(len(counts)), counts)
@@ -131,7 +141,9 @@ def _expand(low: np.ndarray, span: np.ndarray):
     return item, low[item, 0] + local % columns, low[item, 1] + local // columns
 
 
-def _rasterize_triangles(xy, depth, faces, width, height):
+def _rasterize_triangles(
+    xy: np.ndarray, depth: np.ndarray, faces: np.ndarray, width: int, height: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Z-buffered triangle coverage: per covered pixel, the face's vertices and barycentrics."""
     corners = xy[faces]
     low = np.maximum(np.ceil(corners.min(axis=1) - 0.5), 0).astype(np.int64)
@@ -161,7 +173,9 @@ def _rasterize_triangles(xy, depth, faces, width, height):
     return pixel, faces[visible[face]], weight
 
 
-def _rasterize_points(xy, depth, radius: float, width: int, height: int):
+def _rasterize_points(
+    xy: np.ndarray, depth: np.ndarray, radius: float, width: int, height: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Depth-tested disc splats of ``radius`` pixels (depth in pixel units)."""
     reach = int(np.ceil(radius))
     inside = np.all((xy >= -reach) & (xy < [width + reach, height + reach]), axis=1)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,7 +53,7 @@ class Camera:
         return light / np.linalg.norm(light)
 
 
-def camera(view="front", up="y") -> Camera:
+def camera(view: str | Sequence[float] = "front", up: str | Sequence[float] = "y") -> Camera:
     """The camera of a named view or of ``(azimuth, elevation)`` degrees.
 
     Parameters
@@ -78,7 +79,7 @@ def camera(view="front", up="y") -> Camera:
     return Camera(right=np.cross(image_up, toward), up=image_up, toward=toward)
 
 
-def _view_angles(view) -> tuple[float, float]:
+def _view_angles(view: str | Sequence[float]) -> tuple[float, float]:
     if isinstance(view, str):
         if view not in VIEWS:
             raise InputError(
@@ -96,7 +97,7 @@ def _view_angles(view) -> tuple[float, float]:
     return azimuth, elevation
 
 
-def _up_vector(up) -> np.ndarray:
+def _up_vector(up: str | Sequence[float]) -> np.ndarray:
     if isinstance(up, str):
         if up not in UP_AXES:
             raise InputError(f"unknown up axis {up!r}; choose one of {UP_AXES} or give a 3-vector")
@@ -115,7 +116,7 @@ def _front_vector(up: np.ndarray) -> np.ndarray:
     return front / np.linalg.norm(front)
 
 
-def model_aspect(surface: Surface, view="front", up="y") -> float:
+def model_aspect(surface: Surface, view: str | Sequence[float] = "front", up: str | Sequence[float] = "y") -> float:
     """Height / width of the model as seen from a view, kept within [0.5, 2]."""
     extent = np.ptp(camera(view, up).project(surface.vertices)[:, :2], axis=0)
     return float(np.clip(extent[1] / max(extent[0], 1e-300), 0.5, 2.0))
