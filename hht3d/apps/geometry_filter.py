@@ -27,6 +27,7 @@ from .reconstruction import (
     INTERIOR_WEIGHT,
     ReconstructionOptions,
     check_mean_curvature_signal,
+    moved,
     reconstruct_from_change,
 )
 
@@ -160,7 +161,7 @@ def filter_geometry(
             QualityWarning,
             stacklevel=2,
         )
-        return _copy(surface, name)
+        return moved(surface, 0.0, name)  # the gain edits nothing: the shape unchanged
     interior, boundary = options.interior_weight, options.boundary_weight
     if weights is None and interior is None:
         interior = automatic_weight(surface, edited)
@@ -176,17 +177,4 @@ def filter_geometry(
         interior_weight=INTERIOR_WEIGHT if interior is None else interior,
         boundary_weight=boundary,
         preserve_scale=options.preserve_scale,
-    )
-
-
-def _copy(surface: Surface, name: str | None) -> Surface:
-    """``surface`` unchanged under another name (a gain that edits nothing)."""
-    return Surface(
-        surface.vertices,
-        surface.faces,
-        colors=surface.colors,
-        attributes=dict(surface.attributes),
-        laplacian=surface.laplacian,
-        n_neighbors=surface.n_neighbors,
-        name=name or f"{surface.name}_filtered",
     )

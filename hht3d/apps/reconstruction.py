@@ -96,6 +96,7 @@ __all__ = [
     "reconstruct",
     "reconstruct_from_change",
     "check_mean_curvature_signal",
+    "moved",
     "INTERIOR_WEIGHT",
     "BOUNDARY_WEIGHT",
     "DISPLACEMENT_LIMIT",
@@ -225,6 +226,12 @@ def reconstruct_from_change(
             QualityWarning,
             stacklevel=2,
         )
+    return moved(surface, displacement, name)
+
+
+def moved(surface: Surface, displacement: np.ndarray | float, name: str | None) -> Surface:
+    """``surface`` with its vertices moved by ``displacement`` (faces, colours, fields and
+    Laplacian kept), named ``name`` or ``<name>_filtered``."""
     return Surface(
         surface.vertices + displacement,
         surface.faces,

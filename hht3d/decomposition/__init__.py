@@ -5,6 +5,7 @@ Data flow: :mod:`.extrema` → :mod:`.envelopes` → :mod:`.sifting` →
 settings in :mod:`.options` and the figures in :mod:`.quality`.
 """
 
+from . import options
 from .decompose import EMDResult, emd
 from .ensemble import combine_eemd, eemd, eemd_member
 from .envelopes import EnvelopeSolver, envelope_interpolation, envelope_operator
@@ -19,6 +20,7 @@ from .options import (
     STOPPING_RULES,
     EMDOptions,
     EnsembleOptions,
+    start_tension,
 )
 from .quality import ENERGY_RATIO_LIMIT, LEAKAGE_LIMIT, ORTHOGONALITY_LIMIT, SPIKE_LIMIT, Quality, QualityWarning
 
@@ -28,15 +30,6 @@ __all__ = [
     "eemd",
     "eemd_member",
     "combine_eemd",
-    "EMDOptions",
-    "EnsembleOptions",
-    "EMD_DEFAULTS",
-    "ENSEMBLE_DEFAULTS",
-    "PAPER_OPTIONS",
-    "STOPPING_RULES",
-    "ENVELOPES",
-    "EXTREMA_RULES",
-    "GUARD_TENSIONS",
     "local_extrema",
     "extrema_spacing",
     "envelope_operator",
@@ -49,3 +42,4 @@ __all__ = [
     "LEAKAGE_LIMIT",
     "SPIKE_LIMIT",
 ]
+__all__ += options.__all__  # the settings, their presets and choices

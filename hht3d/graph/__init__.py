@@ -7,6 +7,7 @@ Data flow: :mod:`.tasks` (how tasks are made and surfaces shared) →
 """
 
 from ..execution import SCHEDULERS, compute, open_client, worker_count
+from . import stages
 from .stages import (
     eemd,
     emd,
@@ -30,33 +31,5 @@ from .stages import (
 )
 from .tasks import Builder, as_key, from_surface, resident, riesz_potential
 
-__all__ = [
-    "Builder",
-    "mirror",
-    "compute",
-    "load",
-    "from_surface",
-    "as_key",
-    "resident",
-    "operators",
-    "signal",
-    "emd",
-    "eemd",
-    "riesz_potential",
-    "monogenic",
-    "monogenic_from_potential",
-    "hht",
-    "save",
-    "transform",
-    "transform_file",
-    "filter_signal",
-    "filter_geometry",
-    "reconstruct",
-    "prominent_features",
-    "hks_features",
-    "imf_enhancement",
-    "manifold_harmonics_filter",
-    "SCHEDULERS",
-    "open_client",
-    "worker_count",
-]
+__all__ = ["SCHEDULERS", "open_client", "worker_count"]
+__all__ += stages.__all__  # the lazy twins and the task-building names
