@@ -26,6 +26,7 @@ __all__ = [
     "one_line",
     "MAX_SHOWN",
     "did_you_mean",
+    "HHT3DDeprecationWarning",
 ]
 
 #: Characters of a user value a message echoes before cutting it short.
@@ -34,6 +35,10 @@ MAX_SHOWN = 80
 
 class HHT3DError(Exception):
     """Base class of every error hht3d raises on purpose."""
+
+
+class HHT3DDeprecationWarning(DeprecationWarning):
+    """A former name or call shape of hht3d, accepted for one release (the test suite makes it an error)."""
 
 
 class InputError(HHT3DError, ValueError):

@@ -37,7 +37,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar, TypeVar, cast
 
-from .errors import InputError, did_you_mean, shown
+from .errors import HHT3DDeprecationWarning, InputError, did_you_mean, shown
 
 R = TypeVar("R", bound="Record")
 
@@ -192,7 +192,7 @@ def renamed_keywords(overrides: dict, renamed: dict[str, str], function: str) ->
             raise InputError(f"{function}: give {new} only ({old} is its former name)")
         warnings.warn(
             f"{function}({old}=...) is deprecated; write {new}={shown(overrides[old])}",
-            DeprecationWarning,
+            HHT3DDeprecationWarning,
             stacklevel=3,
         )
         overrides[new] = overrides.pop(old)
@@ -250,7 +250,7 @@ class Record:
             new = cls.renamed[old]
             warnings.warn(
                 f"{cls.label} option {old} is now called {new}; write {new}={shown(settings[old])}",
-                DeprecationWarning,
+                HHT3DDeprecationWarning,
                 stacklevel=3,
             )
             settings[new] = settings.pop(old)

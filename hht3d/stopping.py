@@ -25,7 +25,7 @@ from typing import Any
 import psutil
 
 from .io import remove_stale_parts
-from .io.atomic import stop_writes
+from .io.atomic import stop_writes, wait_for_writes
 from .io.storage import remove_temporary_folders
 
 __all__ = ["SIGNALS", "Stopped", "stop_on_signals", "clean_stop"]
@@ -35,6 +35,8 @@ __all__ = ["SIGNALS", "Stopped", "stop_on_signals", "clean_stop"]
 SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGINT") if hasattr(signal, name))
 #: Seconds a worker process is given to end after SIGTERM before it is killed.
 WORKER_GRACE = 3.0
+#: Seconds the writes open in other threads are given to end (and remove their temporary files).
+WRITE_GRACE = 10.0
 
 
 class Stopped(BaseException):
@@ -75,8 +77,11 @@ def stop_on_signals() -> Iterator[None]:
 def clean_stop(folders: Iterable[Path | str]) -> list:
     """End this process's worker processes and remove the temporary files left in ``folders``, and
     the temporary folders of downloads and uploads of this process and of its ended workers (their
-    ``with`` blocks never finish: the stop ends with ``os._exit``)."""
+    ``with`` blocks never finish: the stop ends with ``os._exit``).  Writes open in other threads (the
+    threads scheduler) are waited for, up to :data:`WRITE_GRACE` seconds: each removes its temporary
+    file instead of renaming it."""
     stop_writes()
+    wait_for_writes(WRITE_GRACE)  # a thread writing a figure would otherwise make its file after the removal
     pids = {os.getpid(), *(p.pid for p in psutil.Process().children(recursive=True))}
     children = multiprocessing.active_children()
     for child in children:

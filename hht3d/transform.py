@@ -26,7 +26,7 @@ from .decomposition.decompose import emd
 from .decomposition.ensemble import combine_eemd, eemd_member
 from .decomposition.options import EMD_DEFAULTS, EMDOptions, EnsembleOptions
 from .decomposition.quality import Quality, decomposition_quality
-from .errors import InputError, shown
+from .errors import HHT3DDeprecationWarning, InputError, shown
 from .geometry.surface import Surface
 from .geometry.validation import check_signal
 from .records import Record, route
@@ -142,7 +142,7 @@ def hht_settings(options: HHTOptions | dict | None, overrides: dict, function: s
         warnings.warn(
             f"{function}({'=, '.join(former)}=) is deprecated: pass the settings by name "
             "(max_imfs=3, tol=1e-6) or as options",
-            DeprecationWarning,
+            HHT3DDeprecationWarning,
             stacklevel=3,
         )
         base = HHTOptions.of(options)

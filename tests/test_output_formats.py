@@ -172,10 +172,10 @@ def test_a_new_format_is_one_entry_and_one_writer(monkeypatch, tmp_path, mesh_fi
 
     assert list(plain_formats("hht")) == [".ply", ".npz", ".energy"] and by_suffix()[".energy"] == "energy"
     surface = Surface(*icosphere(2))
-    result = hht(surface, surface.vertices[:, 0], emd={"max_imfs": 1})
+    result = hht(surface, surface.vertices[:, 0], max_imfs=1)
     with np.load(result.save(tmp_path / "x.energy"), allow_pickle=False) as saved:
         np.testing.assert_allclose(saved["energy"], (result.imfs**2 * surface.mass_diagonal).sum(1))
-    dataset_graph([mesh_file], tmp_path / "dataset", formats=(".energy",), emd={"max_imfs": 1})  # accepted
+    dataset_graph([mesh_file], tmp_path / "dataset", formats=(".energy",), max_imfs=1)  # accepted
 
 
 def test_format_options_refuse_what_the_types_cannot_say():

@@ -50,7 +50,7 @@ if limit:  # an address-space limit this far above what the process maps now (ul
 before = peak()
 start = time.perf_counter()
 try:
-    result = hht(surface, signal, emd={{"max_imfs": 2}})
+    result = hht(surface, signal, max_imfs=2)
     error = None
 except Exception as exc:
     error = f"{{type(exc).__name__}}: {{exc}}"

@@ -59,7 +59,7 @@ RUN = textwrap.dedent("""
 
     folder_locks.msvcrt = types.SimpleNamespace(locking=locking, LK_NBLCK=LK_NBLCK, LK_UNLCK=LK_UNLCK)
     rows = run_dataset(sys.argv[1:3], sys.argv[3], scheduler="synchronous", progress=False,
-                       emd={"max_imfs": 2})
+                       max_imfs=2)
     print(json.dumps({"status": [r.status for r in rows], "fcntl": folder_locks.fcntl is None,
                       "locks": calls.count(LK_NBLCK), "unlocks": calls.count(LK_UNLCK),
                       "posix": [m for m in ("fcntl", "resource") if sys.modules.get(m) is not None]}))

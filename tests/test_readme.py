@@ -190,7 +190,7 @@ def test_the_command_lines_run(scratch):
     from hht3d.geometry.signals import mean_curvature
 
     spot = hht3d.load(scratch / "model.ply")  # the results the view lines read
-    result = hht3d.hht(spot, mean_curvature(spot), emd={"max_imfs": 1})
+    result = hht3d.hht(spot, mean_curvature(spot), max_imfs=1)
     result.save(scratch / "out" / "model_hht.npz")
     result.save(scratch / "x.ply")  # `hht3d view x.ply --field imf_1`: a result saved as PLY
     for line in filter(None, lines):

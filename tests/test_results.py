@@ -13,7 +13,7 @@ def test_load_result_gives_back_the_saved_result(tmp_path):
     from hht3d.geometry.signals import mean_curvature
 
     spot = load(data_path("spot.ply"))
-    result = hht(spot, mean_curvature(spot), emd={"max_imfs": 3})
+    result = hht(spot, mean_curvature(spot), max_imfs=3)
     again = load_result(result.save(tmp_path / "spot_hht.npz"))
     for name in ("signal", "imfs", "residue"):
         np.testing.assert_array_equal(getattr(again, name), getattr(result, name))

@@ -113,3 +113,35 @@ def test_a_stop_removes_the_temporary_folders_of_downloads(tmp_path, monkeypatch
         assert local.is_file() and local.parent.name.startswith(f"hht3d-{os.getpid()}-")
         clean_stop([])
         assert not local.parent.exists()
+
+
+def test_a_stop_waits_for_a_write_open_in_another_thread(tmp_path, monkeypatch):
+    """Under the threads scheduler a task may be writing a figure when the stop removes the temporary
+    files: the stop waits for it, and the write removes its file instead of renaming it (seen in CI as
+    a ``.part`` left behind)."""
+    import threading
+
+    from hht3d.errors import OutputError
+    from hht3d.io.atomic import atomic_path
+    from hht3d.stopping import clean_stop
+
+    monkeypatch.setattr("hht3d.io.atomic._STOPPING", threading.Event())
+    opened, release, raised = threading.Event(), threading.Event(), []
+
+    def write():
+        try:
+            with atomic_path(tmp_path / "figure.png") as tmp:
+                opened.set()
+                release.wait(5)
+                tmp.write_bytes(b"png")  # made again after the stop removed the empty file
+        except OutputError as exc:
+            raised.append(str(exc))
+
+    writer = threading.Thread(target=write)
+    writer.start()
+    assert opened.wait(5)
+    threading.Timer(0.5, release.set).start()
+    clean_stop([tmp_path])
+    writer.join(5)
+    assert raised and "the run is stopping" in raised[0]
+    assert list(tmp_path.iterdir()) == []

@@ -20,7 +20,7 @@ def two_scale_signal(vertices):
 @pytest.fixture(scope="module")
 def result() -> HHTResult:
     s = Surface(*icosphere(4))
-    return hht(s, two_scale_signal(s.vertices), emd={"max_imfs": 3})
+    return hht(s, two_scale_signal(s.vertices), max_imfs=3)
 
 
 def test_decomposition_and_spectra(result):
@@ -87,7 +87,7 @@ def test_to_open3d_mesh(result):
 
 def test_point_cloud_to_open3d():
     s = Surface(fibonacci_sphere(800), None)
-    r = hht(s, two_scale_signal(s.vertices), emd={"max_imfs": 1})
+    r = hht(s, two_scale_signal(s.vertices), max_imfs=1)
     cloud = r.to_open3d()
     assert "phase_1" in cloud.point
     assert np.array_equal(cloud.point["imf_1"].numpy()[:, 0], r.imfs[0])
@@ -109,7 +109,7 @@ def test_hht_settings_reach_every_stage(frequency):
     from hht3d.geometry.signals import mean_curvature
 
     spot = load(data_path("spot.ply"))
-    result = hht(spot, mean_curvature(spot), emd={"max_imfs": 2}, riesz={"frequency": frequency, "gradient": "fem"})
+    result = hht(spot, mean_curvature(spot), max_imfs=2, frequency=frequency, gradient="fem")
     direct = monogenic(spot, result.imfs, frequency=frequency, gradient="fem")
     np.testing.assert_allclose(result.monogenic.frequency, direct.frequency, rtol=0, atol=1e-9 * direct.frequency.max())
     other = monogenic(spot, result.imfs, frequency="gradient" if frequency == "phase" else "phase", gradient="fem")

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..decomposition.extrema import local_extrema
 from ..decomposition.options import MAX_IMFS
-from ..errors import InputError
+from ..errors import HHT3DDeprecationWarning, InputError
 from ..geometry.signals import fluctuation
 from ..geometry.surface import Surface
 from ..geometry.validation import as_imfs, check_surface
@@ -135,7 +135,7 @@ def imf_enhancement(
     if isinstance(options, numbers.Real):
         warnings.warn(
             f"imf_enhancement(surface, imfs, {options!r}) is deprecated; write factor={options!r}",
-            DeprecationWarning,
+            HHT3DDeprecationWarning,
             stacklevel=2,
         )
         options = {"factor": options}

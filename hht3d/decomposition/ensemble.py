@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import HHT3DDeprecationWarning, InputError
 from ..geometry.surface import Surface
 from ..geometry.validation import check_signal, check_surface
 from ..records import route
@@ -78,7 +78,7 @@ def eemd_member(
     if isinstance(options, EnsembleOptions) and isinstance(ensemble, EMDOptions):
         warnings.warn(
             "eemd_member(surface, signal, i, ensemble, options) is deprecated: pass the EMD options first, as to eemd",
-            DeprecationWarning,
+            HHT3DDeprecationWarning,
             stacklevel=2,
         )
         options, ensemble = ensemble, options

@@ -39,22 +39,41 @@ __all__ = [
     "confined",
     "remove_stale_parts",
     "stop_writes",
+    "wait_for_writes",
     "PART",
 ]
 
 #: A temporary file of :func:`atomic_path`: ``.NAME.PID-XXXXXXXX.part``.
 PART = re.compile(r"^\..*\.(\d+)-[a-z0-9_]{8}\.part$")
 _SUFFIX_BYTES = len(".part") + 1 + 8
-#: Set when the process is stopping: no new temporary file is made.
+#: Set when the process is stopping: no new temporary file is made, none is renamed.
 _STOPPING = threading.Event()
+#: The number of :func:`atomic_path` blocks open in this process (other threads may be writing at a stop).
+_OPEN = 0
+_OPEN_CHANGED = threading.Condition()
 _NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
 #: Whether files can be made and renamed relative to an open folder (POSIX; not Windows).
 _DIR_FD = {os.open, os.rename, os.unlink} <= os.supports_dir_fd  # os.replace takes dir_fd where os.rename does
 
 
 def stop_writes() -> None:
-    """Make every later :func:`atomic_path` in this process fail at once (the process is stopping)."""
+    """Make every later :func:`atomic_path` in this process fail at once, and every open one remove its
+    temporary file instead of renaming it (the process is stopping)."""
     _STOPPING.set()
+
+
+def wait_for_writes(timeout: float) -> bool:
+    """Wait up to ``timeout`` seconds for the :func:`atomic_path` blocks open in other threads to end
+    (after :func:`stop_writes` each removes its temporary file); whether none is left open."""
+    with _OPEN_CHANGED:
+        return _OPEN_CHANGED.wait_for(lambda: _OPEN == 0, timeout)
+
+
+def _opened(change: int) -> None:
+    global _OPEN
+    with _OPEN_CHANGED:
+        _OPEN += change
+        _OPEN_CHANGED.notify_all()
 
 
 def _prefix(name: str) -> str:
@@ -92,8 +111,11 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
             os.close(folder)
         raise _cannot_write(path, exc) from None
     tmp = path.parent / name
+    _opened(+1)
     try:
         yield tmp
+        if _STOPPING.is_set():  # a stop began while this thread wrote: its outputs are no longer recorded
+            raise OutputError(f"{short(path)}: not written: the run is stopping")
         if not os.path.samestat(os.stat(tmp.parent), made_in):
             raise OutputError(
                 f"{short(path)}: not written: its folder {short(path.parent)} was replaced while the "
@@ -109,6 +131,7 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
             raise _cannot_write(path, exc) from None
         raise
     finally:
+        _opened(-1)
         if folder is not None:
             os.close(folder)
 

@@ -57,7 +57,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import InputError
+from ..errors import HHT3DDeprecationWarning, InputError
 from .cholmod import CHOLMOD_LOCK, CholmodPattern
 from .pardiso import PARDISO_LOCK, PardisoPattern
 from .superlu import SuperLUPattern
@@ -261,7 +261,7 @@ def _deprecated_backends() -> tuple[str, ...]:
     warnings.warn(
         "hht3d.linalg.BACKENDS is deprecated and goes in 0.3.0; use tuple(hht3d.linalg.SOLVER_BACKENDS), "
         "which also holds the backends registered later",
-        DeprecationWarning,
+        HHT3DDeprecationWarning,
         stacklevel=3,
     )
     return tuple(SOLVER_BACKENDS)

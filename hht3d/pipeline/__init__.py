@@ -22,6 +22,7 @@ This layer adds configuration only: nothing in the core knows YAML exists.
 
 from typing import Any
 
+from ..errors import HHT3DDeprecationWarning
 from ..output_formats import FORMATS, Format
 from .document import apply_overrides
 from .params import Param
@@ -57,6 +58,6 @@ def __getattr__(name: str) -> Any:
     if name == "Execution":
         import warnings
 
-        warnings.warn("hht3d.pipeline.Execution is now ExecutionOptions", DeprecationWarning, stacklevel=2)
+        warnings.warn("hht3d.pipeline.Execution is now ExecutionOptions", HHT3DDeprecationWarning, stacklevel=2)
         return ExecutionOptions
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -23,6 +23,7 @@ import warnings
 from dataclasses import dataclass
 from typing import Any
 
+from ..errors import HHT3DDeprecationWarning
 from ..records import Record, option
 
 __all__ = [
@@ -86,6 +87,6 @@ RIESZ_DEFAULTS = RieszOptions()
 def __getattr__(name: str) -> Any:
     """``METHODS``, the former name of :data:`POTENTIALS`, for one release."""
     if name == "METHODS":
-        warnings.warn("hht3d.spectral.METHODS is now POTENTIALS", DeprecationWarning, stacklevel=2)
+        warnings.warn("hht3d.spectral.METHODS is now POTENTIALS", HHT3DDeprecationWarning, stacklevel=2)
         return POTENTIALS
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

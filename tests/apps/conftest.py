@@ -16,4 +16,4 @@ def bumps():
     """(surface, clean unit-sphere vertices, unit bump pattern, HHT of the mean curvature)."""
     v, f, clean, pattern = bump_band_sphere(5, WAVES, AMPLITUDE)
     surface = Surface(v, f, name="bump_band_sphere")
-    return surface, clean, pattern, hht(surface, mean_curvature(surface), emd={"max_imfs": 4})
+    return surface, clean, pattern, hht(surface, mean_curvature(surface), max_imfs=4)

@@ -53,7 +53,7 @@ def test_counts_threshold_and_per_imf_extrema():
     assert isinstance(result, FeatureResult) and result.n_scales == 3 and result.min_count == 2
     expected = np.zeros(surface.n_vertices, dtype=int)
     for k, f in enumerate(imfs):
-        maxima, minima = local_extrema(surface, f, rule="relaxed", ring=2, ratio=0.8)
+        maxima, minima = local_extrema(surface, f, extrema="relaxed", ring=2, ratio=0.8)
         assert np.array_equal(result.maxima[k], maxima) and np.array_equal(result.minima[k], minima)
         expected[np.union1d(maxima, minima)] += 1
     assert np.array_equal(result.vertex_counts, expected)

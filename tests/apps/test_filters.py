@@ -93,9 +93,9 @@ def test_filtering_does_not_depend_on_the_signal_unit():
     signal = mean_curvature(surface)
     omega = np.sqrt(12 * 13)
     gain = BandStop(low=omega / 2, high=2 * omega, width=omega / 4)
-    reference = hht(surface, signal, emd={"max_imfs": 3})
+    reference = hht(surface, signal, max_imfs=3)
     for c in (1e3, -1e-3):
-        scaled = hht(surface, c * signal, emd={"max_imfs": 3})
+        scaled = hht(surface, c * signal, max_imfs=3)
         assert np.abs(gains_of(scaled, gain) - gains_of(reference, gain)).max() <= 1e-11
         error = np.abs(filter_signal(scaled, gain) - c * filter_signal(reference, gain)).max()
         assert error <= 2e-13 * np.abs(c * signal).max()

@@ -77,22 +77,22 @@ def test_identity_closed_mesh(bumps):
 def test_identity_open_grid():
     surface = Surface(*height_field_grid(30, 30), name="height_field")
     assert surface.boundary_vertices.sum() == 4 * 29
-    assert_identity(surface, hht(surface, mean_curvature(surface), emd={"max_imfs": 3}))
+    assert_identity(surface, hht(surface, mean_curvature(surface), max_imfs=3))
 
 
 def test_identity_open_scan(shared_model):
     surface = hht3d.load(shared_model("spacetime_face_neutral.ply"))
     assert surface.boundary_vertices.any()
-    assert_identity(surface, hht(surface, mean_curvature(surface), emd={"max_imfs": 3}))
+    assert_identity(surface, hht(surface, mean_curvature(surface), max_imfs=3))
 
 
 def test_identity_point_cloud_and_components():
     cloud = Surface(fibonacci_sphere(1500), name="cloud")
-    assert_identity(cloud, hht(cloud, mean_curvature(cloud), emd={"max_imfs": 2}))
+    assert_identity(cloud, hht(cloud, mean_curvature(cloud), max_imfs=2))
     v, f = icosphere(3)
     pair = Surface(*disjoint_union((v, f), (0.5 * v + [3.0, 0, 0], f)), name="pair")
     assert pair.n_components == 2
-    assert_identity(pair, hht(pair, mean_curvature(pair), emd={"max_imfs": 2}))
+    assert_identity(pair, hht(pair, mean_curvature(pair), max_imfs=2))
 
 
 # -- the least-squares problem -------------------------------------------------------------
@@ -230,7 +230,7 @@ def mixed_bumps():
     """(surface, narrow field, wide field, HHT of the mean curvature): 30 narrow and 30 wide bumps."""
     v, f, narrow, wide = random_bump_sphere()
     surface = Surface(v, f, name="random_bumps")
-    return surface, narrow, wide, hht(surface, mean_curvature(surface), emd={"max_imfs": 6})
+    return surface, narrow, wide, hht(surface, mean_curvature(surface), max_imfs=6)
 
 
 def bump_classes(surface: Surface, vertices: np.ndarray, narrow: np.ndarray, wide: np.ndarray) -> np.ndarray:
@@ -310,7 +310,7 @@ def test_bad_filter_and_reconstruction_inputs(bumps):
         with pytest.raises(InputError):
             reconstruct(surface, mean_curvature(surface), **bad)
     # an HHT of another signal cannot drive the geometry
-    other = hht(Surface(*icosphere(2)), icosphere(2)[0][:, 0], emd={"max_imfs": 1})
+    other = hht(Surface(*icosphere(2)), icosphere(2)[0][:, 0], max_imfs=1)
     with pytest.raises(InputError, match="mean-curvature"):
         filter_geometry(other, Constant(1.0))
     with pytest.raises(InputError):

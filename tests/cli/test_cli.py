@@ -55,7 +55,7 @@ def test_run_succeeds_with_exit_code_0(pipeline, mesh_file, tmp_path, capsys):
     assert (row["status"], row["vertices"], row["imfs"]) == ("ok", 162, 2)
     # the file holds what the Python API computes in memory
     surface = load(mesh_file)
-    expected = hht(surface, mean_curvature(surface), emd={"max_imfs": 2})
+    expected = hht(surface, mean_curvature(surface), max_imfs=2)
     with np.load(tmp_path / "out" / "bumpy_hht.npz") as saved:
         assert_same_hht(saved, expected)
         np.testing.assert_array_equal(saved["vertices"], surface.vertices)

@@ -20,7 +20,7 @@ from hht3d.transform import hht
 def test_corrupt_file_is_reported_and_others_finish(tmp_path):
     inputs = _make_inputs(tmp_path / "in")
     out = tmp_path / "out"
-    rows = run_dataset(inputs, out, scheduler="synchronous", progress=False, emd={"max_imfs": 2}, riesz_tasks=2)
+    rows = run_dataset(inputs, out, scheduler="synchronous", progress=False, max_imfs=2, riesz_tasks=2)
     status = {r.source.rsplit("/", 1)[-1]: r for r in rows}
     assert status["good0.ply"].status == status["good1.ply"].status == "ok"
     assert status["good0.ply"].imfs == 2 and status["good0.ply"].vertices == 642
@@ -44,7 +44,7 @@ def test_corrupt_file_is_reported_and_others_finish(tmp_path):
     # each file holds its own input's HHT, as the Python API computes it in memory
     for name in ("good0", "good1"):
         surface = load(inputs / f"{name}.ply")
-        expected = hht(surface, mean_curvature(surface), emd={"max_imfs": 2})
+        expected = hht(surface, mean_curvature(surface), max_imfs=2)
         with np.load(out / f"{name}_hht.npz") as saved:
             assert_same_hht(saved, expected)
         assert_same_hht(hht_arrays_from_ply(load(out / f"{name}_hht.ply", clean=False).attributes), expected)
@@ -55,9 +55,9 @@ def test_resume_skips_complete_items(tmp_path):
     for name in ("corrupt.ply", "three_points.xyz"):
         (inputs / name).unlink()
     out = tmp_path / "out"
-    run_dataset(inputs, out, scheduler="synchronous", progress=False, emd={"max_imfs": 1})
+    run_dataset(inputs, out, scheduler="synchronous", progress=False, max_imfs=1)
     (out / "good1_hht.npz").unlink()
-    rows = run_dataset(inputs, out, scheduler="synchronous", progress=False, resume=True, emd={"max_imfs": 1})
+    rows = run_dataset(inputs, out, scheduler="synchronous", progress=False, resume=True, max_imfs=1)
     assert [r.status for r in rows] == ["skipped", "ok"]
     shutil.rmtree(out)
 
@@ -74,7 +74,7 @@ def test_a_worker_killed_mid_write_leaves_no_temporary_file(tmp_path, monkeypatc
         return real(*args, **kwargs)
 
     monkeypatch.setattr(dataset, "compute", compute)
-    run_dataset(inputs / "good0.ply", tmp_path / "out", scheduler="synchronous", progress=False, emd={"max_imfs": 1})
+    run_dataset(inputs / "good0.ply", tmp_path / "out", scheduler="synchronous", progress=False, max_imfs=1)
     assert not parts[0].exists() and (tmp_path / "out" / "good0_hht.npz").is_file()
 
 

@@ -20,7 +20,7 @@ def test_summary_rows_carry_the_quality(tmp_path):
         tmp_path / "out",
         scheduler="synchronous",
         progress=False,
-        emd={"max_imfs": 2},
+        max_imfs=2,
         riesz_tasks=1,
     )
     (row,) = json.loads((tmp_path / "out" / "summary.json").read_text())

@@ -45,10 +45,10 @@ def test_ring_rule_relaxes_strict_rule():
     s = Surface(*grid(12, 12, jitter=0.2, seed=3), name="grid")
     f = np.random.default_rng(0).standard_normal(s.n_vertices)
     strict_max, strict_min = local_extrema(s, f)
-    ring_max, ring_min = local_extrema(s, f, rule="relaxed", ring=1, ratio=0.8)
+    ring_max, ring_min = local_extrema(s, f, extrema="relaxed", ring=1, ratio=0.8)
     assert set(strict_max) <= set(ring_max) and set(strict_min) <= set(ring_min)
     # ratio 1 on the 1-ring is the strict rule
-    one = local_extrema(s, f, rule="relaxed", ring=1, ratio=1.0)
+    one = local_extrema(s, f, extrema="relaxed", ring=1, ratio=1.0)
     assert one[0].tolist() == strict_max.tolist() and one[1].tolist() == strict_min.tolist()
     # the paper's rule (Sec. 5.2) by brute force on the 2-ring
     ring2 = s.ring(2).toarray()
@@ -57,7 +57,7 @@ def test_ring_rule_relaxes_strict_rule():
         for i in range(s.n_vertices)
         if np.sum(f[i] >= f[ring2[i]]) >= 0.8 * ring2[i].sum() and np.any(f[i] > f[ring2[i]])
     ]
-    assert local_extrema(s, f, rule="relaxed")[0].tolist() == expected
+    assert local_extrema(s, f, extrema="relaxed")[0].tolist() == expected
 
 
 def test_extrema_is_the_emd_setting_and_rule_its_former_name():

@@ -170,7 +170,7 @@ def test_local_mean_correction_keeps_slow_content_out_of_the_imfs():
 
 def test_hht_result_reports_the_same_quality(spot):
     surface, signal = spot
-    result = hht(surface, signal, emd={"max_imfs": 3})
+    result = hht(surface, signal, max_imfs=3)
     q = result.quality
     reference = decomposition_quality(surface, signal, result.imfs, result.residue)
     assert q.energy_ratio == reference.energy_ratio and q.warnings == reference.warnings
@@ -184,7 +184,7 @@ def test_hht_result_reports_the_same_quality(spot):
         "warnings",
     }
     with pytest.raises(InputError, match="did you mean 'max_imfs'"):
-        hht(surface, signal, emd={"max_imf": 3})
+        hht(surface, signal, max_imf=3)
 
 
 # -- muting, thread by thread ---------------------------------------------------------------------------

@@ -62,7 +62,7 @@ UNGUARDED = textwrap.dedent("""
     from hht3d import data_path
     from hht3d.dataset import run_dataset
 
-    run_dataset([data_path("spot.ply")], "out", scheduler="{scheduler}", workers=2, emd={{"max_imfs": 1}})
+    run_dataset([data_path("spot.ply")], "out", scheduler="{scheduler}", workers=2, max_imfs=1)
 """)
 
 

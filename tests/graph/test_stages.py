@@ -40,7 +40,7 @@ def test_graph_equals_eager_hht():
     (lazy,) = graph.compute(
         graph.hht(s, graph.signal(s, "mean_curvature"), **OPTIONS), scheduler="synchronous", progress=False
     )
-    eager = eager_hht(surface, mean_curvature(surface), emd=OPTIONS["emd"])
+    eager = eager_hht(surface, mean_curvature(surface), max_imfs=OPTIONS["max_imfs"])
     np.testing.assert_array_equal(lazy.imfs, eager.imfs)
     # shifts summed in groups instead of one loop: only the summation order differs
     np.testing.assert_allclose(
@@ -97,8 +97,8 @@ def test_lazy_twins_have_the_eager_signatures_and_docstrings():
     [
         lambda s, f: graph.emd(s, f, max_imf=2),
         lambda s, f: graph.eemd(s, f, ensemble_sise=3),
-        lambda s, f: graph.hht(s, f, emd={"max_imf": 2}),
-        lambda s, f: graph.hht(s, f, riesz={"method": "quadratur"}),
+        lambda s, f: graph.hht(s, f, max_imf=2),
+        lambda s, f: graph.hht(s, f, potential="quadratur"),
         lambda s, f: graph.monogenic(s, f, tol=0),
     ],
 )

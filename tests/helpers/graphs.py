@@ -5,7 +5,7 @@ import numpy as np
 from helpers.meshes import fibonacci_sphere, icosphere
 from hht3d import Surface
 
-OPTIONS = dict(emd={"max_imfs": 3}, riesz_tasks=3)
+OPTIONS = dict(max_imfs=3, riesz_tasks=3)
 
 
 def _surfaces():

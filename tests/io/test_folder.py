@@ -32,7 +32,7 @@ def test_a_file_url_folder_of_run_dataset_keeps_a_users_file(inputs, tmp_path):
 
 def test_save_and_load_take_a_file_url(tmp_path):
     surface = Surface(*icosphere(2))
-    result = hht(surface, surface.vertices[:, 2].copy(), emd={"max_imfs": 1})
+    result = hht(surface, surface.vertices[:, 2].copy(), max_imfs=1)
     url = f"file://{tmp_path}/r.ply"
     assert result.save(url) == tmp_path / "r.ply"
     assert load(url).n_vertices == surface.n_vertices

@@ -36,7 +36,7 @@ from hht3d.errors import InputError, OutputError  # noqa: E402
 BUCKET = "hht"
 MODELS = {"spot.ply": "spot.ply", "sphere.ply": "sphere_oct4098.ply"}
 CORRUPT = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\nnot a number\n"
-EMD = {"max_imfs": 2}
+EMD = {"max_imfs": 2}  # the EMD settings these runs pass by name (**EMD)
 #: A recognisable secret: it must appear in nothing the runs print or write.
 SECRET = "hht3dSECRETvalue0123456789abcdef"
 TIMEOUT = 120
@@ -81,7 +81,7 @@ def remote_run(store, cluster):
         address=cluster[0],
         storage_options=options,
         progress=False,
-        emd=EMD,
+        **EMD,
     )
     return {Path(r.source).name: r for r in rows}
 
@@ -117,7 +117,7 @@ def test_dataset_from_s3_to_s3_equals_the_local_run_and_isolates_a_corrupt_objec
     assert bad.step == "load" and "s3://hht/mixed/bad.ply" in bad.error and bad.outputs == ()
     local = {
         Path(r.source).name: r
-        for r in run_dataset(local_scans, tmp_path, scheduler="synchronous", progress=False, emd=EMD)
+        for r in run_dataset(local_scans, tmp_path, scheduler="synchronous", progress=False, **EMD)
     }
     fs.invalidate_cache()
     written = sorted(Path(p).name for p in fs.ls(f"{BUCKET}/out"))
@@ -157,7 +157,7 @@ def test_a_resumed_run_skips_the_outputs_that_exist_remotely(store, cluster, rem
         storage_options=options,
         progress=False,
         resume=True,
-        emd=EMD,
+        **EMD,
     )
     by_name = {Path(r.source).name: r for r in rows}
     assert [by_name[k].status for k in ("spot.ply", "sphere.ply", "bad.ply")] == ["skipped", "skipped", "failed"]
@@ -258,7 +258,7 @@ def test_a_secret_never_appears_in_what_runs_print_or_write(store, cluster, tmp_
         address=cluster[0],
         storage_options=secret_options,
         progress=True,
-        emd=EMD,
+        **EMD,
     )
     assert [r.status for r in rows] == ["ok", "failed"]
     signed = f"{endpoint}/{BUCKET}/missing.ply?X-Amz-Credential=id&X-Amz-Signature={SECRET}"
@@ -331,9 +331,7 @@ def test_url_inputs_into_a_local_folder_keep_the_local_rules(store, tmp_path):
     spot, out = f"s3://{BUCKET}/scans/spot.ply", tmp_path / "out"
 
     def run(**flags):
-        return run_dataset(
-            spot, out, storage_options=options, scheduler="synchronous", progress=False, emd=EMD, **flags
-        )
+        return run_dataset(spot, out, storage_options=options, scheduler="synchronous", progress=False, **EMD, **flags)
 
     assert [r.status for r in run()] == ["ok"]
     recorded = entries(out)

@@ -84,7 +84,7 @@ def test_options_keyed_by_protocol_serve_a_run_that_mixes_stores(signed):
 def test_a_saved_result_is_read_back_from_a_bucket(signed):
     _, options, _, _ = signed
     surface = hht3d.load(SPOT)
-    result = hht3d.hht(surface, mean_curvature(surface), emd={"max_imfs": 1})
+    result = hht3d.hht(surface, mean_curvature(surface), max_imfs=1)
     url = f"s3://{BUCKET}/results/spot_hht.npz"
     result.save(url, storage_options=options)
     again = hht3d.load_result(url, storage_options=options)

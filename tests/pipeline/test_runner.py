@@ -58,7 +58,7 @@ def test_point_cloud_example_keeps_points_and_fields(tmp_path, cloud_file):
     assert result.faces is None and result.n_vertices == 300
     assert {"signal", "imf_1", "frequency_1", "residue"} <= set(result.attributes)
     cloud = load(cloud_file, n_neighbors=30)
-    expected = hht(cloud, mean_curvature(cloud), emd={"max_imfs": 2})
+    expected = hht(cloud, mean_curvature(cloud), max_imfs=2)
     np.testing.assert_array_equal(result.vertices, cloud.vertices)
     with np.load(out / "cloud_hht.npz") as saved:
         assert_same_hht(saved, expected)
@@ -85,7 +85,7 @@ def test_filtering_example_moves_vertices_and_keeps_faces(tmp_path, mesh_file):
     # the same filter through the Python API: Riesz round-off (1e-12) moves the gains and so the
     # vertices by far less than 1e-9 of the model size
     surface = load(mesh_file)
-    result = hht(surface, mean_curvature(surface), emd={"max_imfs": 6})
+    result = hht(surface, mean_curvature(surface), max_imfs=6)
     expected = filter_geometry(result, LowPass(cutoff=1.0))
     np.testing.assert_allclose(smooth.vertices, expected.vertices, rtol=0, atol=1e-9)
     enhanced = filter_geometry(
@@ -107,7 +107,7 @@ def test_cli_pipeline_and_graph_api_give_the_same_numbers(tmp_path, mesh_file):
     (row,) = run_pipeline(plan, scheduler="synchronous", progress=False)
 
     surface = graph.load(mesh_file)
-    lazy = graph.hht(surface, graph.signal(surface, "mean_curvature"), emd={"max_imfs": 3})
+    lazy = graph.hht(surface, graph.signal(surface, "mean_curvature"), max_imfs=3)
     (expected,) = graph.compute(lazy, scheduler="synchronous", progress=False)
     assert row.status == "ok" and row.imfs == expected.n_imfs >= 2
     mono = expected.monogenic

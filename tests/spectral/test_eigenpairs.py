@@ -24,7 +24,7 @@ def test_dense_method_matches_generalized_eigh(jittered_grid):
     # with a wrong mass scaling, a dropped mode or a wrong power is off by O(1).
     s = jittered_grid
     f = mixed_signals(s)
-    dense = fractional_laplacian(s, f, method="dense")
+    dense = fractional_laplacian(s, f, potential="dense")
     assert np.all(m_error(s, dense, eigen_reference(s, f)) < 5e-13)
 
 
@@ -39,7 +39,7 @@ def test_spectral_arpack_equals_truncated_generalized_eigh(jittered_grid):
     assert values[p] - values[p - 1] > 1e-3 * values[p - 1]  # the cut does not split a cluster
     reference = eigen_reference(s, fluctuation(s, f), count=p)
     s.cache.pop("riesz:eigenpairs", None)
-    approx = fractional_laplacian(s, f, method="spectral", eigenpairs=p)
+    approx = fractional_laplacian(s, f, potential="spectral", eigenpairs=p)
     assert "riesz:eigenpairs" in s.cache  # computed by ARPACK, not the dense fallback
     assert np.all(m_error(s, approx, reference) < 2e-13)
 

@@ -217,14 +217,14 @@ def test_zero_signal_reads_zero(regular):
     s, _ = regular
     zero = np.zeros((1, s.n_vertices))
     for method in FREQUENCY_METHODS:
-        assert np.all(instantaneous_frequency(s, zero, np.zeros((1, s.n_vertices, 3)), method=method) == 0)
+        assert np.all(instantaneous_frequency(s, zero, np.zeros((1, s.n_vertices, 3)), frequency=method) == 0)
 
 
 def test_bad_arguments(regular):
     s, _ = regular
     f = np.zeros((2, s.n_vertices))
     with pytest.raises(InputError, match="frequency method"):
-        instantaneous_frequency(s, f, np.zeros((2, s.n_vertices, 3)), method="hilbert")
+        instantaneous_frequency(s, f, np.zeros((2, s.n_vertices, 3)), frequency="hilbert")
     with pytest.raises(InputError, match="shape"):
         instantaneous_frequency(s, f, np.zeros((2, s.n_vertices, 2)))
     with pytest.raises(InputError, match="frequency"):
@@ -252,12 +252,10 @@ def test_option_reaches_hht_the_graph_and_the_pipeline():
 
     s = Surface(*icosphere(3))
     f = np.cos(6 * np.arctan2(s.vertices[:, 1], s.vertices[:, 0])) + s.vertices[:, 2]
-    eager = hht(s, f, riesz={"frequency": "gradient"}, emd={"max_imfs": 1})
-    (lazy,) = graph.compute(
-        graph.hht(s, f, riesz={"frequency": "gradient"}, emd={"max_imfs": 1}), scheduler="synchronous", progress=False
-    )
+    eager = hht(s, f, frequency="gradient", max_imfs=1)
+    (lazy,) = graph.compute(graph.hht(s, f, frequency="gradient", max_imfs=1), scheduler="synchronous", progress=False)
     assert eager.info["riesz"]["frequency"] == lazy.info["riesz"]["frequency"] == "gradient"
-    expected = instantaneous_frequency(s, eager.imfs, eager.monogenic.riesz, method="gradient")
+    expected = instantaneous_frequency(s, eager.imfs, eager.monogenic.riesz, frequency="gradient")
     assert np.allclose(eager.monogenic.frequency, expected) and np.allclose(lazy.monogenic.frequency, expected)
     (param,) = [p for p in OPERATIONS["hht"].params if p.name == "frequency"]
     assert param.default == "phase" and tuple(param.choices) == FREQUENCY_METHODS

@@ -62,7 +62,7 @@ def test_from_potential_matches(cylinder, cylinder_waves, frequency):
     a = monogenic_from_potential(cylinder, cylinder_waves, potential, gradient="fem", frequency=frequency)
     b = monogenic(cylinder, cylinder_waves, gradient="fem", frequency=frequency)
     assert np.allclose(a.frequency, b.frequency, atol=1e-12) and np.allclose(a.riesz, b.riesz, atol=1e-12)
-    expected = instantaneous_frequency(cylinder, cylinder_waves, a.riesz, method=frequency, gradient="fem")
+    expected = instantaneous_frequency(cylinder, cylinder_waves, a.riesz, frequency=frequency, gradient="fem")
     assert np.array_equal(a.frequency, expected)
     with pytest.raises(InputError, match="potential"):
         monogenic_from_potential(cylinder, cylinder_waves, potential[:1])

@@ -41,7 +41,7 @@ def test_quadrature_error_is_within_its_documented_tolerance(name, request):
     exact = (
         eigen_reference(surface, fluctuation(surface, f))
         if name == "jittered_grid"
-        else fractional_laplacian(surface, f, method="dense")
+        else fractional_laplacian(surface, f, potential="dense")
     )
     tolerances = (1e-4, 1e-6, 1e-8, 1e-10) if name == "jittered_grid" else (1e-8,)
     for tol in tolerances:

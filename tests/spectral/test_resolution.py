@@ -55,7 +55,7 @@ def test_one_energy_share_above_the_limit_on_spot():
     from hht3d.geometry.signals import mean_curvature
 
     spot = load(data_path("spot.ply"))
-    result = hht(spot, mean_curvature(spot), emd={"max_imfs": 3})
+    result = hht(spot, mean_curvature(spot), max_imfs=3)
     mono = result.monogenic
     energy = mono.amplitude**2 * spot.mass_diagonal
     expected = energy[mono.frequency > np.pi / np.sqrt(spot.mass_diagonal)].sum() / energy.sum()

@@ -26,12 +26,12 @@ def test_dense_and_spectral_other_powers(jittered_grid):
     # L^{-1} via powers equals a direct solve of L u = M f̃ on the kernel complement.
     s = jittered_grid
     f = fluctuation(s, mixed_signals(s, 1)[0])
-    inverse = fractional_laplacian(s, f, power=-1.0, method="dense")
+    inverse = fractional_laplacian(s, f, power=-1.0, potential="dense")
     reg = (s.stiffness + 1e-12 * s.mass).tocsc()
     direct = fluctuation(s, spla.spsolve(reg, s.mass_diagonal * f))
     assert m_error(s, inverse, direct) < 1e-6
-    half = fractional_laplacian(s, f, method="dense")
-    twice = fractional_laplacian(s, half, method="dense")
+    half = fractional_laplacian(s, f, potential="dense")
+    twice = fractional_laplacian(s, half, potential="dense")
     assert m_error(s, twice, inverse) < 1e-9
 
 
@@ -122,16 +122,16 @@ def test_kernel_is_projected_per_component():
     signal = rng.standard_normal(two.n_vertices)
     shifted = signal + np.where(two.component_labels == 0, 5.0, -2.0)
     for method in ("quadrature", "dense"):
-        a = fractional_laplacian(two, signal, method=method)
-        b = fractional_laplacian(two, shifted, method=method)
+        a = fractional_laplacian(two, signal, potential=method)
+        b = fractional_laplacian(two, shifted, potential=method)
         assert np.allclose(a, b, atol=1e-8 * np.abs(a).max())
         for c in range(2):  # M-orthogonal to each component's constant
             part = two.component_labels == c
             assert abs(np.sum(a[part] * two.mass_diagonal[part])) < 1e-8 * np.sum(np.abs(a[part]))
     # each component on its own gives the same values
     alone = Surface(v, f)
-    first = fractional_laplacian(alone, signal[: len(v)], method="dense")
-    both = fractional_laplacian(two, signal, method="dense")
+    first = fractional_laplacian(alone, signal[: len(v)], potential="dense")
+    both = fractional_laplacian(two, signal, potential="dense")
     assert np.allclose(both[: len(v)], first, atol=1e-10)
 
 
@@ -169,14 +169,14 @@ def test_bad_inputs(jittered_grid, monkeypatch):
         fractional_laplacian(s, np.ones(n + 1))
     with pytest.raises(InputError, match="shape"):
         riesz(s, np.ones((2, 3, n)))
-    with pytest.raises(InputError, match="method"):
-        fractional_laplacian(s, np.ones(n), method="eig")
+    with pytest.raises(InputError, match="potential must be one of"):
+        fractional_laplacian(s, np.ones(n), potential="eig")
     with pytest.raises(InputError, match="power=-0.5 only"):
         fractional_laplacian(s, np.ones(n), power=-0.25)
     with pytest.raises(InputError, match="tolerance"):
         fractional_laplacian(s, np.ones(n), tol=1e-16)
     with pytest.raises(InputError, match="eigenpairs"):
-        fractional_laplacian(s, np.ones(n), method="spectral", eigenpairs=n)
+        fractional_laplacian(s, np.ones(n), potential="spectral", eigenpairs=n)
     with pytest.raises(InputError, match="gradient"):
         riesz(s, np.ones(n), gradient="green")
     with pytest.raises(InputError, match="Surface"):
@@ -184,4 +184,4 @@ def test_bad_inputs(jittered_grid, monkeypatch):
     monkeypatch.setattr(sys.modules["hht3d.spectral.eigenpairs"], "DENSE_MAX_VERTICES", 100)
     big = Surface(s.vertices, s.faces)
     with pytest.raises(InputError, match="dense eigendecomposition is limited"):
-        fractional_laplacian(big, np.ones(n), method="dense")
+        fractional_laplacian(big, np.ones(n), potential="dense")

@@ -20,7 +20,7 @@ def sphere() -> Surface:
 def result():
     """The HHT of the shipped demo model's mean curvature, two IMFs."""
     surface = hht3d.load(demo_model_path())
-    return hht3d.hht(surface, signals.mean_curvature(surface), emd={"max_imfs": 2})
+    return hht3d.hht(surface, signals.mean_curvature(surface), max_imfs=2)
 
 
 @pytest.fixture(scope="module")

@@ -26,14 +26,14 @@ def two_scale_signal(vertices):
 @pytest.fixture(scope="module")
 def result() -> HHTResult:
     s = Surface(*icosphere(3), name="sphere")
-    return hht(s, two_scale_signal(s.vertices), emd={"max_imfs": 2})
+    return hht(s, two_scale_signal(s.vertices), max_imfs=2)
 
 
 @pytest.fixture(scope="module")
 def cloud_result() -> HHTResult:
     points = fibonacci_sphere(1500)
     s = Surface(points, normals=points, name="cloud")
-    return hht(s, two_scale_signal(points), emd={"max_imfs": 2})
+    return hht(s, two_scale_signal(points), max_imfs=2)
 
 
 def pixels(path):
