@@ -80,28 +80,28 @@ CONFIGS = {
 }
 
 
-def curvature(surface: Surface, config: str) -> np.ndarray:
-    min_area = CONFIGS[config][1]
+def curvature(surface: Surface, config: str, configs: dict = CONFIGS) -> np.ndarray:
+    min_area = configs[config][1]
     return mean_curvature(surface) if min_area is None else mean_curvature(surface, min_area=min_area)
 
 
-def decompose(surface: Surface, signal, config: str, **options):
+def decompose(surface: Surface, signal, config: str, configs: dict = CONFIGS, **options):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the quality figures are the measurement here
-        return emd(surface, signal, CONFIGS[config][0], **options)
+        return emd(surface, signal, configs[config][0], **options)
 
 
-def part_models(names) -> list[dict]:
+def part_models(names, configs: dict = CONFIGS) -> list[dict]:
     rows = []
     for name in names:
         path = model_or_skip(name)
         if path is None:
             continue
         surface = hht3d.load(path)
-        for config in CONFIGS:
-            signal = curvature(surface, config)
+        for config in configs:
+            signal = curvature(surface, config, configs)
             start = time.perf_counter()
-            result = decompose(surface, signal, config)
+            result = decompose(surface, signal, config, configs)
             seconds = time.perf_counter() - start
             q = result.quality
             rows.append(
@@ -124,16 +124,16 @@ def part_models(names) -> list[dict]:
     return rows
 
 
-def part_slivers() -> list[dict]:
+def part_slivers(configs: dict = CONFIGS) -> list[dict]:
     rows = []
     for kind in ("edge", "corner"):
         surface = Surface(*sliver_sphere(kind=kind), name=f"sliver_sphere_{kind}")
         area = surface.mass_diagonal
-        for config in CONFIGS:
-            min_area = CONFIGS[config][1]
+        for config in configs:
+            min_area = configs[config][1]
             options = {} if min_area is None else {"min_area": min_area}
             h, k = mean_curvature(surface, **options), gaussian_curvature(surface, **options)
-            result = decompose(surface, h, config)
+            result = decompose(surface, h, config, configs)
             rows.append(
                 {
                     "mesh": surface.name,
@@ -178,17 +178,17 @@ def _volume(vertices, faces) -> float:
     return float(np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2])).sum() / 6)
 
 
-def part_bumps() -> list[dict]:
+def part_bumps(configs: dict = CONFIGS) -> list[dict]:
     rows = []
     vertices, faces = _bump_sphere()
     surface = Surface(vertices, faces, name="random_bumps")
     clean_volume = _volume(vertices / np.linalg.norm(vertices, axis=1, keepdims=True), faces)
     radial0, fitted0 = _sphere_distances(surface, vertices)
-    for config in CONFIGS:
-        options, _, weights = CONFIGS[config]
+    for config in configs:
+        options, _, weights = configs[config]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            result = hht(surface, curvature(surface, config), emd=options)
+            result = hht(surface, curvature(surface, config, configs), **options.as_dict())
             for cutoff in (3.0, 4.0, 6.0):
                 out = filter_geometry(result, LowPass(cutoff=cutoff, width=cutoff / 3), **weights)
                 radial, fitted = _sphere_distances(surface, out.vertices)
@@ -212,11 +212,11 @@ def part_bumps() -> list[dict]:
     mixed = Surface(v, f, name="mixed_bumps")
     basis = np.c_[narrow, wide]
     area = mixed.mass_diagonal
-    for config in CONFIGS:
-        options, _, weights = CONFIGS[config]
+    for config in configs:
+        options, _, weights = configs[config]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            result = hht(mixed, curvature(mixed, config), emd=dataclasses.replace(options, max_imfs=6))
+            result = hht(mixed, curvature(mixed, config, configs), **dataclasses.replace(options, max_imfs=6).as_dict())
             out = filter_geometry(result, LowPass(cutoff=6.0, width=2.0), **weights)
         deviation = np.linalg.norm(out.vertices, axis=1) - 1
         kept = np.linalg.solve(basis.T @ (area[:, None] * basis), basis.T @ (area * deviation))
@@ -234,12 +234,12 @@ def part_bumps() -> list[dict]:
     return rows
 
 
-def part_noise() -> list[dict]:
+def part_noise(configs: dict = CONFIGS) -> list[dict]:
     rows = []
     for surface in (Surface(*icosphere(5), name="icosphere"), Surface(*grid(128, 128), name="grid")):
         noise = np.random.default_rng(0).standard_normal(surface.n_vertices)
-        for config in CONFIGS:
-            result = decompose(surface, noise, config)
+        for config in configs:
+            result = decompose(surface, noise, config, configs)
             counts = [sum(map(len, local_extrema(surface, imf))) for imf in result.imfs]
             ratios = [counts[i] / counts[i + 1] for i in range(len(counts) - 1) if counts[i + 1] >= 50]
             rows.append(
@@ -255,7 +255,7 @@ def part_noise() -> list[dict]:
     return rows
 
 
-def part_eigen() -> list[dict]:
+def part_eigen(configs: dict = CONFIGS) -> list[dict]:
     rows = []
     for name, path, pairs in (
         ("spot", SPOT, [(3, 40), (5, 100)]),
@@ -273,9 +273,9 @@ def part_eigen() -> list[dict]:
         )  # eigsh's random start flips signs
         for low, high in pairs:
             fine = vectors[:, high] / np.abs(vectors[:, high]).max()
-            for sign, config in ((sign, config) for sign in (1, -1) for config in CONFIGS):
+            for sign, config in ((sign, config) for sign in (1, -1) for config in configs):
                 signal = vectors[:, low] / np.abs(vectors[:, low]).max() + sign * fine
-                imf = decompose(surface, signal, config).imfs[0]
+                imf = decompose(surface, signal, config, configs).imfs[0]
                 rows.append(
                     {
                         "model": name,

@@ -79,6 +79,10 @@ def strip_cases() -> list[Case]:
             lambda x: 0.3 * x,
         ),
         _strip(
+            "strip: linear chirp 6→62 cycles + tone 3",
+            [lambda x: np.sin(tau * (6 * x + 28 * x**2)), lambda x: 0.8 * np.sin(tau * 3 * x + 0.4)],
+        ),
+        _strip(
             "strip: bursts + two tones",
             [
                 lambda x: (_hann(x, 0.15, 0.35) + _hann(x, 0.55, 0.8)) * np.sin(tau * 60 * x),
@@ -128,6 +132,12 @@ def surface_cases(spot_path, face_path) -> list[Case]:
             ratio = "/".join(f"{values[j] / values[indices[0]]:.3g}" for j in indices[1:])
             parts = [vectors[:, j] / np.abs(vectors[:, j]).max() for j in indices]
             cases.append(Case(f"{surface.name}: eigenfunctions {indices} (λ ratio {ratio})", surface, parts))
+    sphere10k = Surface(*icosphere(5), name="icosphere 10k")
+    edge, z = _mean_edge(sphere10k), sphere10k.vertices[:, 2]
+    narrow, wide = _bumps(sphere10k.vertices, [2.5 * edge, 10 * edge], (60, 6), seed=7)
+    narrow_top = narrow * _hann(z, -0.1, 2.1) ** 0.5  # the narrow bumps fade out below the equator
+    wide_bottom = wide * _hann(z, -2.1, 0.1) ** 0.5
+    cases.append(Case("icosphere 10k: narrow bumps north, wide south", sphere10k, [narrow_top, wide_bottom]))
     curvature = fluctuation(spot, mean_curvature(spot))
     noise = 0.3 * np.std(curvature) * np.random.default_rng(5).standard_normal(spot.n_vertices)
     cases.append(Case("spot: mean curvature + 30% white noise", spot, [noise, curvature]))
@@ -154,7 +164,8 @@ def scores(imfs: np.ndarray, residue: np.ndarray, components, weights: np.ndarra
     return [max(abs(_weighted_corr(c, comp, weights)) for c in candidates) for comp in components]
 
 
-def _surface_methods() -> dict:
+def surface_methods() -> dict:
+    """The methods on surfaces of ``bench_quality``: the paper's EMD, the defaults and EEMD."""
     members = {"ensemble_size": ENSEMBLE}
     return {
         "paper": lambda s, f: emd(s, f, PAPER_OPTIONS),
@@ -163,7 +174,7 @@ def _surface_methods() -> dict:
     }
 
 
-def _pyemd_methods() -> dict:
+def pyemd_methods() -> dict:
     from PyEMD import CEEMDAN, EEMD, EMD
 
     def run(method):
@@ -189,11 +200,14 @@ def _strip_1d(case: Case):
     return order, weights
 
 
-def part_recovery(spot_path, face_path) -> list[dict]:
-    """One row per case and method: the score of each component, and the EMD's IO and energy ratio."""
+def part_recovery(spot_path, face_path, methods: dict | None = None, references: dict | None = None) -> list[dict]:
+    """One row per case and method: the score of each component, and the EMD's IO and energy ratio.
+
+    ``methods`` (default :func:`surface_methods`) run on the surfaces, ``references`` (default
+    :func:`pyemd_methods`) on the strips' 1-D signals."""
     rows = []
     for case in strip_cases() + surface_cases(spot_path, face_path):
-        for name, run in _surface_methods().items():
+        for name, run in (methods or surface_methods()).items():
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 result = run(case.surface, case.signal)
@@ -211,7 +225,7 @@ def part_recovery(spot_path, face_path) -> list[dict]:
             print(rows[-1], flush=True)
         if case.x is not None:
             order, weights = _strip_1d(case)
-            for name, run in _pyemd_methods().items():
+            for name, run in (pyemd_methods() if references is None else references).items():
                 imfs, residue = run(case.x[order], case.signal[order])
                 rows.append(
                     {

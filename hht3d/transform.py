@@ -196,6 +196,12 @@ class HHTResult:
     def n_imfs(self) -> int:
         return len(self.imfs)
 
+    @property
+    def method(self) -> str | None:
+        """The decomposition method (``"sifting"`` or ``"filtering"``); ``None`` for a result read back
+        without its info."""
+        return (self.info or {}).get("emd", {}).get("method")
+
     @cached_property
     def quality(self) -> Quality:
         """Energy ratio, index of orthogonality, energy shares and warnings (:mod:`hht3d.decomposition.quality`)."""

@@ -146,7 +146,7 @@ def test_one_call_shape_and_the_former_keywords():
         np.testing.assert_array_equal(other.monogenic.frequency, flat.monogenic.frequency)
     assert HHTOptions.of(ensemble_size=3).ensemble.ensemble_size == 3
     assert HHTOptions.of(max_imfs=2).ensemble is None
-    with pytest.raises(InputError, match="did you mean potential"):
-        hht(surface, f, method="spectral")  # the flat namespace keeps method free
+    with pytest.raises(InputError, match="EMD option method must be one of sifting, filtering"):
+        hht(surface, f, method="spectral")  # the flat name method is the decomposition's (Riesz: potential)
     with pytest.raises(InputError, match="did you mean 'max_imfs'"):
         hht(surface, f, max_imf=2)

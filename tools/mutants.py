@@ -63,6 +63,7 @@ MONOGENIC_TESTS = (
     "tests/apps/test_reconstruction.py",
     "tests/apps/test_baselines.py",
 )
+FILTERING_TESTS = ("tests/decomposition/test_filtering.py",)
 FILTER_TESTS = ("tests/apps/test_filters.py", "tests/apps/test_reconstruction.py", "tests/apps/test_baselines.py")
 OPERATOR_TESTS = (
     "tests/geometry/test_operators.py",
@@ -98,6 +99,47 @@ class Mutant:
 
 
 MUTANTS = (
+    # -- iterative filtering (hht3d/decomposition/filtering.py) ---------------------------------
+    Mutant(
+        "filtering-recurrence",
+        "the Clenshaw recurrence in W instead of 2W - I",
+        "hht3d/decomposition/filtering.py",
+        "        return 2.0 * solve(mass * v) - v\n",
+        "        return solve(mass * v)\n",
+        FILTERING_TESTS,
+    ),
+    Mutant(
+        "filtering-cut-power",
+        "the filter's t is 1/ω_c instead of 1/ω_c²",
+        "hht3d/decomposition/filtering.py",
+        "        t = np.full(len(residue), 1.0 / cut**2)\n",
+        "        t = np.full(len(residue), 1.0 / cut)\n",
+        FILTERING_TESTS,
+    ),
+    Mutant(
+        "filtering-cut-ratio",
+        "the cut ratio multiplies the cut frequency instead of dividing it",
+        "hht3d/decomposition/filtering.py",
+        "        cut = EXTREMA_FREQUENCY / (self.options.cut_ratio * spacing)\n",
+        "        cut = EXTREMA_FREQUENCY * self.options.cut_ratio / spacing\n",
+        FILTERING_TESTS,
+    ),
+    Mutant(
+        "filtering-no-trend-stop",
+        "the stop on a residue whose extrema did not thin out is gone",
+        "hht3d/decomposition/filtering.py",
+        "        if min(counts) < 2 or (counts[0] >= self.counts[0] and counts[1] >= self.counts[1]):\n",
+        "        if min(counts) < 2:\n",
+        FILTERING_TESTS,
+    ),
+    Mutant(
+        "filtering-membrane-diagonal",
+        "the membrane resolvent's diagonal keeps the plain Laplacian's",
+        "hht3d/decomposition/filtering.py",
+        "            data[e.diagonal] = -np.bincount(rows[off], weights=data[off], minlength=e.n)\n",
+        "            data[e.diagonal] = e.laplacian[e.diagonal]\n",
+        FILTERING_TESTS,
+    ),
     # -- EMD (hht3d/decomposition/) ------------------------------------------------------------
     Mutant(
         "emd-half-step",
@@ -119,8 +161,8 @@ MUTANTS = (
         "emd-imf-halved",
         "every IMF halved (the residue absorbs the rest)",
         "hht3d/decomposition/decompose.py",
-        "            imfs.append(sifter.corrected(*sifted))\n",
-        "            imfs.append(0.5 * sifter.corrected(*sifted))\n",
+        "            imfs.append(extracted[0])\n",
+        "            imfs.append(0.5 * extracted[0])\n",
         EMD_TESTS,
     ),
     Mutant(

@@ -66,6 +66,7 @@ class ItemSummary:
     ``energy_ratio``, ``orthogonality_index`` (with its ``io_leaking`` and
     ``io_cancelling`` parts) and ``warnings`` are the
     quality of the item's last decomposition (:mod:`hht3d.decomposition.quality`).
+    ``method`` is the decomposition's (``sifting`` or ``filtering``, :data:`~hht3d.decomposition.options.METHODS`).
     ``solver_advice`` says which extra to install when a slow sparse solver ran on a
     large mesh (:func:`hht3d.linalg.estimate.slow_fallback`).
     """
@@ -75,6 +76,7 @@ class ItemSummary:
     vertices: int | None = None
     imfs: int | None = None
     seconds: float | None = None
+    method: str | None = None
     energy_ratio: float | None = None
     orthogonality_index: float | None = None
     io_leaking: float | None = None
@@ -92,13 +94,16 @@ def summary_paths(out_dir: Path | str) -> list:
 
 
 def quality_fields(decomposition: Any, surface: Surface) -> dict:
-    """``energy_ratio``, ``orthogonality_index``, its two parts and ``warnings`` of an EMD or HHT result."""
+    """``method``, ``energy_ratio``, ``orthogonality_index``, its two parts and ``warnings`` of an EMD or HHT
+    result."""
     if isinstance(decomposition, HHTResult):
         quality = decomposition.quality
     else:
         imfs, residue = decomposition.imfs, decomposition.residue
         quality = decomposition_quality(surface, imfs.sum(axis=0) + residue, imfs, residue)
+    info = decomposition.info
     return {
+        "method": info.get("emd", info).get("method"),
         "energy_ratio": quality.energy_ratio,
         "orthogonality_index": quality.orthogonality_index,
         "io_leaking": quality.io_leaking,

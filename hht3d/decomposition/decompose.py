@@ -4,14 +4,21 @@ A signal ``f`` is split into intrinsic mode functions (IMFs) and a residue,
 
     f = Σ_k f_k + r_N                                              (Eq. 1)
 
-by *sifting* (Huang et al. 1998): find the local maxima and minima of the
-current signal ``h``, interpolate each set by a smooth envelope, subtract the
-envelopes' mean, repeat until ``h`` is an IMF, then continue on the residue.
+one IMF at a time, by one of the :data:`METHODS`: *sifting* (Huang et al.
+1998; :mod:`.sifting`): find the local maxima and minima of the current
+signal ``h``, interpolate each set by a smooth envelope, subtract the
+envelopes' mean, repeat until ``h`` is an IMF; or *iterative filtering*
+(:mod:`.filtering`): a fixed high-pass of the residue whose cut comes from
+its extrema spacing.  Either continues on the residue.
 
 The steps live in their own modules: extrema (:mod:`.extrema`), envelopes
 (:mod:`.envelopes`), sifting with the cancellation guard and the local-mean
-correction (:mod:`.sifting`), settings (:mod:`.options`), ensemble EMD
-(:mod:`.ensemble`) and the quality figures (:mod:`.quality`).
+correction (:mod:`.sifting`), iterative filtering (:mod:`.filtering`),
+settings (:mod:`.options`), ensemble EMD (:mod:`.ensemble`) and the quality
+figures (:mod:`.quality`).  A method is a class built from
+``(surface, options, backend)`` whose ``imf(residue)`` returns the next IMF
+and its diagnostics, or ``None`` when the residue has too few extrema, with
+its ``solver`` and ``totals()``.
 
 Components
 ----------
@@ -30,14 +37,18 @@ from typing import Any
 
 import numpy as np
 
-from ..geometry.signals import fluctuation
+from ..geometry.signals import fluctuation, fluctuation_energy
 from ..geometry.surface import Surface
 from ..geometry.validation import check_signal, check_surface
+from .filtering import Filterer
 from .options import EMDOptions
 from .quality import Quality, decomposition_quality, warn_quality
 from .sifting import Sifter
 
-__all__ = ["EMDResult", "emd", "result_with_quality"]
+__all__ = ["EMDResult", "emd", "result_with_quality", "METHOD_CLASSES"]
+
+#: The class of each decomposition method of :data:`~hht3d.decomposition.options.METHODS` (module notes).
+METHOD_CLASSES: dict[str, type[Sifter] | type[Filterer]] = {"sifting": Sifter, "filtering": Filterer}
 
 #: A signal whose deviation from its per-component mean is below this fraction
 #: of its magnitude is constant up to round-off and is not decomposed.
@@ -213,38 +224,38 @@ def emd(
     options = EMDOptions.of(options, **overrides)
     f = check_signal(check_surface(surface), signal)
     start = time.perf_counter()
-    sifter = Sifter(surface, options, backend)
+    method = METHOD_CLASSES[options.method](surface, options, backend)
     magnitude = float(np.max(np.abs(f)))
     unit = f / magnitude if magnitude > 0 else f
     imfs: list[np.ndarray] = []
     per_imf: list[dict] = []
     residue = unit
-    reference = sifter.energy(unit)
+    reference = fluctuation_energy(surface, unit)
     if np.max(np.abs(fluctuation(surface, unit)), initial=0.0) <= FLAT_RTOL:
         reason = "constant"
     else:
         reason = "max_imfs"
         while len(imfs) < options.max_imfs:
-            if sifter.energy(residue) <= options.energy_threshold * reference:
+            if fluctuation_energy(surface, residue) <= options.energy_threshold * reference:
                 reason = "energy"
                 break
-            sifted = sifter.imf(residue)
-            if sifted is None:
+            extracted = method.imf(residue)
+            if extracted is None:
                 reason = "extrema"
                 break
-            imfs.append(sifter.corrected(*sifted))
-            per_imf.append(sifted[1])
+            imfs.append(extracted[0])
+            per_imf.append(extracted[1])
             residue = unit - np.sum(imfs, axis=0)
     stacked = np.array(imfs).reshape(len(imfs), len(f)) * (magnitude if magnitude > 0 else 1.0)
     info = {
         "imfs": per_imf,
         "n_imfs": len(per_imf),
-        "sifts": sum(d["sifts"] for d in per_imf),
-        "factorizations": sifter.solver.n_factorizations,
+        "method": options.method,
+        **method.totals(),
+        "factorizations": method.solver.n_factorizations,
         "seconds": time.perf_counter() - start,
-        "backend": sifter.solver.backend,
+        "backend": method.solver.backend,
         "stop_reason": reason,
-        "max_constraint_error": sifter.max_constraint_error,
         "options": options.as_dict(),
     }
     return result_with_quality(surface, f, stacked, info)

@@ -118,6 +118,7 @@ def combine_eemd(surface: Surface, signal: np.ndarray, members: Sequence[Any]) -
         imfs[: m.n_imfs] += m.imfs
     imfs /= len(members)
     info = {
+        "method": members[0].info.get("method"),
         "ensemble_size": len(members),
         "member_n_imfs": [m.n_imfs for m in members],
         "n_imfs": k,

@@ -96,8 +96,9 @@ class _EnvelopeEnergies:
         self.bilaplacian = self._on_pattern(keys, bilaplacian)
         membrane = _membrane(lap)
         self.laplacian = self._on_pattern(keys, membrane)
-        floored = np.maximum(surface.mass_diagonal, MASS_FLOOR * np.median(surface.mass_diagonal))
-        self.smoothing = self._on_pattern(keys, membrane @ sp.diags(1.0 / floored) @ membrane)
+        self.floored = np.maximum(surface.mass_diagonal, MASS_FLOOR * np.median(surface.mass_diagonal))
+        self.membrane = membrane
+        self.smoothing = self._on_pattern(keys, membrane @ sp.diags(1.0 / self.floored) @ membrane)
 
     def _on_pattern(self, keys: np.ndarray, a: Any) -> np.ndarray:
         """The entries of ``a`` at the positions of the shared pattern (``keys``: row·n + column; zeros
@@ -106,6 +107,13 @@ class _EnvelopeEnergies:
         data = np.zeros(len(keys))
         np.add.at(data, np.searchsorted(keys, coo.row.astype(np.int64) * self.n + coo.col), coo.data)
         return data
+
+    def local_smoothing(self, scale: np.ndarray) -> np.ndarray:
+        """Entries of ``L S M̃⁻¹ S L`` with ``S = diag(scale)``: :attr:`smoothing` with a scale per vertex."""
+        rows = np.repeat(np.arange(self.n), self.row_lengths)
+        keys = rows.astype(np.int64) * self.n + self.indices
+        del rows
+        return self._on_pattern(keys, self.membrane @ sp.diags(scale**2 / self.floored) @ self.membrane)
 
     def data(self, tension: float, spacing: float) -> np.ndarray:
         """Entries of ``Q_τ = L M⁻¹ L + (τ/d)² L``; ``τ = inf`` gives ``L`` (the harmonic limit)."""

@@ -26,7 +26,7 @@ from ..geometry.validation import check_signal, check_surface
 from ..records import renamed_keywords
 from .options import EMDOptions
 
-__all__ = ["local_extrema", "extrema_masks", "extrema_spacing", "TIE_RTOL"]
+__all__ = ["local_extrema", "extrema_masks", "active_extrema", "extrema_spacing", "TIE_RTOL"]
 
 #: Neighbouring values closer than this fraction of the signal's range are ties.
 TIE_RTOL = 1e-9
@@ -99,6 +99,23 @@ def extrema_masks(
     is_max = (degree - n_below >= need) & (n_above > 0)
     is_min = (degree - n_above >= need) & (n_below > 0)
     return is_max, is_min
+
+
+def active_extrema(surface: Surface, h: np.ndarray, options: EMDOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The maximum and minimum masks a decomposition uses, and the mask of *passive* components.
+
+    Open-boundary vertices are no extrema unless ``options.boundary_extrema``; a connected component
+    that lacks a maximum or a minimum is passive: it has no oscillation to take and stays in the
+    residue (:mod:`.decompose`, "Components")."""
+    is_max, is_min = extrema_masks(surface, h, options)
+    if not options.boundary_extrema:
+        boundary = surface.boundary_vertices
+        is_max, is_min = is_max & ~boundary, is_min & ~boundary
+    labels, k = surface.component_labels, surface.n_components
+    has_max = np.bincount(labels[is_max], minlength=k) > 0
+    has_min = np.bincount(labels[is_min], minlength=k) > 0
+    passive = ~(has_max & has_min)[labels]
+    return is_max & ~passive, is_min & ~passive, passive
 
 
 def extrema_spacing(surface: Surface, n_extrema: int) -> float:

@@ -33,13 +33,23 @@ __all__ = [
     "EMD_DEFAULTS",
     "ENSEMBLE_DEFAULTS",
     "PAPER_OPTIONS",
+    "FILTERING_OPTIONS",
     "STOPPING_RULES",
+    "METHODS",
+    "FILTERS",
+    "CUTS",
     "ENVELOPES",
     "EXTREMA_RULES",
     "GUARD_TENSIONS",
     "start_tension",
 ]
 
+#: Decomposition methods: envelope sifting (Sec. 4.1, :mod:`.sifting`) or iterative filtering (:mod:`.filtering`).
+METHODS = ("sifting", "filtering")
+#: Low-pass resolvents of iterative filtering: ``(M + t² L M̃⁻¹ L)⁻¹ M`` or ``(M + t L)⁻¹ M``.
+FILTERS = ("bilaplacian", "membrane")
+#: Cuts of iterative filtering: one frequency for the surface, or one per vertex from the local extrema spacing.
+CUTS = ("global", "local")
 #: Sifting stopping rules.
 STOPPING_RULES = ("sd", "rfg", "s_number", "fixed")
 #: Envelope interpolants: thin plate in tension (default), the paper's thin plate (Eq. 11), membrane.
@@ -57,6 +67,8 @@ MAX_IMFS = 64
 MAX_SIFTS = 1000
 #: Envelope tension (scale-free; the cancellation guard stops at 48, then goes harmonic).
 MAX_TENSION = 1000
+#: ``m`` of iterative filtering's pass band (``2m − 1`` solves per IMF).
+MAX_ORDER = 64
 #: Neighbourhood rings of extrema.
 MAX_RING = 16
 #: EEMD members (Wu & Huang 2009 use 100); one graph task each.
@@ -87,6 +99,9 @@ class EMDOptions(Record):
 
     label = "EMD"
 
+    method: str = option(
+        "sifting", "decomposition: envelope sifting (Sec. 4.1) or iterative filtering", choices=METHODS
+    )
     max_imfs: int = option(10, "at most this many IMFs", minimum=0, maximum=MAX_IMFS)
     stopping: str = option("sd", "sifting stop rule", choices=STOPPING_RULES)
     sd_threshold: float = option(0.2, "SD stopping threshold", minimum=0, maximum=10)
@@ -128,6 +143,14 @@ class EMDOptions(Record):
         False, "let open-boundary vertices be extrema (the paper's rule; a trend then enters the IMFs)"
     )
     energy_threshold: float = option(1e-8, "stop when the residue keeps less of the energy", minimum=0, maximum=1)
+    filter: str = option("bilaplacian", "method filtering: the low-pass resolvent", choices=FILTERS)
+    order: int = option(
+        16, "method filtering: m of the pass band 1 - I_G(m, m), sharper as it grows", minimum=1, maximum=MAX_ORDER
+    )
+    cut: str = option("global", "method filtering: one cut for the surface or one per vertex", choices=CUTS)
+    cut_ratio: float = option(
+        1.5, "method filtering: the cut lies this many times below the extrema frequency", minimum=0.25, maximum=16
+    )
 
     @property
     def tensions(self) -> tuple[float, ...]:
@@ -157,3 +180,6 @@ ENSEMBLE_DEFAULTS = EnsembleOptions()
 PAPER_OPTIONS = EMDOptions(
     envelope="biharmonic", cancellation_tolerance=None, mean_correction=None, boundary_extrema=True
 )
+#: Iterative filtering (:mod:`.filtering`) with its calibrated settings: bilaplacian resolvent, ``m = 16``,
+#: a global cut 1.5 times below the extrema frequency.
+FILTERING_OPTIONS = EMDOptions(method="filtering")

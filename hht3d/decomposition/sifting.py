@@ -64,10 +64,10 @@ from typing import Any, cast
 import numpy as np
 
 from ..errors import NumericalError
-from ..geometry.signals import fluctuation
+from ..geometry.signals import fluctuation, fluctuation_energy
 from ..geometry.surface import Surface
 from .envelopes import EnvelopeSolver
-from .extrema import extrema_masks, extrema_spacing
+from .extrema import active_extrema, extrema_spacing
 from .options import EMDOptions
 
 __all__ = ["Sifter", "RFG_THRESHOLDS"]
@@ -95,22 +95,13 @@ class Sifter:
         self.surface = surface
         self.options = options
         self.solver = EnvelopeSolver(surface, backend)
-        self.labels = surface.component_labels
-        self.n_components = surface.n_components
         self.mass = surface.mass_diagonal
-        self.boundary = surface.boundary_vertices
         self.max_constraint_error = 0.0
+        self.n_sifts = 0
 
     def extrema(self, h: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Maximum and minimum masks plus the mask of components lacking either."""
-        o = self.options
-        is_max, is_min = extrema_masks(self.surface, h, o)
-        if not o.boundary_extrema:
-            is_max, is_min = is_max & ~self.boundary, is_min & ~self.boundary
-        has_max = np.bincount(self.labels[is_max], minlength=self.n_components) > 0
-        has_min = np.bincount(self.labels[is_min], minlength=self.n_components) > 0
-        passive = ~(has_max & has_min)[self.labels]
-        return is_max & ~passive, is_min & ~passive, passive
+        return active_extrema(self.surface, h, self.options)
 
     def envelopes(
         self, h: np.ndarray, is_max: np.ndarray, is_min: np.ndarray, passive: np.ndarray, tension: float
@@ -162,10 +153,22 @@ class Sifter:
 
     def energy(self, f: np.ndarray) -> float:
         """``‖f̃‖²_M`` of the fluctuation about the per-component mean."""
-        g = fluctuation(self.surface, f)
-        return float(np.dot(self.mass * g, g))
+        return fluctuation_energy(self.surface, f)
 
     def imf(self, residue: np.ndarray) -> tuple[np.ndarray, dict] | None:
+        """The next IMF, sifted and :meth:`corrected`, and its diagnostics; ``None`` when the residue
+        has < 2 maxima or minima."""
+        sifted = self.sifted(residue)
+        if sifted is None:
+            return None
+        self.n_sifts += sifted[1]["sifts"]
+        return self.corrected(*sifted), sifted[1]
+
+    def totals(self) -> dict:
+        """Run totals for ``EMDResult.info``: ``sifts`` and ``max_constraint_error``."""
+        return {"sifts": self.n_sifts, "max_constraint_error": self.max_constraint_error}
+
+    def sifted(self, residue: np.ndarray) -> tuple[np.ndarray, dict] | None:
         """Sift one IMF out of ``residue``; ``None`` when it has < 2 maxima or minima.
 
         Tries the tensions of the cancellation guard in turn and keeps the

@@ -326,6 +326,12 @@ def signal(
     raise InputError(f"unknown signal {kind!r}; choose one of {sorted(SIGNALS) + ['stored', 'file', 'array']}")
 
 
+def fluctuation_energy(surface: Surface, f: np.ndarray) -> float:
+    """``‖f̃‖²_M``, the energy of the :func:`fluctuation` of ``f`` (n,) in the lumped mass."""
+    g = fluctuation(surface, f)
+    return float(np.dot(surface.mass_diagonal * g, g))
+
+
 def fluctuation(surface: Surface, f: np.ndarray) -> np.ndarray:
     """``f`` (n,) or (k, n) minus its area-weighted mean on each connected component.
 

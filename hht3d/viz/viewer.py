@@ -255,7 +255,7 @@ def result_html(
         path,
         surfaces,
         result.vertex_attributes(),
-        title=f"{result.surface.name}: HHT",
+        title=f"{result.surface.name}: HHT" + (", iterative filtering" if result.method == "filtering" else ""),
         spectrum=result.spectrum,
         quality=result.quality,
         field=field,

@@ -177,3 +177,16 @@ def test_a_worker_killed_mid_write_leaves_no_temporary_file(tmp_path, folder, mo
     rows = run_pipeline(load_pipeline(path), scheduler="synchronous", progress=False)
     assert [r.status for r in rows] == ["ok", "ok"]
     assert not parts[0].exists() and (tmp_path / "out" / "part1_imfs.npz").is_file()
+
+
+def test_a_pipeline_step_takes_the_method(tmp_path):
+    """``method: filtering`` in the demo's ``hht`` step gives the IMFs of ``hht(method="filtering")``."""
+    from hht3d import data_path
+
+    demo = next(p for p in EXAMPLES if p.stem == "demo")
+    out = tmp_path / "out"
+    settings = [f"outputs.folder={out}", "steps.hht.params.method=filtering", "steps.hht.params.max_imfs=2"]
+    assert _run(demo, *[a for s in settings for a in ("--set", s)]) == 0
+    spot = load(data_path("spot.ply"))
+    expected = hht(spot, mean_curvature(spot), method="filtering", max_imfs=2)
+    assert_same_hht(hht_arrays_from_ply(load(out / "spot_hht.ply", clean=False).attributes), expected)
