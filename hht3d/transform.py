@@ -25,7 +25,7 @@ from . import io
 from .decomposition.decompose import emd
 from .decomposition.ensemble import combine_eemd, eemd_member
 from .decomposition.options import EMD_DEFAULTS, EMDOptions, EnsembleOptions
-from .decomposition.quality import Quality, decomposition_quality
+from .decomposition.quality import Quality, aliasing_warnings, decomposition_quality, warn_quality
 from .errors import HHT3DDeprecationWarning, InputError, shown
 from .geometry.surface import Surface
 from .geometry.validation import check_signal
@@ -183,7 +183,7 @@ class HHTResult:
         """Assemble a result from an :class:`~hht3d.decomposition.EMDResult` and the monogenic
         signal of its IMFs (the last of :func:`hht_stages`)."""
         info = {"emd": decomposition.info, "riesz": dict(riesz_options)}
-        return cls(
+        result = cls(
             surface=surface,
             signal=check_signal(surface, signal),
             imfs=decomposition.imfs,
@@ -191,6 +191,9 @@ class HHTResult:
             monogenic=mono,
             info=info,
         )
+        for message in result._aliasing():  # EMD issued its own warnings already
+            warn_quality(f"{surface.name}: {message}", stacklevel=2)
+        return result
 
     @property
     def n_imfs(self) -> int:
@@ -198,8 +201,15 @@ class HHTResult:
 
     @cached_property
     def quality(self) -> Quality:
-        """Energy ratio, index of orthogonality, energy shares and warnings (:mod:`hht3d.decomposition.quality`)."""
-        return decomposition_quality(self.surface, self.signal, self.imfs, self.residue)
+        """Energy ratio, index of orthogonality, energy shares and warnings (:mod:`hht3d.decomposition.quality`),
+        with those of the IMFs' frequencies above the resolution limit."""
+        decomposition = decomposition_quality(self.surface, self.signal, self.imfs, self.residue)
+        return decomposition.with_warnings(self._aliasing())
+
+    def _aliasing(self) -> tuple[str, ...]:
+        """:func:`~hht3d.decomposition.quality.aliasing_warnings` of the IMFs' frequencies."""
+        report = self.spectrum.resolution
+        return aliasing_warnings(report.area_per_signal, report.limit)
 
     @property
     def spectrum(self) -> HilbertSpectrum:
