@@ -23,6 +23,7 @@ import dask
 import psutil
 
 from ..io.atomic import writes_end_with
+from ..io.sealed import install
 
 __all__ = [
     "SINGLE_THREAD_ENV",
@@ -54,14 +55,16 @@ def worker_count() -> int:
         return int(dask.config.get("num_workers", None) or os.cpu_count() or 1)
 
 
-def limit_blas_threads(parent: int | None = None) -> None:
+def limit_blas_threads(parent: int | None = None, storage_options: dict[str, dict] | None = None) -> None:
     """Process-pool initializer: runs before numpy is imported in a spawned worker.
 
     Workers also ignore SIGINT: Ctrl-C reaches the whole process group, and
     the main process stops them (:mod:`hht3d.stopping`), without a traceback
     from each.  They end with their parent (:func:`end_with_parent`), even
-    when it is killed and cannot stop them.
+    when it is killed and cannot stop them.  ``storage_options`` are the run's
+    sealed options (:func:`hht3d.io.sealed.registered`), whose tokens its tasks carry.
     """
+    install(storage_options)
     os.environ.update(SINGLE_THREAD_ENV)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     end_with_parent(parent)
