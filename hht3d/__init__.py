@@ -20,14 +20,54 @@ Examples
 (2930, 2930)
 """
 
-from .decomposition import EMDResult, eemd, emd
-from .errors import HHT3DError, InputError, NumericalError, PipelineError
-from .geometry import Surface
-from .io import data_path, load
-from .results import load_result
-from .spectral import HilbertSpectrum, MonogenicSignal, fractional_laplacian, monogenic, riesz
-from .transform import HHTOptions, HHTResult, hht
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
 from .version import __version__
+
+if TYPE_CHECKING:
+    from .decomposition import EMDResult, eemd, emd
+    from .errors import HHT3DError, InputError, NumericalError, PipelineError
+    from .geometry import Surface
+    from .io import data_path, load
+    from .results import load_result
+    from .spectral import HilbertSpectrum, MonogenicSignal, fractional_laplacian, monogenic, riesz
+    from .transform import HHTOptions, HHTResult, hht
+
+#: Where each exported name lives.  They are imported on first use (PEP 562), so that
+#: ``import hht3d`` and ``python -m hht3d`` start in tens of milliseconds: the command line
+#: installs its stop handlers before numpy, scipy and Open3D load (:mod:`hht3d.__main__`).
+_EXPORTS = {
+    **dict.fromkeys(("EMDResult", "eemd", "emd"), "decomposition"),
+    **dict.fromkeys(("HHT3DError", "InputError", "NumericalError", "PipelineError"), "errors"),
+    "Surface": "geometry",
+    **dict.fromkeys(("data_path", "load"), "io"),
+    "load_result": "results",
+    **dict.fromkeys(("HilbertSpectrum", "MonogenicSignal", "fractional_laplacian", "monogenic", "riesz"), "spectral"),
+    **dict.fromkeys(("HHTOptions", "HHTResult", "hht"), "transform"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """An exported name, or a subpackage (``hht3d.io`` after a bare ``import hht3d``), imported now."""
+    if name in _EXPORTS:
+        value = getattr(import_module(f".{_EXPORTS[name]}", __name__), name)
+    elif not name.startswith("__"):
+        try:
+            value = import_module(f".{name}", __name__)
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})
+
 
 __all__ = [
     "EMDResult",

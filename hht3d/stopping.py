@@ -22,12 +22,6 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-import psutil
-
-from .io import remove_stale_parts
-from .io.atomic import stop_writes, wait_for_writes
-from .io.storage import remove_temporary_folders
-
 __all__ = ["SIGNALS", "Stopped", "stop_on_signals", "clean_stop"]
 
 #: The signals that stop a run: SIGTERM where the platform has it (POSIX, and Windows'
@@ -79,7 +73,14 @@ def clean_stop(folders: Iterable[Path | str]) -> list:
     the temporary folders of downloads and uploads of this process and of its ended workers (their
     ``with`` blocks never finish: the stop ends with ``os._exit``).  Writes open in other threads (the
     threads scheduler) are waited for, up to :data:`WRITE_GRACE` seconds: each removes its temporary
-    file instead of renaming it."""
+    file instead of renaming it.  (The I/O it needs is imported here: this module loads before
+    numpy, so that the command line catches a signal from its first moment, :mod:`hht3d.__main__`.)"""
+    import psutil
+
+    from .io import remove_stale_parts
+    from .io.atomic import stop_writes, wait_for_writes
+    from .io.storage import remove_temporary_folders
+
     stop_writes()
     wait_for_writes(WRITE_GRACE)  # a thread writing a figure would otherwise make its file after the removal
     pids = {os.getpid(), *(p.pid for p in psutil.Process().children(recursive=True))}

@@ -25,10 +25,11 @@ from . import io
 from .decomposition.decompose import emd
 from .decomposition.ensemble import combine_eemd, eemd_member
 from .decomposition.options import EMD_DEFAULTS, EMDOptions, EnsembleOptions
-from .decomposition.quality import Quality, decomposition_quality
+from .decomposition.quality import Quality, aliasing_warnings, decomposition_quality, warn_quality
 from .errors import HHT3DDeprecationWarning, InputError, shown
 from .geometry.surface import Surface
 from .geometry.validation import check_signal
+from .io.sealed import Sealed, unsealed
 from .records import Record, route
 from .spectral.monogenic_signal import MonogenicSignal, monogenic_from_potential
 from .spectral.options import RIESZ_DEFAULTS, RieszOptions
@@ -183,7 +184,7 @@ class HHTResult:
         """Assemble a result from an :class:`~hht3d.decomposition.EMDResult` and the monogenic
         signal of its IMFs (the last of :func:`hht_stages`)."""
         info = {"emd": decomposition.info, "riesz": dict(riesz_options)}
-        return cls(
+        result = cls(
             surface=surface,
             signal=check_signal(surface, signal),
             imfs=decomposition.imfs,
@@ -191,6 +192,9 @@ class HHTResult:
             monogenic=mono,
             info=info,
         )
+        for message in result._aliasing():  # EMD issued its own warnings already
+            warn_quality(f"{surface.name}: {message}", stacklevel=2)
+        return result
 
     @property
     def n_imfs(self) -> int:
@@ -204,8 +208,15 @@ class HHTResult:
 
     @cached_property
     def quality(self) -> Quality:
-        """Energy ratio, index of orthogonality, energy shares and warnings (:mod:`hht3d.decomposition.quality`)."""
-        return decomposition_quality(self.surface, self.signal, self.imfs, self.residue)
+        """Energy ratio, index of orthogonality, energy shares and warnings (:mod:`hht3d.decomposition.quality`),
+        with those of the IMFs' frequencies above the resolution limit."""
+        decomposition = decomposition_quality(self.surface, self.signal, self.imfs, self.residue)
+        return decomposition.with_warnings(self._aliasing())
+
+    def _aliasing(self) -> tuple[str, ...]:
+        """:func:`~hht3d.decomposition.quality.aliasing_warnings` of the IMFs' frequencies."""
+        report = self.spectrum.resolution
+        return aliasing_warnings(report.area_per_signal, report.limit)
 
     @property
     def spectrum(self) -> HilbertSpectrum:
@@ -231,33 +242,33 @@ class HHTResult:
             arrays["faces"] = cast(np.ndarray, self.surface.faces)
         return arrays
 
-    def save(self, path: Path | str, *, storage_options: dict | None = None) -> Path:
+    def save(self, path: Path | str, *, storage_options: dict | Sealed | None = None) -> Path:
         """Write the result atomically in the format of its suffix, one of the formats of an HHT
         result that take no options (:func:`hht3d.output_formats.plain_formats`).
 
         ``.ply``: the surface with :meth:`vertex_attributes` as float64 vertex
         properties.  ``.npz``: :meth:`arrays`; :func:`hht3d.results.load_result`
         reads it back.  ``path`` may be an fsspec URL, with ``storage_options``
-        (:mod:`hht3d.io.storage`).
+        (:mod:`hht3d.io.storage`; or their token in a task graph, :mod:`hht3d.io.sealed`).
         """
         from .output_formats import plain_formats
 
         if io.storage.is_url(path):  # object storage: written locally, then uploaded
-            return io.uploads.write_via(self.save, path, storage_options=storage_options)
+            return io.uploads.write_via(self.save, path, storage_options=unsealed(storage_options))
         path = Path(io.storage.local_path(path))
         formats = plain_formats("hht")
         if path.suffix.lower() not in formats:
             raise InputError(f"cannot save an HHT result as {path.name!r}: use a {' or '.join(formats)} file name")
         return formats[path.suffix.lower()].write(self, self.surface, path)
 
-    def to_html(self, path: Path | str, *, storage_options: dict | None = None, **options: Any) -> Path:
+    def to_html(self, path: Path | str, *, storage_options: dict | Sealed | None = None, **options: Any) -> Path:
         """Write an interactive page of every field, the marginal spectrum and the quality
         figures as one self-contained HTML file (:func:`hht3d.viz.viewer.result_html`, whose
         keyword arguments ``options`` takes: ``beside``, ``field``, ``max_vertices``, ...);
         ``path`` may be an fsspec URL, with ``storage_options``."""
         from .viz.viewer import result_html
 
-        return io.uploads.write_via(result_html, self, path, storage_options=storage_options, **options)
+        return io.uploads.write_via(result_html, self, path, storage_options=unsealed(storage_options), **options)
 
     def to_open3d(self) -> Any:
         """An Open3D tensor ``TriangleMesh`` (or ``PointCloud``) carrying

@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -145,3 +146,37 @@ def test_a_stop_waits_for_a_write_open_in_another_thread(tmp_path, monkeypatch):
     writer.join(5)
     assert raised and "the run is stopping" in raised[0]
     assert list(tmp_path.iterdir()) == []
+
+
+def _catches(pid: int, signum: int) -> bool:
+    """Whether process ``pid`` has a handler for ``signum`` (Linux's ``SigCgt`` mask)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    mask = next(line.split()[1] for line in status.splitlines() if line.startswith("SigCgt:"))
+    return bool(int(mask, 16) >> (signum - 1) & 1)
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").is_file(), reason="reads the signal mask from /proc")
+@pytest.mark.parametrize("when", ["handler", 0.25])
+def test_sigterm_from_the_first_moment_stops_with_one_line(job, when):
+    """A SIGTERM before the command line has loaded (it takes about half a second, numpy, scipy and
+    Open3D) ends with 143 and one line, not a silent -15: sent the moment the handler exists (which
+    must be before numpy is mapped into the process), and at 0.25 s, inside the former window."""
+    proc = _start(job)
+    if when == "handler":
+        deadline = time.monotonic() + STOP_WITHIN
+        while not _catches(proc.pid, signal.SIGTERM) and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.001)
+        maps = Path(f"/proc/{proc.pid}/maps").read_text()
+        os.kill(proc.pid, signal.SIGTERM)
+        assert "numpy" not in maps and "open3d" not in maps, "the handler came after the heavy imports"
+    else:
+        time.sleep(when)
+        os.kill(proc.pid, signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=STOP_WITHIN)
+    assert proc.returncode == 143, (proc.returncode, stderr)
+    assert stderr.splitlines() == [line for line in stderr.splitlines() if line.startswith("hht3d: stopped by SIGTERM")]
+    assert len(stderr.splitlines()) == 1, stderr
+    assert not list((job / "out").rglob("*.part"))

@@ -32,6 +32,7 @@ from ..geometry.signals import SIGNALS
 from ..graph import stages as graph
 from ..io.folder import OutputFolder, check_locations
 from ..io.manifest import new_run_id
+from ..io.sealed import seal
 from ..io.storage import file_name, join, local_path, resolve_locations, stem
 from ..output_formats import plain_formats
 from ..transform import HHTResult
@@ -173,7 +174,7 @@ def dataset_graph(
     folder = OutputFolder(out_dir, storage_options=storage_options, run=run)
     folder.prepare([p for paths in items.values() for p in paths] + summary_paths(out_dir), overwrite=overwrite)
     save = folder.writer(HHTResult.save)
-    load_options = {**(load_options or {}), **({"storage_options": storage_options} if storage_options else {})}
+    load_options = {**(load_options or {}), **({"storage_options": seal(storage_options)} if storage_options else {})}
 
     def item(source: Path | str, paths: Sequence[Path | str]) -> Any:
         tasks = graph.Builder(guard=lambda step, func, src=str(source): Guarded(step, func, src))

@@ -23,7 +23,16 @@ from .options import (
     EnsembleOptions,
     start_tension,
 )
-from .quality import ENERGY_RATIO_LIMIT, LEAKAGE_LIMIT, ORTHOGONALITY_LIMIT, SPIKE_LIMIT, Quality, QualityWarning
+from .quality import (
+    ALIASED_AREA_LIMIT,
+    DOMINANT_SHARE_LIMIT,
+    ENERGY_RATIO_LIMIT,
+    LEAKAGE_LIMIT,
+    ORTHOGONALITY_LIMIT,
+    SPIKE_LIMIT,
+    Quality,
+    QualityWarning,
+)
 
 __all__ = [
     "EMDResult",
@@ -42,5 +51,7 @@ __all__ = [
     "ORTHOGONALITY_LIMIT",
     "LEAKAGE_LIMIT",
     "SPIKE_LIMIT",
+    "DOMINANT_SHARE_LIMIT",
+    "ALIASED_AREA_LIMIT",
 ]
 __all__ += options.__all__  # the settings, their presets and choices

@@ -30,6 +30,7 @@ import dask
 
 from ..decomposition.options import EnsembleOptions
 from ..errors import InputError, one_line
+from ..io.sealed import registered
 from ..logs import get_logger, quieted, showing
 from ..records import Record, option
 from .cluster import gather_bounded
@@ -156,7 +157,8 @@ def compute(
 
 @contextlib.contextmanager
 def _process_pool(workers: int | None) -> Iterator[Any]:
-    """A pool of ``workers`` processes (default one per core) with BLAS limited to one thread, all
+    """A pool of ``workers`` processes (default one per core) with BLAS limited to one thread and the
+    run's sealed storage options (:mod:`hht3d.io.sealed`: the tasks carry their tokens), all
     started at once with SIGINT ignored (so that Ctrl-C, sent to the whole process group, reaches the
     main process only, even while a worker is still starting)."""
     import multiprocessing
@@ -165,7 +167,9 @@ def _process_pool(workers: int | None) -> Iterator[Any]:
     count = workers or os.cpu_count() or 1
     context = multiprocessing.get_context(dask.config.get("multiprocessing.context", "spawn"))
     with sigint_ignored_by_children():
-        pool = ProcessPoolExecutor(count, mp_context=context, initializer=limit_blas_threads, initargs=(os.getpid(),))
+        pool = ProcessPoolExecutor(
+            count, mp_context=context, initializer=limit_blas_threads, initargs=(os.getpid(), registered())
+        )
         for _ in range(count):  # each submission finding no idle worker starts one
             pool.submit(os.getpid)
     try:
@@ -177,6 +181,9 @@ def _process_pool(workers: int | None) -> Iterator[Any]:
 def _compute_distributed(client: Any, graphs: Sequence[Any], progress: bool, where: str = "the given client") -> tuple:
     from distributed import progress as show_progress
 
+    from .sharing import share_storage_options
+
+    share_storage_options(client)  # the tasks carry only their tokens (hht3d.io.sealed)
     futures = client.compute(list(graphs))
     if progress and is_terminal(sys.stderr):
         show_progress(futures, notebook=False)

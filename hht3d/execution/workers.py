@@ -1,9 +1,10 @@
-"""What each worker of a local scheduler is set up with: its BLAS threads, SIGINT, and how many there are.
+"""What each worker of a local scheduler is set up with: its BLAS threads, SIGINT, its parent, and how many there are.
 
 Process-pool workers run their BLAS, OpenMP and MKL with one thread each
 (:data:`SINGLE_THREAD_ENV`), so that the pool does not oversubscribe the
 cores, and ignore SIGINT: Ctrl-C reaches the whole process group, and the
-main process stops them (:mod:`hht3d.stopping`).
+main process stops them (:mod:`hht3d.stopping`).  They end with their parent
+(:func:`end_with_parent`).
 """
 
 from __future__ import annotations
@@ -13,16 +14,24 @@ import contextlib
 import os
 import signal
 import sys
+import threading
+import time
 from collections.abc import Iterator
 from types import FrameType
 
 import dask
+import psutil
+
+from ..io.atomic import writes_end_with
+from ..io.sealed import install
 
 __all__ = [
     "SINGLE_THREAD_ENV",
     "worker_count",
     "limit_blas_threads",
     "end_with_parent",
+    "parent_alive",
+    "PARENT_CHECK",
     "sigint_ignored_by_children",
     "check_main_guard",
 ]
@@ -46,14 +55,16 @@ def worker_count() -> int:
         return int(dask.config.get("num_workers", None) or os.cpu_count() or 1)
 
 
-def limit_blas_threads(parent: int | None = None) -> None:
+def limit_blas_threads(parent: int | None = None, storage_options: dict[str, dict] | None = None) -> None:
     """Process-pool initializer: runs before numpy is imported in a spawned worker.
 
     Workers also ignore SIGINT: Ctrl-C reaches the whole process group, and
     the main process stops them (:mod:`hht3d.stopping`), without a traceback
     from each.  They end with their parent (:func:`end_with_parent`), even
-    when it is killed and cannot stop them.
+    when it is killed and cannot stop them.  ``storage_options`` are the run's
+    sealed options (:func:`hht3d.io.sealed.registered`), whose tokens its tasks carry.
     """
+    install(storage_options)
     os.environ.update(SINGLE_THREAD_ENV)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     end_with_parent(parent)
@@ -61,22 +72,53 @@ def limit_blas_threads(parent: int | None = None) -> None:
 
 #: ``prctl`` option that sends a signal to this process when its parent ends (Linux).
 _PR_SET_PDEATHSIG = 1
+#: Seconds between a worker's checks that its parent still runs, where the kernel cannot end it.
+PARENT_CHECK = 0.5
 
 
 def end_with_parent(parent: int | None) -> None:
-    """Have the kernel end this worker when its parent process ``parent`` ends (Linux's
-    ``PR_SET_PDEATHSIG``), so that a parent killed with SIGKILL leaves no worker computing and
-    recording results; a parent already gone ends the worker at once.  Elsewhere nothing is set:
-    there a killed parent's pool workers end when they next find their call queue closed."""
+    """End this worker when its parent process ``parent`` ends, so that a parent killed with
+    SIGKILL leaves no worker computing and recording results.
+
+    On Linux the kernel does it (``PR_SET_PDEATHSIG``).  Elsewhere, or where ``prctl`` is refused,
+    a daemon thread checks every :data:`PARENT_CHECK` seconds, between tasks and within long ones,
+    that the parent still runs (:func:`parent_alive`), and ends the worker when it does not.  In
+    either case no write finished after the parent ended is renamed into place or recorded in a
+    manifest (:func:`hht3d.io.atomic.writes_end_with`): that check is made at the write, so it
+    holds in the moments before the kernel or the thread acts.  A parent already gone ends the
+    worker at once.
+    """
+    if parent is None:
+        return
+    writes_end_with(parent)
+    if not _kernel_ends_worker():
+        threading.Thread(target=_watch_parent, args=(parent,), name="hht3d-parent", daemon=True).start()
+    if not parent_alive(parent):  # the parent ended before either took effect
+        os._exit(1)
+
+
+def _kernel_ends_worker() -> bool:
+    """Ask the kernel to SIGKILL this process when its parent ends; whether it will (Linux only)."""
     import ctypes
 
-    if not sys.platform.startswith("linux") or parent is None:
-        return
+    if not sys.platform.startswith("linux"):
+        return False
     libc = ctypes.CDLL(None, use_errno=True)
-    if libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) != 0:
-        return  # not permitted here: the pool's own shutdown remains
-    if os.getppid() != parent:  # the parent ended before the request took effect
-        os._exit(1)
+    return bool(libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) == 0)
+
+
+def parent_alive(parent: int) -> bool:
+    """Whether ``parent`` is still this process's parent and runs: on POSIX an orphan is adopted
+    (its ``getppid`` changes); Windows keeps the former id, so the process itself is looked up."""
+    return os.getppid() == parent and psutil.pid_exists(parent)
+
+
+def _watch_parent(parent: int) -> None:
+    """End this worker process as soon as ``parent`` has ended (a daemon thread of
+    :func:`end_with_parent`; ``os._exit``: the task running has nothing left to report to)."""
+    while parent_alive(parent):
+        time.sleep(PARENT_CHECK)
+    os._exit(1)
 
 
 @contextlib.contextmanager

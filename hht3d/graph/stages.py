@@ -55,6 +55,7 @@ from ..execution import compute
 from ..geometry.signals import signal as _signal
 from ..geometry.surface import Surface
 from ..io.read import load as _load
+from ..io.sealed import seal
 from ..spectral.monogenic_signal import monogenic_from_potential as _monogenic_from_potential
 from ..spectral.options import RieszOptions
 from ..transform import HHTOptions, HHTResult, decomposition_stage, hht_settings, hht_stages
@@ -144,6 +145,9 @@ def mirror(
 
 
 def _load_tasks(builder: Builder, path: Path | str, options: Any = None, **keywords: Any) -> Any:
+    """The ``load`` task; its ``storage_options`` go into the graph sealed, as a token (:mod:`hht3d.io.sealed`)."""
+    if keywords.get("storage_options"):
+        keywords["storage_options"] = seal(keywords["storage_options"])
     return builder.task("load", _load)(str(path), options, **keywords)
 
 
@@ -271,8 +275,9 @@ def hht(
 
 def save(result: HHTResult, path: Path | str, *, storage_options: dict | None = None) -> Any:
     """Lazy :meth:`HHTResult.save <hht3d.transform.HHTResult.save>` (atomic PLY or npz write; ``path``
-    may be an fsspec URL, written by the worker with ``storage_options``); returns the path."""
-    return _PLAIN.task("save", HHTResult.save)(result, str(path), storage_options=storage_options)
+    may be an fsspec URL, written by the worker with ``storage_options``, which the task carries
+    sealed, as a token: :mod:`hht3d.io.sealed`); returns the path."""
+    return _PLAIN.task("save", HHTResult.save)(result, str(path), storage_options=seal(storage_options))
 
 
 # -- applications (Sec. 5, hht3d.apps): one task each ----------------------------------------

@@ -40,6 +40,7 @@ __all__ = [
     "remove_stale_parts",
     "stop_writes",
     "wait_for_writes",
+    "writes_end_with",
     "PART",
 ]
 
@@ -54,12 +55,32 @@ _OPEN_CHANGED = threading.Condition()
 _NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
 #: Whether files can be made and renamed relative to an open folder (POSIX; not Windows).
 _DIR_FD = {os.open, os.rename, os.unlink} <= os.supports_dir_fd  # os.replace takes dir_fd where os.rename does
+#: In a worker process, the run's process whose end stops every write (:func:`writes_end_with`).
+_PARENT: int | None = None
 
 
 def stop_writes() -> None:
     """Make every later :func:`atomic_path` in this process fail at once, and every open one remove its
     temporary file instead of renaming it (the process is stopping)."""
     _STOPPING.set()
+
+
+def writes_end_with(parent: int) -> None:
+    """In a worker process: make every later :func:`atomic_path` fail, and every open one remove its
+    temporary file, once process ``parent`` (the run's) has ended, so that nothing the worker
+    finishes afterwards is renamed into place or recorded as done in a manifest
+    (:func:`hht3d.execution.workers.end_with_parent` ends the worker itself)."""
+    global _PARENT
+    _PARENT = parent
+
+
+def _refusal(path: Path) -> OutputError | None:
+    """Why ``path`` may not be written now: the run is stopping, or this worker's run has ended."""
+    if _STOPPING.is_set():
+        return OutputError(f"{short(path)}: not written: the run is stopping")
+    if _PARENT is not None and (os.getppid() != _PARENT or not _alive(_PARENT)):
+        return OutputError(f"{short(path)}: not written: the run's process {_PARENT} has ended")
+    return None
 
 
 def wait_for_writes(timeout: float) -> bool:
@@ -95,11 +116,12 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
     OutputError
         The folder cannot be made, or writing failed (no permission, full
         disk, a folder in the way), or the folder was swapped since the
-        temporary file was made there; names ``path`` and the reason.
+        temporary file was made there, or the run is stopping or has ended
+        (:func:`stop_writes`, :func:`writes_end_with`); names ``path`` and the reason.
     """
     path = Path(path)
-    if _STOPPING.is_set():
-        raise OutputError(f"{short(path)}: not written: the run is stopping")
+    if (refusal := _refusal(path)) is not None:
+        raise refusal
     folder = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -114,8 +136,8 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
     _opened(+1)
     try:
         yield tmp
-        if _STOPPING.is_set():  # a stop began while this thread wrote: its outputs are no longer recorded
-            raise OutputError(f"{short(path)}: not written: the run is stopping")
+        if (refusal := _refusal(path)) is not None:  # a stop began, or the run ended, while this thread wrote
+            raise refusal
         if not os.path.samestat(os.stat(tmp.parent), made_in):
             raise OutputError(
                 f"{short(path)}: not written: its folder {short(path.parent)} was replaced while the "

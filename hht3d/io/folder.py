@@ -42,24 +42,26 @@ from .manifest import (
     valid_entries,
 )
 from .paths import check_name, check_output_location
+from .sealed import Sealed, seal, unsealed
 
 __all__ = ["OutputFolder", "Uploaded", "check_locations"]
 
 
 class Uploaded:
     """A writer whose last positional argument is a URL: written locally, then uploaded
-    (:func:`hht3d.io.uploads.write_via`; a picklable task function)."""
+    (:func:`hht3d.io.uploads.write_via`; a picklable task function).  Its storage options are
+    sealed (:mod:`hht3d.io.sealed`): the task carries their token, resolved where it runs."""
 
-    def __init__(self, write: Callable[..., Any], storage_options: dict | None):
-        self.write, self.storage_options = write, storage_options or None
+    def __init__(self, write: Callable[..., Any], storage_options: dict | Sealed | None):
+        self.write, self.storage_options = write, seal(storage_options)
         self.__name__ = getattr(write, "__name__", "write")
         self.__module__, self.__qualname__ = write.__module__, write.__qualname__
 
     def __dask_tokenize__(self) -> tuple:
-        return (self.write.__module__, self.write.__qualname__, repr(sorted((self.storage_options or {}).items())))
+        return (self.write.__module__, self.write.__qualname__, self.storage_options)
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
-        return uploads.write_via(self.write, *args, storage_options=self.storage_options, **kwargs)
+        return uploads.write_via(self.write, *args, storage_options=unsealed(self.storage_options), **kwargs)
 
 
 class OutputFolder:

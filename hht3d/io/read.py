@@ -32,6 +32,7 @@ from .formats import (
     usable_name,
 )
 from .references import check_references
+from .sealed import Sealed, unsealed
 
 __all__ = [
     "data_path",
@@ -76,7 +77,7 @@ def load(
     options: LoadOptions | dict | None = None,
     *,
     name: str | None = None,
-    storage_options: dict | None = None,
+    storage_options: dict | Sealed | None = None,
     **overrides: Any,
 ) -> Surface:
     """Load a triangle mesh or point cloud as a :class:`~hht3d.geometry.surface.Surface`.
@@ -94,7 +95,8 @@ def load(
     name : str, optional
         Defaults to the file stem.
     storage_options : dict, optional
-        For a URL: options of its fsspec back-end (endpoint, region, ...).
+        For a URL: options of its fsspec back-end (endpoint, region, ...), or their
+        :class:`~hht3d.io.sealed.Sealed` token (a task of a graph, :mod:`hht3d.io.sealed`).
     **overrides
         Settings that replace those of ``options`` (``clean=False``).
 
@@ -115,7 +117,7 @@ def load(
 
     path = local_path(path)
     if is_url(path):  # object storage: through a temporary local copy
-        return load_url(load, path, storage_options, options=options, name=name)
+        return load_url(load, path, unsealed(storage_options), options=options, name=name)
     path = Path(path)
     check_regular_file(path)
     check_extension(path)

@@ -32,6 +32,7 @@ from ..dataset.summary import ItemSummary, item_summary, quality_fields, write_s
 from ..execution import compute
 from ..graph.stages import Builder
 from ..io.folder import OutputFolder
+from ..io.sealed import seal
 from ..io.storage import file_name
 from .plan import FILE, Pipeline
 from .validation import EXECUTION
@@ -53,7 +54,7 @@ def _item(plan: Pipeline, folder: OutputFolder, source: Path, paths: list[Path])
         inputs = {slot: str(source) if ref == FILE else results[ref] for slot, ref in step.refs.items()}
         params = dict(step.params)
         if step.op.name == "load" and plan.storage_options:  # the worker reads the URL itself
-            params["storage_options"] = plan.storage_options
+            params["storage_options"] = seal(plan.storage_options)
         tasks = step.op.tasks(builder, inputs, params)
         results[step.id] = tasks["result"]
         parts.update({t.key: t for t in tasks.values()})

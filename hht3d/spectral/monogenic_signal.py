@@ -94,7 +94,8 @@ class MonogenicSignal:
 
         The same figures as :attr:`hht3d.spectral.spectrum.HilbertSpectrum.resolution`.
         """
-        return resolution_report(self.frequency, self.resolvable, self.amplitude**2 * self._area())
+        area = self._area()
+        return resolution_report(self.frequency, self.resolvable, self.amplitude**2 * area, area)
 
 
 def monogenic(

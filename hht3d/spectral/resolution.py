@@ -53,6 +53,10 @@ class ResolutionReport:
     energy_share : float
         Share of the weighted energy (``a² A_v``) carried by those pairs;
         ``nan`` without weights or energy.
+    area_per_signal : (k,) ndarray
+        Per signal, the share of the area (``A_v``) where it is above the limit; with no areas
+        given, every vertex counts alike (``per_signal``).  The figure of
+        :func:`hht3d.decomposition.quality.aliasing_warnings`.
     """
 
     limit: float
@@ -60,6 +64,7 @@ class ResolutionReport:
     fraction: float
     per_signal: np.ndarray
     energy_share: float
+    area_per_signal: np.ndarray
 
     @property
     def ok(self) -> bool:
@@ -78,7 +83,10 @@ class ResolutionReport:
 
 
 def resolution_report(
-    frequency: np.ndarray, resolvable: np.ndarray, weights: np.ndarray | None = None
+    frequency: np.ndarray,
+    resolvable: np.ndarray,
+    weights: np.ndarray | None = None,
+    area: np.ndarray | None = None,
 ) -> ResolutionReport:
     """Which instantaneous frequencies exceed the resolution limit of their vertex.
 
@@ -90,6 +98,8 @@ def resolution_report(
         Per-vertex limits (:func:`resolvable_frequency`).
     weights : (k, n) array_like, optional
         E.g. ``a² A_v``, for :attr:`ResolutionReport.energy_share`.
+    area : (n,) array_like, optional
+        Vertex areas ``A_v``, for :attr:`ResolutionReport.area_per_signal`.
 
     Returns
     -------
@@ -106,10 +116,16 @@ def resolution_report(
         total = weights.sum()
         share = float(weights[above].sum() / total) if total > 0 else np.nan
     per_signal = above.mean(axis=1) if above.shape[1] else np.zeros(len(above))
+    area_per_signal = per_signal
+    if area is not None:
+        area = np.asarray(area, dtype=np.float64)
+        total_area = float(area.sum())
+        area_per_signal = above @ area / total_area if total_area > 0 else np.zeros(len(above))
     return ResolutionReport(
         limit=float(np.median(resolvable)) if resolvable.size else np.nan,
         pairs=int(above.sum()),
         fraction=float(above.mean()) if above.size else 0.0,
         per_signal=per_signal,
         energy_share=share,
+        area_per_signal=area_per_signal,
     )

@@ -84,7 +84,8 @@ class HilbertSpectrum:
     def resolution(self) -> ResolutionReport:
         """Vertex–IMF pairs whose frequency exceeds their vertex's limit, and their share of
         the energy ``a² A_v``: frequencies the surface cannot resolve, reported, not dropped."""
-        return resolution_report(self.frequency, cast(np.ndarray, self.resolvable), self._relative_energy() * self.area)
+        resolvable = cast(np.ndarray, self.resolvable)
+        return resolution_report(self.frequency, resolvable, self._relative_energy() * self.area, self.area)
 
     @property
     def energy(self) -> np.ndarray:

@@ -13,7 +13,10 @@ import hht3d
 from helpers.meshes import grid, icosphere, random_bump_sphere
 from helpers.models import shipped_model_path
 from hht3d import InputError, Surface, emd, hht
+from hht3d.dataset.summary import quality_fields
 from hht3d.decomposition import (
+    ALIASED_AREA_LIMIT,
+    DOMINANT_SHARE_LIMIT,
     ENERGY_RATIO_LIMIT,
     GUARD_TENSIONS,
     LEAKAGE_LIMIT,
@@ -218,3 +221,55 @@ def test_quality_warnings_stay_muted_in_a_thread_when_another_thread_unmutes():
     assert a_left.is_set() and [str(w.message) for w in caught] == []
     with pytest.warns(QualityWarning, match="outside"):
         warn_quality("outside", stacklevel=1)
+
+
+def _quality_warnings(surface, signal, max_imfs=2):
+    with warnings.catch_warnings(record=True) as issued:
+        warnings.simplefilter("always", QualityWarning)
+        result = hht(surface, signal, max_imfs=max_imfs)
+    return result, [str(w.message) for w in issued if issubclass(w.category, QualityWarning)]
+
+
+def test_one_imf_holding_nearly_all_the_energy_is_reported():
+    """A fine pattern of amplitude 1 beside a coarse one of 0.03: IMF 1 holds 99.5% of the energy
+    (measured; white noise, the case the limit must let through, 91%), every frequency within the
+    limit.  The quality line must say so, not stay clean."""
+    v, f = icosphere(3)
+    pattern = np.sin(9 * np.arctan2(v[:, 1], v[:, 0])) * np.sin(np.arccos(np.clip(v[:, 2], -1, 1))) ** 9
+    result, issued = _quality_warnings(Surface(v, f), pattern + 0.03 * v[:, 2])
+    assert result.quality.energy_share[0] > DOMINANT_SHARE_LIMIT
+    assert [w for w in result.quality.warnings if "IMF 1 holds" in w] and not result.quality.ok
+    assert not [w for w in result.quality.warnings if "resolution limit" in w], result.quality.warnings
+    assert any("IMF 1 holds" in w for w in issued), issued  # issued too, so the CLI and summaries see it
+    assert "WARNING: IMF 1 holds" in result.quality.summary()
+    assert any("IMF 1 holds" in w for w in quality_fields(result, result.surface)["warnings"])
+
+
+def test_frequencies_above_the_resolution_limit_are_reported():
+    """cos(60x)·cos(60y) on a 16x16 grid of spacing 1/15, whose limit is π·15 = 47 rad/unit: the
+    pattern is finer than the mesh, and 20% of IMF 1's area reads above the limit (measured)."""
+    surface = Surface(*grid(16, 16))
+    x = surface.vertices
+    result, issued = _quality_warnings(surface, np.cos(60 * x[:, 0]) * np.cos(60 * x[:, 1]))
+    share = result.spectrum.resolution.area_per_signal[0]
+    assert share > ALIASED_AREA_LIMIT, share
+    aliased = [w for w in result.quality.warnings if "above the resolution limit" in w]
+    assert len(aliased) == 1 and aliased[0].startswith("IMF 1 has"), result.quality.warnings
+    assert any("above the resolution limit" in w for w in issued), issued
+
+
+def test_a_resolved_decomposition_has_neither_warning(spot):
+    """Spot's mean curvature, two IMFs: 60% and 14% of the energy, 0.25% of IMF 1's area above the
+    limit (measured): neither limit is near."""
+    result, issued = _quality_warnings(*spot)
+    assert max(result.quality.energy_share[:-1]) < DOMINANT_SHARE_LIMIT
+    assert max(result.spectrum.resolution.area_per_signal) < ALIASED_AREA_LIMIT
+    assert result.quality.ok and issued == [], (result.quality.warnings, issued)
+
+
+def test_one_imf_is_not_reported_as_dominant():
+    """With a single IMF there are no others to compare it with: no dominance warning."""
+    signal = np.random.default_rng(0).standard_normal(162)
+    quality = decomposition_quality(Surface(*icosphere(2)), signal, signal[None], np.zeros(162))
+    assert quality.energy_share[0] == pytest.approx(1.0)
+    assert not [w for w in quality.warnings if "holds" in w], quality.warnings

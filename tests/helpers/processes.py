@@ -61,3 +61,12 @@ def _wait_for(condition, timeout: float, what: str) -> None:
         if time.monotonic() > deadline:
             pytest.fail(f"timed out after {timeout} s waiting for {what}")
         time.sleep(0.1)
+
+
+def pool_initializer_without_prctl(parent: int, storage_options: dict | None = None) -> None:
+    """The process pool's initializer as on a platform without ``PR_SET_PDEATHSIG`` (macOS, Windows):
+    the worker must end through its own check of the parent (importable by spawned workers)."""
+    from hht3d.execution import workers
+
+    workers._kernel_ends_worker = lambda: False
+    workers.limit_blas_threads(parent, storage_options)

@@ -455,3 +455,57 @@ def test_a_conditional_summary_write_keeps_the_rows_of_a_run_that_came_first(sto
     update_object(url, update, options)
     assert seen[0] == b"[]" and len(seen) == 2
     assert json.loads(fs.cat_file(url)) == [{"source": "theirs"}, {"source": "ours"}]
+
+
+def _pickled_graph(*collections) -> bytes:
+    """The graph as a scheduler receives it: every task of ``collections``, pickled (this dask has no
+    ``dask.base.collections_to_dsk``: each collection's ``__dask_graph__``, merged)."""
+    import cloudpickle
+
+    tasks: dict = {}
+    for collection in collections:
+        tasks.update(dict(collection.__dask_graph__()))
+    return cloudpickle.dumps(tasks)
+
+
+@pytest.mark.parametrize("scheduler", ["synchronous", "threads", "processes", "distributed"])
+def test_storage_options_stay_out_of_the_graph_and_every_scheduler_reads_and_writes(store, scheduler):
+    """Credentials given as storage_options from Python are not in the task graph in any form
+    (the tasks carry a token, :mod:`hht3d.io.sealed`), yet each scheduler's workers (this process,
+    pool processes, a LocalCluster's workers) read the scans from and write the results to S3."""
+    from hht3d import graph
+    from hht3d.dataset.run import dataset_graph
+
+    _, options, fs = store
+    secret_options = {**options, "key": "S3RVER", "secret": SECRET}
+    out = f"s3://{BUCKET}/sealed-{scheduler}"
+    lazy = dataset_graph(f"s3://{BUCKET}/scans/spot.ply", out, storage_options=secret_options, **EMD)
+    surface = graph.load(f"s3://{BUCKET}/scans/spot.ply", storage_options=secret_options)
+    saved = graph.save(
+        graph.hht(surface, graph.signal(surface, "mean_curvature"), max_imfs=2),
+        f"{out}/g.npz",
+        storage_options=secret_options,
+    )
+    pickled = _pickled_graph(lazy, saved)
+    assert b"Sealed" in pickled  # the tokens are there, standing for the options
+    assert forms_found(pickled, SECRET) == [] and forms_found(repr(lazy.dask), SECRET) == []
+    rows = run_dataset(
+        f"s3://{BUCKET}/scans/spot.ply",
+        out,
+        scheduler=scheduler,
+        workers=2,
+        storage_options=secret_options,
+        progress=False,
+        **EMD,
+    )
+    assert [r.status for r in rows] == ["ok"], rows[0].error
+    fs.invalidate_cache()
+    assert {p.rsplit("/", 1)[1] for p in fs.find(f"{BUCKET}/sealed-{scheduler}")} >= {"spot_hht.npz", "spot_hht.ply"}
+
+
+def test_a_task_whose_storage_options_were_not_shared_says_so():
+    """A token no worker received (a graph computed by a client hht3d did not prepare) is one line."""
+    from hht3d.io.sealed import Sealed, unsealed
+
+    with pytest.raises(InputError, match="share_storage_options"):
+        unsealed(Sealed("0" * 32))
