@@ -23,9 +23,10 @@ import numpy as np
 
 from . import io
 from .decomposition.decompose import emd
+from .decomposition.display import value_range
 from .decomposition.ensemble import combine_eemd, eemd_member
 from .decomposition.options import EMD_DEFAULTS, EMDOptions, EnsembleOptions
-from .decomposition.quality import Quality, decomposition_quality
+from .decomposition.quality import Quality, decomposition_html, decomposition_quality, decomposition_repr
 from .errors import HHT3DDeprecationWarning, InputError, shown
 from .geometry.surface import Surface
 from .geometry.validation import check_signal
@@ -183,14 +184,7 @@ class HHTResult:
         """Assemble a result from an :class:`~hht3d.decomposition.EMDResult` and the monogenic
         signal of its IMFs (the last of :func:`hht_stages`)."""
         info = {"emd": decomposition.info, "riesz": dict(riesz_options)}
-        return cls(
-            surface=surface,
-            signal=check_signal(surface, signal),
-            imfs=decomposition.imfs,
-            residue=decomposition.residue,
-            monogenic=mono,
-            info=info,
-        )
+        return cls(surface, check_signal(surface, signal), decomposition.imfs, decomposition.residue, mono, info)
 
     @property
     def n_imfs(self) -> int:
@@ -200,6 +194,21 @@ class HHTResult:
     def quality(self) -> Quality:
         """Energy ratio, index of orthogonality, energy shares and warnings (:mod:`hht3d.decomposition.quality`)."""
         return decomposition_quality(self.surface, self.signal, self.imfs, self.residue)
+
+    def __repr__(self) -> str:
+        text = f"{self.surface.name!r}: {self.n_imfs} IMFs of {self.surface.n_vertices:,} vertices"
+        return decomposition_repr("HHTResult", text, self.quality)
+
+    def _repr_html_(self) -> str:
+        frequency = {"frequency 5–95 %": [value_range(row) for row in self.monogenic.frequency]}
+        facts = [("surface", repr(self.surface)), ("IMFs", str(self.n_imfs))]
+        return decomposition_html(f"HHTResult: {self.surface.name}", facts, self.n_imfs, frequency, self.quality)
+
+    def show(self, **options: Any) -> Any:
+        """The viewer inline in a notebook (:func:`hht3d.viz.notebook.inline_view`: ``height``, ``field``, ...)."""
+        from .viz.notebook import inline_view
+
+        return inline_view(self, **options)
 
     @property
     def spectrum(self) -> HilbertSpectrum:

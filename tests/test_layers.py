@@ -38,6 +38,7 @@ LAYERS = [
 #: Upward imports inside a function: (importing module, imported module).
 DELEGATES = {
     ("hht3d.transform", "hht3d.viz.viewer"),  # HHTResult.to_html
+    ("hht3d.transform", "hht3d.viz.notebook"),  # HHTResult.show
     ("hht3d.transform", "hht3d.output_formats"),
 }  # HHTResult.save
 MAX_LINES = 400
