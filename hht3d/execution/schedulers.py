@@ -179,8 +179,10 @@ def _compute_distributed(client: Any, graphs: Sequence[Any], progress: bool, whe
     from distributed import progress as show_progress
 
     futures = client.compute(list(graphs))
-    if progress and in_notebook():  # a widget that updates itself while the results are gathered
-        show_progress(futures, notebook=True)
+    if progress and in_notebook():  # the notebook's widget, shown now, updates itself while the results are gathered
+        from IPython.display import display
+
+        display(show_progress(futures, notebook=True))
     elif progress and is_terminal(sys.stderr):
         show_progress(futures, notebook=False)
         print(file=sys.stderr)
