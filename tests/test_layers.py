@@ -1,6 +1,6 @@
 """The package's architecture as tests: imports point down the layers, no cycles, small modules.
 
-The layers, bottom first (README "Layers"); a module may import from its own
+The layers, bottom first (docs/development.md); a module may import from its own
 package or from a lower layer.  The few upward imports are lazy delegates,
 listed by name below, each a method that hands its work to a higher layer.
 """
