@@ -12,7 +12,6 @@ pipeline's ``hht`` step.
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from operator import attrgetter
@@ -23,16 +22,24 @@ import numpy as np
 
 from . import io
 from .decomposition.decompose import emd
+from .decomposition.display import value_range
 from .decomposition.ensemble import combine_eemd, eemd_member
-from .decomposition.options import EMD_DEFAULTS, EMDOptions, EnsembleOptions
-from .decomposition.quality import Quality, aliasing_warnings, decomposition_quality, warn_quality
-from .errors import HHT3DDeprecationWarning, InputError, shown
+from .decomposition.options import EMDOptions, EnsembleOptions
+from .decomposition.quality import (
+    Quality,
+    aliasing_warnings,
+    decomposition_html,
+    decomposition_quality,
+    decomposition_repr,
+    warn_quality,
+)
+from .errors import InputError
 from .geometry.surface import Surface
 from .geometry.validation import check_signal
+from .hht_options import HHTOptions, hht_settings
 from .io.sealed import Sealed, unsealed
-from .records import Record, route
 from .spectral.monogenic_signal import MonogenicSignal, monogenic_from_potential
-from .spectral.options import RIESZ_DEFAULTS, RieszOptions
+from .spectral.options import RieszOptions
 from .spectral.riesz_transform import fractional_laplacian
 from .spectral.spectrum import HilbertSpectrum
 
@@ -87,68 +94,6 @@ def field_imf(name: object) -> int | None:
     if kind in IMF_FIELDS and number.isascii() and number.isdigit() and not number.startswith("0"):
         return int(number)
     return None
-
-
-#: The parts of :class:`HHTOptions`, by the record each holds.
-PARTS: dict[str, type[Record]] = {"emd": EMDOptions, "riesz": RieszOptions, "ensemble": EnsembleOptions}
-
-
-@dataclass(frozen=True)
-class HHTOptions:
-    """The settings of one HHT: EMD's, the Riesz transform's and, for ensemble EMD, the ensemble's.
-
-    ``ensemble=None`` decomposes by plain EMD.  :meth:`of` routes flat
-    settings by name to the record that declares them (their names are
-    disjoint), so ``HHTOptions.of(max_imfs=3, tol=1e-6)`` sets one EMD and
-    one Riesz setting.
-    """
-
-    emd: EMDOptions = EMD_DEFAULTS
-    riesz: RieszOptions = RIESZ_DEFAULTS
-    ensemble: EnsembleOptions | None = None
-
-    @classmethod
-    def of(cls, value: Any = None, /, **overrides: Any) -> "HHTOptions":
-        """From ``None``, an :class:`HHTOptions` or a dict of parts (``{"emd": {...}, "riesz": ...}``)
-        and/or flat settings, with flat ``overrides``; an ensemble setting turns ensemble EMD on.
-
-        Raises
-        ------
-        InputError
-            A setting no record declares (with the closest name), or an invalid value.
-        """
-        if value is None or isinstance(value, cls):
-            base, flat = value or cls(), {}
-        elif isinstance(value, dict):
-            parts: dict[str, Any] = {
-                k: None if k == "ensemble" and v is None else PARTS[k].of(v) for k, v in value.items() if k in PARTS
-            }
-            base = cls(**parts)
-            flat = {k: v for k, v in value.items() if k not in PARTS}
-        else:
-            raise InputError(f"HHT options must be an HHTOptions or a dict; got {shown(value)}")
-        emd, riesz, ensemble = route({**flat, **overrides}, *PARTS.values())
-        return cls(
-            EMDOptions.of(base.emd, **emd),
-            RieszOptions.of(base.riesz, **riesz),
-            None if base.ensemble is None and not ensemble else EnsembleOptions.of(base.ensemble, **ensemble),
-        )
-
-
-def hht_settings(options: HHTOptions | dict | None, overrides: dict, function: str) -> HHTOptions:
-    """:meth:`HHTOptions.of`, accepting for one release the former keywords ``emd=``, ``riesz=`` and
-    ``ensemble=`` of ``function`` with a DeprecationWarning."""
-    former = {k: overrides.pop(k) for k in PARTS if k in overrides}
-    if former:
-        warnings.warn(
-            f"{function}({'=, '.join(former)}=) is deprecated: pass the settings by name "
-            "(max_imfs=3, tol=1e-6) or as options",
-            HHT3DDeprecationWarning,
-            stacklevel=3,
-        )
-        base = HHTOptions.of(options)
-        options = {**{k: getattr(base, k) for k in PARTS}, **former}
-    return HHTOptions.of(options, **overrides)
 
 
 @dataclass
@@ -217,6 +162,21 @@ class HHTResult:
         """:func:`~hht3d.decomposition.quality.aliasing_warnings` of the IMFs' frequencies."""
         report = self.spectrum.resolution
         return aliasing_warnings(report.area_per_signal, report.limit)
+
+    def __repr__(self) -> str:
+        text = f"{self.surface.name!r}: {self.n_imfs} IMFs of {self.surface.n_vertices:,} vertices"
+        return decomposition_repr("HHTResult", text, self.quality)
+
+    def _repr_html_(self) -> str:
+        frequency = {"frequency 5–95 %": [value_range(row) for row in self.monogenic.frequency]}
+        facts = [("surface", repr(self.surface)), ("IMFs", str(self.n_imfs))]
+        return decomposition_html(f"HHTResult: {self.surface.name}", facts, self.n_imfs, frequency, self.quality)
+
+    def show(self, **options: Any) -> Any:
+        """The viewer inline in a notebook (:func:`hht3d.viz.notebook.inline_view`: ``height``, ``field``, ...)."""
+        from .viz.notebook import inline_view
+
+        return inline_view(self, **options)
 
     @property
     def spectrum(self) -> HilbertSpectrum:

@@ -1,6 +1,6 @@
 """The package's architecture as tests: imports point down the layers, no cycles, small modules.
 
-The layers, bottom first (README "Layers"); a module may import from its own
+The layers, bottom first (docs/development.md); a module may import from its own
 package or from a lower layer.  The few upward imports are lazy delegates,
 listed by name below, each a method that hands its work to a higher layer.
 """
@@ -24,6 +24,7 @@ LAYERS = [
     ("hht3d.io",),
     ("hht3d.decomposition",),
     ("hht3d.spectral",),
+    ("hht3d.hht_options",),
     ("hht3d.transform",),
     ("hht3d.results", "hht3d.apps", "hht3d.viz"),
     ("hht3d.output_formats",),
@@ -38,6 +39,7 @@ LAYERS = [
 #: Upward imports inside a function: (importing module, imported module).
 DELEGATES = {
     ("hht3d.transform", "hht3d.viz.viewer"),  # HHTResult.to_html
+    ("hht3d.transform", "hht3d.viz.notebook"),  # HHTResult.show
     ("hht3d.transform", "hht3d.output_formats"),
 }  # HHTResult.save
 MAX_LINES = 400

@@ -1,4 +1,5 @@
-"""Every code block of the README runs as written, or names the test that runs its equivalent.
+"""Every code block of the README and of the documentation's Markdown pages runs as written, or names the
+test that runs its equivalent.
 
 The Python, YAML and command-line blocks run in a scratch folder holding what they name:
 ``model.ply`` (the shipped spot), ``scans/`` (spot and the shipped sphere) and ``out/``.  Blocks
@@ -25,19 +26,24 @@ from helpers.models import shipped_model_path
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
+#: The pages whose blocks are run: the README and the documentation's Markdown (not the built site).
+PAGES = [README, *sorted(p for p in (ROOT / "docs").rglob("*.md") if "_build" not in p.parts)]
 TIMEOUT = 600
 
 
-def blocks() -> dict[tuple[str, int], tuple[str, str]]:
-    """``(section, k) -> (language, code)`` for the k-th fenced block of each ``##`` section."""
-    found, section, counts = {}, "", {}
-    for match in re.finditer(r"^## ([^\n]+)$|^```(\w*)\n(.*?)^```$", README.read_text(), re.M | re.S):
-        if match.group(1):
-            section = match.group(1).strip()
-            continue
-        k = counts.get(section, 0)
-        counts[section] = k + 1
-        found[(section, k)] = (match.group(2), match.group(3))
+def blocks() -> dict[tuple[str, str, int], tuple[str, str]]:
+    """``(page, section, k) -> (language, code)`` for the k-th fenced block under each ``#`` or ``##``
+    heading of each page (``page`` relative to the repository)."""
+    found, counts = {}, {}
+    for path in PAGES:
+        page, section = str(path.relative_to(ROOT)), ""
+        for match in re.finditer(r"^##? ([^\n]+)$|^```(\w*)\n(.*?)^```$", path.read_text(), re.M | re.S):
+            if match.group(1):
+                section = match.group(1).strip()
+                continue
+            k = counts.get((page, section), 0)
+            counts[(page, section)] = k + 1
+            found[(page, section, k)] = (match.group(2), match.group(3))
     return found
 
 
@@ -51,36 +57,40 @@ class Mirror:
 
 RUN = "run here"
 MIRRORED = {
-    ("Two commands", 0): Mirror(
+    ("docs/getting_started.md", "Install", 0): Mirror(
+        ".ci/wheel::-m pip install --quiet --no-deps", "pip installs the built wheel in a fresh environment"
+    ),
+    ("README.md", "Two commands", 0): Mirror(
         '.ci/wheel::bin/hht3d" demo', "command 1 runs in CI from the built wheel; command 2 is .ci/run"
     ),
-    ("Running on a cluster", 0): Mirror(
+    ("docs/guide/clusters.md", "Running on a cluster", 0): Mirror(
         "tests/io/test_storage.py::remote_run",
         "SLURM and the lab bucket: run_dataset with address=, s3:// and "
         "storage_options on a two-worker scheduler and moto",
     ),
-    ("Running on a cluster", 2): Mirror(
+    ("docs/guide/clusters.md", "Running on a cluster", 2): Mirror(
         "tests/io/test_storage.py::test_a_yaml_pipeline_from_s3_to_s3_equals_the_local_run",
         "kubectl: hht3d run --address with s3:// inputs and outputs",
     ),
-    ("Running on a cluster", 3): Mirror(
+    ("docs/guide/clusters.md", "Running on a cluster", 3): Mirror(
         "tests/io/test_storage.py::PIPELINE", "a lab's scheduler and S3 endpoint: the same pipeline shape on moto"
     ),
-    ("Development", 0): Mirror(
+    ("README.md", "Development", 0): Mirror(
         ".ci/run::python3 -m pytest -q",
         "the tests are CI's command; the benchmark "
         "commands are listed in benchmarks/README.md and not run by the tests",
     ),
 }
 RUN_HERE = {
-    ("Python API", 0),
-    ("Looking at a result interactively", 0),
-    ("Task graphs with Dask", 0),
-    ("YAML pipelines", 0),
-    ("YAML pipelines", 1),
-    ("YAML pipelines", 2),
-    ("Command line", 0),
-    ("Running on a cluster", 1),
+    ("docs/getting_started.md", "A first decomposition", 0),
+    ("README.md", "Python API", 0),
+    ("docs/guide/viewer.md", "Looking at a result interactively", 0),
+    ("docs/guide/graphs.md", "Task graphs with Dask", 0),
+    ("docs/guide/pipelines.md", "YAML pipelines", 0),
+    ("docs/guide/pipelines.md", "YAML pipelines", 1),
+    ("docs/guide/pipelines.md", "YAML pipelines", 2),
+    ("docs/guide/cli.md", "Command line", 0),
+    ("docs/guide/clusters.md", "Running on a cluster", 1),
 }
 
 
@@ -88,7 +98,7 @@ def test_every_block_is_run_or_mirrored():
     assert set(blocks()) == RUN_HERE | set(MIRRORED)
 
 
-@pytest.mark.parametrize("key", sorted(MIRRORED), ids=lambda k: f"{k[0]}#{k[1]}")
+@pytest.mark.parametrize("key", sorted(MIRRORED), ids=lambda k: f"{k[0]}:{k[1]}#{k[2]}")
 def test_a_mirror_names_a_test_that_exists(key):
     path, name = MIRRORED[key].test.split("::")
     assert name in (ROOT / path).read_text(), MIRRORED[key]
@@ -119,15 +129,25 @@ def _python(code: str, folder: Path) -> subprocess.CompletedProcess:
 @pytest.mark.slow
 def test_the_python_api_and_viewer_blocks_run(scratch):
     """The viewer block continues the API block (``result``, ``surface``)."""
-    code = blocks()[("Python API", 0)][1] + blocks()[("Looking at a result interactively", 0)][1]
+    code = (
+        blocks()[("README.md", "Python API", 0)][1]
+        + blocks()[("docs/guide/viewer.md", "Looking at a result interactively", 0)][1]
+    )
     _python(code, scratch)
     for name in ("model_hht.ply", "model_hht.npz", "model_hht.html", "pair.html", "f.html"):
         assert (scratch / "out" / name).stat().st_size > 0, name
 
 
+def test_the_first_decomposition_runs(scratch):
+    done = _python(blocks()[("docs/getting_started.md", "A first decomposition", 0)][1], scratch)
+    assert done.stdout.startswith("HHTResult('spot': 3 IMFs of 2,930 vertices, shares "), done.stdout
+    for name in ("spot_hht.ply", "spot_hht.html"):
+        assert (scratch / name).stat().st_size > 0, name
+
+
 @pytest.mark.slow
 def test_the_task_graph_block_runs(scratch):
-    _python(blocks()[("Task graphs with Dask", 0)][1], scratch)
+    _python(blocks()[("docs/guide/graphs.md", "Task graphs with Dask", 0)][1], scratch)
     assert (scratch / "out" / "model_hht.ply").stat().st_size > 0
     rows = json.loads((scratch / "out" / "summary.json").read_text())
     assert sorted((Path(r["source"]).name, r["status"]) for r in rows) == [
@@ -151,7 +171,7 @@ def _hht3d(*args, folder: Path) -> subprocess.CompletedProcess:
 
 @pytest.mark.slow
 def test_the_yaml_pipeline_block_runs(scratch):
-    (scratch / "p.yaml").write_text(blocks()[("YAML pipelines", 0)][1])
+    (scratch / "p.yaml").write_text(blocks()[("docs/guide/pipelines.md", "YAML pipelines", 0)][1])
     _hht3d("run", "p.yaml", folder=scratch)
     written = sorted(p.name for p in (scratch / "out" / "run1").iterdir() if not p.name.startswith("."))
     for stem in ("spot", "sphere_oct4098"):
@@ -165,10 +185,10 @@ def test_the_yaml_pipeline_block_runs(scratch):
 
 
 def test_the_editor_lines_name_the_shipped_schema():
-    comment = blocks()[("YAML pipelines", 1)][1]
+    comment = blocks()[("docs/guide/pipelines.md", "YAML pipelines", 1)][1]
     relative = comment.split("$schema=")[1].strip()
     assert (ROOT / "pipelines" / relative).resolve() == (ROOT / "hht3d" / "data" / "pipeline.schema.json")
-    settings = json.loads(blocks()[("YAML pipelines", 2)][1])
+    settings = json.loads(blocks()[("docs/guide/pipelines.md", "YAML pipelines", 2)][1])
     assert all((ROOT / path).is_file() for path in settings["yaml.schemas"])
 
 
@@ -176,7 +196,7 @@ def test_the_editor_lines_name_the_shipped_schema():
 def test_the_command_lines_run(scratch):
     """Each line of the Command line block, in the scratch folder; lines that need another
     scheduler or a pipeline in use elsewhere are the shipped examples' and the storage tests'."""
-    (scratch / "p.yaml").write_text(blocks()[("YAML pipelines", 0)][1])
+    (scratch / "p.yaml").write_text(blocks()[("docs/guide/pipelines.md", "YAML pipelines", 0)][1])
     elsewhere = {
         "hht3d run pipelines/filtering.yaml": "tests/test_shipped_examples.py",
         "hht3d demo --out out/demo": "tests/cli/test_cli.py",
@@ -185,7 +205,7 @@ def test_the_command_lines_run(scratch):
         ),
         "hht3d run p.yaml --scheduler distributed --address tcp://host:8786": "tests/io/test_storage.py",
     }
-    lines = [line.split("#")[0].strip() for line in blocks()[("Command line", 0)][1].splitlines()]
+    lines = [line.split("#")[0].strip() for line in blocks()[("docs/guide/cli.md", "Command line", 0)][1].splitlines()]
     import hht3d
     from hht3d.geometry.signals import mean_curvature
 
@@ -202,7 +222,7 @@ def test_the_command_lines_run(scratch):
 
 
 def test_the_helm_values_name_extras_hht3d_has():
-    values = yaml.safe_load(blocks()[("Running on a cluster", 1)][1])
+    values = yaml.safe_load(blocks()[("docs/guide/clusters.md", "Running on a cluster", 1)][1])
     package = next(e["value"] for e in values["worker"]["env"] if e["name"] == "EXTRA_PIP_PACKAGES")
     extras = set(re.fullmatch(r"hht3d\[(.+)\]", package).group(1).split(","))
     declared = set(re.findall(r"^(\w+) = \[", (ROOT / "pyproject.toml").read_text(), re.M))

@@ -193,7 +193,7 @@ def write_summary(
     (``storage_options`` for its back-end) ``summary.json`` is updated
     conditionally where the store can (see the module), ``summary.csv``
     written from it, and both recorded in the folder's manifest object.
-    In the CSV, ``outputs`` are joined with ``;`` and ``warnings`` with `` | ``.
+    In the CSV, ``outputs`` are joined with ``;`` and ``warnings`` with ``" | "``.
 
     Raises
     ------

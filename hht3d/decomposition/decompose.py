@@ -42,7 +42,7 @@ from ..geometry.surface import Surface
 from ..geometry.validation import check_signal, check_surface
 from .filtering import Filterer
 from .options import EMDOptions
-from .quality import Quality, decomposition_quality, warn_quality
+from .quality import Quality, decomposition_html, decomposition_quality, decomposition_repr, warn_quality
 from .sifting import Sifter
 
 __all__ = ["EMDResult", "emd", "result_with_quality", "METHOD_CLASSES"]
@@ -91,6 +91,23 @@ class EMDResult:
     def n_imfs(self) -> int:
         """Number of IMFs."""
         return len(self.imfs)
+
+    def __repr__(self) -> str:
+        return decomposition_repr("EMDResult", f"{self.n_imfs} IMFs of {len(self.residue):,} vertices", self.quality)
+
+    def _repr_html_(self) -> str:
+        facts = [("vertices", f"{len(self.residue):,}"), ("IMFs", str(self.n_imfs))]
+        facts += [
+            (key.replace("_", " "), str(self.info[key]))
+            for key in ("stop_reason", "sifts", "backend")
+            if key in self.info
+        ]
+        per_imf = self.info.get("imfs") or [{}] * self.n_imfs
+        columns = {
+            label: [str(imf.get(key, "")) for imf in per_imf]
+            for label, key in (("sifts", "sifts"), ("maxima", "n_maxima"), ("minima", "n_minima"), ("stop", "stop"))
+        }
+        return decomposition_html("EMDResult", facts, self.n_imfs, columns, self.quality)
 
 
 def emd(

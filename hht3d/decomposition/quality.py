@@ -39,7 +39,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -48,6 +48,7 @@ from ..errors import InputError
 from ..geometry.signals import fluctuation
 from ..geometry.surface import Surface
 from ..geometry.validation import check_surface
+from .display import Facts, share_text, summary_html
 
 __all__ = [
     "Quality",
@@ -55,6 +56,9 @@ __all__ = [
     "quality_warnings_muted",
     "warn_quality",
     "decomposition_quality",
+    "quality_facts",
+    "decomposition_html",
+    "decomposition_repr",
     "ENERGY_RATIO_LIMIT",
     "ORTHOGONALITY_LIMIT",
     "LEAKAGE_LIMIT",
@@ -165,6 +169,15 @@ class Quality:
         """These figures with the warnings ``extra`` added (an HHT's :func:`aliasing_warnings`)."""
         return replace(self, warnings=self.warnings + tuple(extra))
 
+    def __repr__(self) -> str:
+        return (
+            f"Quality(energy ratio {self.energy_ratio:.3g}, IO {self.orthogonality_index:.3g}, "
+            f"{'ok' if self.ok else f'{len(self.warnings)} warning(s)'})"
+        )
+
+    def _repr_html_(self) -> str:
+        return decomposition_html("Quality", [], len(self.energy_share) - 1, {}, self)
+
     def as_dict(self) -> dict:
         """Plain numbers and strings, for JSON summaries."""
         return {
@@ -272,3 +285,39 @@ def aliasing_warnings(area_above: np.ndarray | Sequence[float], limit: float) ->
         for k, share in enumerate(area_above)
         if share > ALIASED_AREA_LIMIT
     )
+
+
+def quality_facts(quality: Quality) -> list[tuple[str, str]]:
+    """The quality figures of :class:`~hht3d.decomposition.quality.Quality`, as labelled text."""
+    return [
+        ("energy ratio", f"{quality.energy_ratio:.3g}"),
+        (
+            "index of orthogonality",
+            f"{quality.orthogonality_index:.3g} ({quality.io_leaking:+.2g} leaking, "
+            f"{quality.io_cancelling:+.2g} cancelling)",
+        ),
+        ("signal spike", f"{quality.signal_spike:.3g}"),
+        ("quality", "ok" if quality.ok else f"{len(quality.warnings)} warning(s)"),
+    ]
+
+
+def decomposition_html(
+    title: str, facts: Facts, n_imfs: int, columns: Mapping[str, Sequence[str]], quality: Quality | None
+) -> str:
+    """:func:`summary_html` of a decomposition: the ``facts``, then with ``quality`` its figures, and a
+    table of one row per IMF (its ``columns``, then its energy share), then the residue's share."""
+    header = ["IMF", *columns]
+    rows = [[str(k + 1), *(column[k] for column in columns.values())] for k in range(n_imfs)]
+    if quality is None:
+        return summary_html(title, facts, (header, rows))
+    shares = [f"{x:.1%}" for x in quality.energy_share]
+    rows = [[*r, share] for r, share in zip(rows, shares)] + [["residue", *[""] * len(columns), shares[-1]]]
+    return summary_html(title, [*facts, *quality_facts(quality)], ([*header, "energy share"], rows), quality.warnings)
+
+
+def decomposition_repr(name: str, text: str, quality: Quality | None) -> str:
+    """``name(text, shares 61.2% 30.1% + residue 8.7%, quality ok)``; without ``quality``, ``name(text)``."""
+    if quality is None:
+        return f"{name}({text})"
+    state = "quality ok" if quality.ok else f"{len(quality.warnings)} quality warning(s)"
+    return f"{name}({text}, shares {share_text(quality.energy_share)}, {state})"

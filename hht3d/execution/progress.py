@@ -1,4 +1,4 @@
-"""Progress of a local scheduler: a redrawn bar on a terminal, rate-limited plain lines otherwise.
+"""Progress of a local scheduler: a redrawn bar on a terminal or in a notebook, rate-limited plain lines otherwise.
 
 The plain lines are records of the ``hht3d.progress`` logger (:mod:`hht3d.logs`):
 :func:`hht3d.execution.compute` shows them on stderr unless the application has
@@ -7,6 +7,7 @@ configured logging.
 
 from __future__ import annotations
 
+import importlib.util
 import sys
 import time
 from typing import Any
@@ -15,7 +16,7 @@ from dask.callbacks import Callback
 
 from ..logs import PROGRESS, get_logger
 
-__all__ = ["PROGRESS_INTERVAL", "ProgressLines", "local_progress", "is_terminal"]
+__all__ = ["PROGRESS_INTERVAL", "ProgressLines", "local_progress", "is_terminal", "in_notebook"]
 
 #: Seconds between progress lines when stderr is not a terminal.
 PROGRESS_INTERVAL = 10.0
@@ -29,9 +30,20 @@ def is_terminal(stream: Any) -> bool:
         return False
 
 
+def in_notebook() -> bool:
+    """True inside a Jupyter kernel that can show widgets (IPython's kernel shell, ipywidgets installed).
+
+    IPython is never imported here: outside a notebook it is not loaded, or loaded without a kernel.
+    """
+    ipython = sys.modules.get("IPython")
+    shell = None if ipython is None else ipython.get_ipython()
+    return getattr(shell, "kernel", None) is not None and importlib.util.find_spec("ipywidgets") is not None
+
+
 def local_progress() -> Any:
-    """A redrawn bar on a terminal; rate-limited plain lines otherwise."""
-    if is_terminal(sys.stderr):
+    """A redrawn bar on a terminal or in a notebook (whose output redraws a ``\\r`` line); rate-limited
+    plain lines otherwise."""
+    if is_terminal(sys.stderr) or in_notebook():
         from dask.diagnostics import ProgressBar
 
         return ProgressBar(minimum=1.0, out=sys.stderr)

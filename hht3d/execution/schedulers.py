@@ -34,7 +34,7 @@ from ..io.sealed import registered
 from ..logs import get_logger, quieted, showing
 from ..records import Record, option
 from .cluster import gather_bounded
-from .progress import is_terminal, local_progress
+from .progress import in_notebook, is_terminal, local_progress
 from .workers import check_main_guard, limit_blas_threads, sigint_ignored_by_children
 
 __all__ = ["SCHEDULERS", "MAX_WORKERS", "ExecutionOptions", "compute", "open_client"]
@@ -126,8 +126,9 @@ def compute(
     address : str, optional
         Scheduler address of an existing cluster (implies ``"distributed"``).
     progress : bool
-        Show progress on stderr: a bar, or when stderr is not a terminal plain lines through the
-        ``hht3d.progress`` logger (shown unless the application configured logging).
+        Show progress: in a notebook its widget (distributed) or a redrawn bar, on a terminal a bar on
+        stderr, otherwise plain lines through the ``hht3d.progress`` logger (shown unless the
+        application configured logging).
     client : distributed.Client, optional
         Reuse a client instead of opening one.
     """
@@ -185,7 +186,11 @@ def _compute_distributed(client: Any, graphs: Sequence[Any], progress: bool, whe
 
     share_storage_options(client)  # the tasks carry only their tokens (hht3d.io.sealed)
     futures = client.compute(list(graphs))
-    if progress and is_terminal(sys.stderr):
+    if progress and in_notebook():  # the notebook's widget, shown now, updates itself while the results are gathered
+        from IPython.display import display
+
+        display(show_progress(futures, notebook=True))
+    elif progress and is_terminal(sys.stderr):
         show_progress(futures, notebook=False)
         print(file=sys.stderr)
     return tuple(gather_bounded(client, futures, where))

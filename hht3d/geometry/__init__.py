@@ -22,3 +22,34 @@ from .signals import (
 )
 from .surface import LAPLACIANS, MAX_NEIGHBORS, MIN_VERTICES, Surface, SurfaceOptions
 from .validation import as_imfs, as_signals, check_signal, check_surface
+
+__all__ = [
+    "FLAT",
+    "estimate_point_normals",
+    "principal_axes",
+    "CAP_ANGLE",
+    "CLUSTER_AREA_FRACTION",
+    "MIN_AREA_FRACTION",
+    "NEEDLE_ANGLE",
+    "ROUND_OFF_ULPS",
+    "SIGNALS",
+    "centroid_distance",
+    "check_signal_path",
+    "coordinate",
+    "gaussian_curvature",
+    "load_signal",
+    "luminance",
+    "mean_curvature",
+    "signal",
+    "stored",
+    "unreliable_vertices",
+    "LAPLACIANS",
+    "MAX_NEIGHBORS",
+    "MIN_VERTICES",
+    "Surface",
+    "SurfaceOptions",
+    "as_imfs",
+    "as_signals",
+    "check_signal",
+    "check_surface",
+]

@@ -256,7 +256,7 @@ class Surface:
 
     @property
     def component_labels(self) -> np.ndarray:
-        """Connected component of each vertex, ``0 .. n_components - 1``."""
+        """Connected component of each vertex, 0 to ``n_components - 1``."""
         return self._components()[1]
 
     @property

@@ -35,6 +35,31 @@ from .estimate import (
 from .factor import Factor
 from .symbolic import SymbolicFactorization, factorize
 
+__all__ = [
+    "BACKEND_VARIABLE",
+    "SOLVER_BACKENDS",
+    "Backend",
+    "BackendStatus",
+    "available_backends",
+    "backend_report",
+    "check_backend",
+    "default_backend",
+    "register_backend",
+    "SLOW_FALLBACK_VERTICES",
+    "Estimate",
+    "SlowSolverWarning",
+    "available_memory",
+    "backend_estimates",
+    "check_memory",
+    "estimate_hht",
+    "estimate_lines",
+    "slow_fallback",
+    "warn_slow_fallback",
+    "Factor",
+    "SymbolicFactorization",
+    "factorize",
+]
+
 
 def __getattr__(name: str) -> Any:
     if name == "BACKENDS":  # deprecated in 0.2.0

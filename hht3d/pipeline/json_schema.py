@@ -2,7 +2,7 @@
 
 Editors validate and complete pipeline YAML with it (VS Code's YAML
 extension: a ``# yaml-language-server: $schema=...`` first line, or the
-``yaml.schemas`` setting; see the README).  The package ships it as
+``yaml.schemas`` setting; see docs/guide/pipelines.md).  The package ships it as
 ``hht3d/data/pipeline.schema.json`` (:func:`hht3d.io.read.data_path`), written by
 ``hht3d schema --output hht3d/data/pipeline.schema.json``; a test fails when
 the shipped file differs from :func:`pipeline_schema`.

@@ -6,9 +6,20 @@ Data flow: :mod:`.render` (colour scales, cameras, renderers) → :mod:`.figures
 """
 
 from .figures import hht_figure, spectrum_figure, write_figures
+from .notebook import INLINE_MAX_BYTES, INLINE_VERTEX_BUDGET, InlineView, inline_view
 from .panels import field_figure, render_png, save_figure
 from .shown import VERTEX_BUDGET, color_limits, shown_copy
-from .viewer import PAGE_BUDGETS, SHAPE, file_html, read_fields, result_html, surfaces_html, write_page
+from .viewer import (
+    PAGE_BUDGETS,
+    SHAPE,
+    file_html,
+    page_html,
+    read_fields,
+    result_html,
+    result_page,
+    surfaces_html,
+    write_page,
+)
 
 __all__ = [
     "hht_figure",
@@ -23,8 +34,14 @@ __all__ = [
     "PAGE_BUDGETS",
     "SHAPE",
     "file_html",
+    "page_html",
     "read_fields",
     "result_html",
+    "result_page",
     "surfaces_html",
     "write_page",
+    "InlineView",
+    "inline_view",
+    "INLINE_VERTEX_BUDGET",
+    "INLINE_MAX_BYTES",
 ]

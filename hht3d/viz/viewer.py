@@ -52,20 +52,29 @@ from typing import Any
 
 import numpy as np
 
-from ..decomposition.quality import Quality, decomposition_quality
+from ..decomposition.quality import Quality
 from ..errors import InputError
 from ..geometry.surface import Surface
 from ..io.atomic import atomic_path
-from ..io.read import load as load_surface
-from ..io.read import read_npz
 from ..spectral.spectrum import HilbertSpectrum
 from ..transform import HHTResult
 from .page import viewer_page
 from .page_data import colorscale, field_title, figure_json, order, quality_data, size_text, spectrum_data, typed
 from .render import PERCENTILES, SEQUENTIAL_CMAP, SYMMETRIC_CMAP, camera
+from .saved import read_fields, saved_decomposition
 from .shown import VERTEX_BUDGET, Shown, color_limits, shown_copy
 
-__all__ = ["PAGE_BUDGETS", "SHAPE", "write_page", "result_html", "surfaces_html", "read_fields", "file_html"]
+__all__ = [
+    "PAGE_BUDGETS",
+    "SHAPE",
+    "page_html",
+    "write_page",
+    "result_html",
+    "result_page",
+    "surfaces_html",
+    "read_fields",
+    "file_html",
+]
 
 #: What a page may cost, by vertices of the surface: (MB on disk, seconds until drawn in
 #: headless Chromium with software WebGL on this project's 2-core machine).
@@ -74,15 +83,22 @@ PAGE_BUDGETS = {100_000: (30.0, 15.0), 1_000_000: (40.0, 20.0)}
 SHAPE = "shape"
 #: Colour of the plain shaded model.
 SHAPE_COLOR = "#c9c7c0"
-#: Stacked arrays of a saved result and the per-IMF field names they become.
-_STACKED = {"imfs": "imf", "amplitude": "amplitude", "phase": "phase", "frequency": "frequency"}
 
 
 # -- the page ------------------------------------------------------------------------------------
 
 
-def write_page(
-    path: Path | str,
+def write_page(path: Path | str, surfaces: Sequence[Surface], fields: dict, **options: Any) -> Path:
+    """Write :func:`page_html` (with these ``options``) to the ``.html`` file ``path``, atomically;
+    its errors name the file."""
+    path = Path(path)
+    page = page_html(surfaces, fields, page_name=path.name, **options)
+    with atomic_path(path) as tmp:
+        tmp.write_text(page, encoding="utf-8")
+    return path
+
+
+def page_html(
     surfaces: Sequence[Surface],
     fields: dict,
     *,
@@ -95,13 +111,12 @@ def write_page(
     percentiles: tuple[float, float] = PERCENTILES,
     view: str | Sequence[float] = "front",
     up: str | Sequence[float] = "y",
-) -> Path:
-    """Write the viewer page of one or more surfaces sharing per-vertex fields, atomically.
+    page_name: str = "page",
+) -> str:
+    """The viewer page of one or more surfaces sharing per-vertex fields, as one HTML text.
 
     Parameters
     ----------
-    path : str or Path
-        The ``.html`` file to write.
     surfaces : sequence of Surface
         Drawn side by side with one camera; each must have as many vertices
         as the fields have values.
@@ -124,10 +139,12 @@ def write_page(
         Robust colour limits (:func:`color_limits`).
     view, up
         Initial camera, as for the PNG figures (:func:`hht3d.viz.render.camera`).
+    page_name : str
+        What error messages call the page (:func:`write_page`: the file name).
 
     Returns
     -------
-    Path
+    str
 
     Raises
     ------
@@ -135,22 +152,21 @@ def write_page(
         No surface, a field of the wrong length or without finite values, an
         unknown initial field, or bad percentiles, view or up axis.
     """
-    path = Path(path)
     surfaces = list(surfaces)
     if not surfaces or not all(isinstance(s, Surface) for s in surfaces):
-        raise InputError(f"{path.name}: expected one or more hht3d.Surface objects to draw")
+        raise InputError(f"{page_name}: expected one or more hht3d.Surface objects to draw")
     labels = [s.name for s in surfaces] if labels is None else list(labels)
     arrays = {str(k): np.asarray(v, dtype=np.float64) for k, v in fields.items()}
     for name, values in arrays.items():
         for s in surfaces:
             if values.shape != (s.n_vertices,):
                 raise InputError(
-                    f"{path.name}: field {name!r} has shape {values.shape}; {s.name} has {s.n_vertices} vertices"
+                    f"{page_name}: field {name!r} has shape {values.shape}; {s.name} has {s.n_vertices} vertices"
                 )
     initial = field or ("signal" if "signal" in arrays else next(iter(arrays), SHAPE))
     if initial != SHAPE and initial not in arrays:
         raise InputError(
-            f"{path.name}: no field {initial!r} to show first; available: {', '.join([SHAPE, *order(arrays)])}"
+            f"{page_name}: no field {initial!r} to show first; available: {', '.join([SHAPE, *order(arrays)])}"
         )
     camera(view, up)  # checks view and up before the expensive part
     shown = [shown_copy(s, max_vertices) for s in surfaces]
@@ -172,7 +188,7 @@ def write_page(
         try:
             limits = color_limits(arrays[name], percentiles)
         except InputError as exc:
-            raise InputError(f"{path.name}: field {name!r}: {exc}") from None
+            raise InputError(f"{page_name}: field {name!r}: {exc}") from None
         entries.append(
             {
                 "name": name,
@@ -217,52 +233,42 @@ def write_page(
         "config": {"displaylogo": False, "responsive": True},
     }
     figure = figure_json(shown, labels, view, up)
-    page = viewer_page(title, json.dumps(meta, allow_nan=False)[:-1] + ', "figure": ' + figure + "}")
+    return viewer_page(title, json.dumps(meta, allow_nan=False)[:-1] + ', "figure": ' + figure + "}")
+
+
+# -- entry points ------------------------------------------------------------------------------
+def result_html(result: HHTResult, path: Path | str, **options: Any) -> Path:
+    """Write :func:`result_page` (with these ``options``) to the ``.html`` file ``path``, atomically."""
+    path = Path(path)
+    page = result_page(result, page_name=path.name, **options)
     with atomic_path(path) as tmp:
         tmp.write_text(page, encoding="utf-8")
     return path
 
 
-# -- entry points ------------------------------------------------------------------------------
-def result_html(
-    result: HHTResult,
-    path: Path | str,
-    *,
-    beside: Any = None,
-    field: str | None = None,
-    max_vertices: int = VERTEX_BUDGET,
-    percentiles: tuple[float, float] = PERCENTILES,
-    view: str | Sequence[float] = "front",
-    up: str | Sequence[float] = "y",
-) -> Path:
+def result_page(result: HHTResult, *, beside: Any = None, **options: Any) -> str:
     """The page of an HHT result: every field, the marginal spectrum and the quality figures.
 
     Parameters
     ----------
     result : HHTResult
-    path : str or Path
     beside : Surface, optional
         A surface with the same vertices, e.g. from
         :func:`hht3d.apps.filter_geometry`, drawn beside the result's surface
         with the same field at each vertex.
-    field, max_vertices, percentiles, view, up
-        See :func:`write_page`.
+    **options
+        ``field``, ``max_vertices``, ``percentiles``, ``view``, ``up``: see :func:`page_html`.
     """
     if not all(hasattr(result, name) for name in ("surface", "vertex_attributes", "spectrum", "quality")):
         raise InputError(f"expected an HHTResult (from hht3d.hht), got {type(result).__name__}")
     surfaces = [result.surface] if beside is None else [result.surface, beside]
-    return write_page(
-        path,
+    return page_html(
         surfaces,
         result.vertex_attributes(),
         title=f"{result.surface.name}: HHT" + (", iterative filtering" if result.method == "filtering" else ""),
         spectrum=result.spectrum,
         quality=result.quality,
-        field=field,
-        max_vertices=max_vertices,
-        percentiles=percentiles,
-        view=view,
-        up=up,
+        **options,
     )
 
 
@@ -298,60 +304,6 @@ def surfaces_html(
     )
 
 
-def read_fields(path: Path | str) -> tuple[Surface, dict, np.ndarray | None]:
-    """A surface, its per-vertex fields and stored vertex areas, from a saved file.
-
-    ``.npz`` files as :meth:`HHTResult.save <hht3d.transform.HHTResult.save>`
-    writes them (``vertices``, ``faces``, ``signal``, ``imfs``, ...): every
-    ``(n,)`` array is a field and ``imfs``, ``amplitude``, ``phase`` and
-    ``frequency`` (k, n) become ``imf_K``, ``amplitude_K``, ... Any surface
-    file of :func:`hht3d.io.read.load` (read without cleaning, so vertices keep
-    their order): its numeric vertex properties are the fields.
-
-    Returns
-    -------
-    surface, fields, area
-        ``area`` is the stored ``area`` array of an ``.npz``, else ``None``.
-    """
-    path = Path(path)
-    if path.suffix.lower() != ".npz":
-        surface = load_surface(path, clean=False)
-        return surface, dict(surface.attributes), None
-    arrays = read_npz(path)
-    if "vertices" not in arrays:
-        raise InputError(f"{path}: no 'vertices' array; expected a file written by HHTResult.save")
-    try:
-        surface = Surface(arrays.pop("vertices"), arrays.pop("faces", None), name=path.stem)
-    except InputError as exc:
-        raise InputError(f"{path}: {exc}") from None
-    n = surface.n_vertices
-    area = arrays.pop("area", None)
-    fields = {}
-    for key, values in arrays.items():
-        if values.shape == (n,):
-            fields[key] = values
-        elif key in _STACKED and values.ndim == 2 and values.shape[1] == n:
-            fields.update({f"{_STACKED[key]}_{k + 1}": row for k, row in enumerate(values)})
-    return surface, fields, None if area is None or area.shape != (n,) else area
-
-
-def _decomposition(surface: Surface, fields: dict, area: np.ndarray | None) -> tuple[Any, Any]:
-    """The spectrum and quality of the IMFs among ``fields`` (``None`` for what they lack)."""
-    k = 0
-    while all(f"{kind}_{k + 1}" in fields for kind in ("imf", "amplitude", "frequency")):
-        k += 1
-    if k == 0:
-        return None, None
-    stack = {
-        kind: np.stack([fields[f"{kind}_{i + 1}"] for i in range(k)]) for kind in ("imf", "amplitude", "frequency")
-    }
-    spectrum = HilbertSpectrum(stack["frequency"], stack["amplitude"], surface.mass_diagonal if area is None else area)
-    quality = None
-    if "signal" in fields and "residue" in fields:
-        quality = decomposition_quality(surface, fields["signal"], stack["imf"], fields["residue"])
-    return spectrum, quality
-
-
 def file_html(
     source: Path | str,
     path: Path | str | None = None,
@@ -372,7 +324,7 @@ def file_html(
     path : str or Path, optional
         Default: ``source`` with the suffix ``.html``.
     field, max_vertices, percentiles, view, up
-        See :func:`write_page`.
+        See :func:`page_html`.
 
     Notes
     -----
@@ -382,7 +334,7 @@ def file_html(
     """
     source = Path(source)
     surface, fields, area = read_fields(source)
-    spectrum, quality = _decomposition(surface, fields, area)
+    spectrum, quality = saved_decomposition(surface, fields, area)
     return write_page(
         source.with_suffix(".html") if path is None else path,
         [surface],

@@ -438,7 +438,7 @@ def test_a_conditional_summary_write_keeps_the_rows_of_a_run_that_came_first(sto
     if request.node.callspec.params["store"] == "s3rver":
         pytest.skip(
             "s3rver 3.7 ignores If-Match and If-None-Match: there the last of two runs wins, as on "
-            "stores without conditional writes (README, Safety)"
+            "stores without conditional writes (docs/guide/safety.md)"
         )
 
     _, options, fs = store

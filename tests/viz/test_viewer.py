@@ -248,3 +248,24 @@ def test_names_with_template_markers_and_markup_are_shown_as_text(browser, opene
     page.select("#hht3d-field", PAYLOAD_FIELD)
     assert page.page.evaluate("() => window.pwned") is None
     assert page.errors == [] and page.requests == [page.url]
+
+
+# -- inline in a notebook ------------------------------------------------------------------------
+def test_the_inline_view_draws_in_its_frame_offline(browser, result, tmp_path):
+    """``result.show()`` as a notebook holds it: the iframe's srcdoc page draws, fetching nothing."""
+    host = tmp_path / "notebook.html"
+    host.write_text(f"<!DOCTYPE html><html><body>{result.show(height=500)._repr_html_()}</body></html>")
+    page = browser.new_page(viewport={"width": 1280, "height": 760})
+    errors, requests = [], []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("request", lambda r: requests.append(r.url))
+    page.goto(host.as_uri())
+    (frame,) = [f for f in page.frames if f is not page.main_frame]
+    frame.wait_for_selector("body[data-ready=true]", timeout=90_000)
+    from PIL import Image
+
+    picture = np.asarray(Image.open(io.BytesIO(frame.locator("#hht3d-surface").screenshot())).convert("RGB"), float)
+    share, colours = not_blank(picture)
+    assert share > 0.05 and colours > 30, (share, colours)
+    assert errors == [] and requests == [host.as_uri()]
+    page.close()

@@ -1,0 +1,58 @@
+"""The API reference of the documentation site covers the public API.
+
+Every name of the ``__all__`` of :mod:`hht3d` and of each subpackage is an entry of the
+``autosummary`` of its page in ``docs/api/`` (which the site build turns into a page per name),
+and no entry is a name that is no longer public: a new public function without a place in the
+reference fails here, before the site is built.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+import re
+from pathlib import Path
+
+import pytest
+
+import hht3d
+
+API = Path(__file__).resolve().parents[1] / "docs" / "api"
+PACKAGES = ["hht3d", *(f"hht3d.{m.name}" for m in pkgutil.iter_modules(hht3d.__path__) if m.ispkg)]
+
+
+def reference() -> dict[str, list[str]]:
+    """``package -> entries`` of every ``autosummary`` directive of the API pages, by ``currentmodule``."""
+    found: dict[str, list[str]] = {}
+    for page in sorted(API.glob("*.rst")):
+        module = None
+        lines = page.read_text().splitlines()
+        for i, line in enumerate(lines):
+            if match := re.fullmatch(r"\.\. currentmodule:: (\S+)", line.strip()):
+                module = match.group(1)
+            elif line.strip() == ".. autosummary::":
+                assert module, f"{page.name}: an autosummary before any currentmodule"
+                entries = found.setdefault(module, [])
+                for entry in lines[i + 1 :]:
+                    if entry and not entry.startswith("   "):
+                        break
+                    if entry.strip() and not entry.strip().startswith(":"):
+                        entries.append(entry.strip())
+    return found
+
+
+def test_the_reference_is_read():
+    documented = reference()
+    assert "emd" in documented["hht3d"] and "HHTResult" in documented["hht3d"]
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_every_public_name_is_in_the_api_reference(package):
+    public = importlib.import_module(package).__dict__.get("__all__")
+    assert public, f"{package} has no __all__: list its public names"
+    entries = reference().get(package, [])
+    missing = [name for name in public if name not in entries]
+    assert not missing, f"not in docs/api/ (an autosummary under currentmodule {package}): {missing}"
+    stale = [name for name in entries if name not in public]
+    assert not stale, f"docs/api/ lists names {package}.__all__ does not: {stale}"
+    assert len(entries) == len(set(entries)), f"{package}: an entry listed twice"
