@@ -104,10 +104,11 @@ BACKEND_MODELS = ["nefertiti", "igea"]
 
 def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper") -> dict:
     """The whole HHT of one mesh, stage by stage (runs in a fresh subprocess); ``preset`` names
-    the EMD settings: ``"paper"`` (``PAPER_OPTIONS``) or ``"defaults"``."""
+    the EMD settings: ``"paper"`` (``PAPER_OPTIONS``), ``"defaults"`` or ``"filtering"``
+    (``FILTERING_OPTIONS``)."""
     import hht3d
     from hht3d import linalg
-    from hht3d.decomposition import EMD_DEFAULTS, PAPER_OPTIONS, emd
+    from hht3d.decomposition import EMD_DEFAULTS, FILTERING_OPTIONS, PAPER_OPTIONS, emd
     from hht3d.geometry.signals import mean_curvature
     from hht3d.spectral import quadrature_nodes
     from hht3d.spectral.monogenic_signal import monogenic
@@ -133,7 +134,7 @@ def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper")
             rec.peaks[f"operators:{key}"] = rec.checkpoint()
     with rec.stage("signal"):
         signal = mean_curvature(surface)
-    chosen = {"paper": PAPER_OPTIONS, "defaults": EMD_DEFAULTS}[preset]
+    chosen = {"paper": PAPER_OPTIONS, "defaults": EMD_DEFAULTS, "filtering": FILTERING_OPTIONS}[preset]
     options = chosen.as_dict() | ({} if max_imfs is None else {"max_imfs": max_imfs})
     with rec.stage("emd"):
         decomposition = emd(surface, signal, **options)
@@ -255,10 +256,10 @@ def main(argv=None) -> int:
     parser.add_argument("--with-superlu", action="store_true", help="add SciPy SuperLU to the backends part")
     parser.add_argument(
         "--emd",
-        choices=["paper", "defaults"],
+        choices=["paper", "defaults", "filtering"],
         default="paper",
-        help="EMD settings: the paper's (PAPER_OPTIONS, as Table 1) or hht3d's defaults; "
-        "cases run with the defaults are named '<case> (defaults)'",
+        help="EMD settings: the paper's (PAPER_OPTIONS, as Table 1), hht3d's defaults or iterative filtering "
+        "(FILTERING_OPTIONS); cases run with the others are named '<case> (defaults)' or '<case> (filtering)'",
     )
     parser.add_argument("--max-imfs", type=int, default=None, help="cap on IMFs for the ladder (default: emd's 10)")
     parser.add_argument(
@@ -292,7 +293,7 @@ def main(argv=None) -> int:
     results.setdefault("generated", {})
     results.setdefault("backends", [])
 
-    suffix = "" if args.emd == "paper" else " (defaults)"
+    suffix = "" if args.emd == "paper" else f" ({args.emd})"
     if "ladder" in args.parts:
         for name in args.models or LADDER:
             path = model_or_skip(name)

@@ -85,6 +85,7 @@ RUN_HERE = {
     ("docs/getting_started.md", "A first decomposition", 0),
     ("README.md", "Python API", 0),
     ("docs/guide/viewer.md", "Looking at a result interactively", 0),
+    ("docs/guide/decomposition.md", "Decomposition methods", 0),
     ("docs/guide/graphs.md", "Task graphs with Dask", 0),
     ("docs/guide/pipelines.md", "YAML pipelines", 0),
     ("docs/guide/pipelines.md", "YAML pipelines", 1),
@@ -143,6 +144,13 @@ def test_the_first_decomposition_runs(scratch):
     assert done.stdout.startswith("HHTResult('spot': 3 IMFs of 2,930 vertices, shares "), done.stdout
     for name in ("spot_hht.ply", "spot_hht.html"):
         assert (scratch / name).stat().st_size > 0, name
+
+
+def test_the_decomposition_methods_block_runs(scratch):
+    """The filtering example prints its IMF count, an energy ratio at most 1 and a non-negative IO."""
+    done = _python(blocks()[("docs/guide/decomposition.md", "Decomposition methods", 0)][1], scratch)
+    count, ratio, io = done.stdout.split()
+    assert int(count) >= 2 and float(ratio) <= 1 and float(io) >= 0, done.stdout
 
 
 @pytest.mark.slow

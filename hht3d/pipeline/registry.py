@@ -289,7 +289,7 @@ OPERATIONS: dict[str, Operation] = {
         ),
         Operation(
             "emd",
-            "empirical mode decomposition with thin-plate envelopes (Sec. 4.1)",
+            "empirical mode decomposition: envelope sifting (Sec. 4.1) or iterative filtering (method)",
             (_SURFACE, _SIGNAL_IN),
             "emd",
             EMD,
