@@ -48,8 +48,11 @@ def test_the_reference_is_read():
 
 @pytest.mark.parametrize("package", PACKAGES)
 def test_every_public_name_is_in_the_api_reference(package):
-    public = importlib.import_module(package).__dict__.get("__all__")
+    module = importlib.import_module(package)
+    public = module.__dict__.get("__all__")
     assert public, f"{package} has no __all__: list its public names"
+    absent = [name for name in public if not hasattr(module, name)]
+    assert not absent, f"{package}.__all__ names what the package does not define (import it): {absent}"
     entries = reference().get(package, [])
     missing = [name for name in public if name not in entries]
     assert not missing, f"not in docs/api/ (an autosummary under currentmodule {package}): {missing}"
