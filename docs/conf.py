@@ -12,7 +12,9 @@ import matplotlib
 import hht3d
 
 matplotlib.use("Agg")
-sys.path.insert(0, str(Path(__file__).parent / "_ext"))  # gallery_figures: the scraper of hht3d's figures
+sys.path.insert(
+    0, str(Path(__file__).parent / "_ext")
+)  # gallery_figures (the scraper of hht3d's figures), benchmark_pages
 
 
 project = "hht3d"
@@ -27,6 +29,7 @@ extensions = [
     "numpydoc",
     "myst_parser",
     "sphinx_gallery.gen_gallery",
+    "benchmark_pages",  # docs/benchmarks/*.md from benchmarks/results/*.json
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 exclude_patterns = ["_build", "_ext", "examples", "auto_examples/*.ipynb", "auto_examples/*.py", "auto_examples/*.zip"]

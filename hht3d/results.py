@@ -24,9 +24,14 @@ __all__ = ["load_result", "RESULT_ARRAYS"]
 def load_result(path: Path | str, *, storage_options: dict | None = None) -> HHTResult:
     """The :class:`~hht3d.transform.HHTResult` saved as ``path`` (a ``.npz`` of ``HHTResult.save``).
 
-    ``path`` may be an fsspec URL (``s3://bucket/out/x_hht.npz``), read with
-    ``storage_options`` (:mod:`hht3d.io.storage`).  ``info`` holds
-    ``{"source": path}``: the diagnostics of the run are not saved.
+    ``info`` holds ``{"source": path}``: the diagnostics of the run are not saved.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.npz`` file, or an fsspec URL of one (``s3://bucket/out/x_hht.npz``).
+    storage_options : dict, optional
+        Options of the URL's fsspec back-end (:mod:`hht3d.io.storage`).
 
     Raises
     ------

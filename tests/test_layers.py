@@ -40,6 +40,7 @@ LAYERS = [
 DELEGATES = {
     ("hht3d.transform", "hht3d.viz.viewer"),  # HHTResult.to_html
     ("hht3d.transform", "hht3d.viz.notebook"),  # HHTResult.show
+    ("hht3d.geometry.surface", "hht3d.viz.notebook"),  # Surface._repr_html_ and Surface.show
     ("hht3d.transform", "hht3d.output_formats"),
 }  # HHTResult.save
 MAX_LINES = 400

@@ -26,8 +26,10 @@ from helpers.models import shipped_model_path
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
-#: The pages whose blocks are run: the README and the documentation's Markdown (not the built site).
-PAGES = [README, *sorted(p for p in (ROOT / "docs").rglob("*.md") if "_build" not in p.parts)]
+#: The pages whose blocks are run: the README and the documentation's Markdown (not the built site, nor
+#: the benchmark pages the build writes into docs/benchmarks/ from benchmarks/results/).
+GENERATED = {"_build", "benchmarks"}
+PAGES = [README, *sorted(p for p in (ROOT / "docs").rglob("*.md") if not GENERATED & set(p.relative_to(ROOT).parts))]
 TIMEOUT = 600
 
 

@@ -39,8 +39,8 @@ def value_range(values: np.ndarray) -> str:
     return f"{low:.3g} – {high:.3g}"
 
 
-def summary_html(title: str, facts: Facts, table: Table | None = None, warnings: Sequence[str] = ()) -> str:
-    """One ``<div>``: a bold ``title``, the ``facts``, an optional ``table`` and the ``warnings``, all escaped.
+def summary_html(title: str, facts: Facts, tables: Sequence[Table] = (), warnings: Sequence[str] = ()) -> str:
+    """One ``<div>``: a bold ``title``, the ``facts``, the ``tables`` and the ``warnings``, all escaped.
 
     >>> summary_html("Quality", [("energy ratio", "1.02")], warnings=["a < b"])
     '<div ...<b>Quality</b>...<td ...>energy ratio</td><td ...>1.02</td>...<li>a &lt; b</li>...</div>'
@@ -51,8 +51,7 @@ def summary_html(title: str, facts: Facts, table: Table | None = None, warnings:
 
     parts = [f'<div style="font-family:sans-serif;font-size:13px"><b>{html.escape(title)}</b>']
     parts.append('<table style="border-collapse:collapse">' + "".join(row(f) for f in facts) + "</table>")
-    if table is not None:
-        header, rows = table
+    for header, rows in tables:
         parts.append(
             '<table style="border-collapse:collapse;margin-top:6px">'
             + row(header, "th")

@@ -309,10 +309,11 @@ def decomposition_html(
     header = ["IMF", *columns]
     rows = [[str(k + 1), *(column[k] for column in columns.values())] for k in range(n_imfs)]
     if quality is None:
-        return summary_html(title, facts, (header, rows))
+        return summary_html(title, facts, [(header, rows)])
     shares = [f"{x:.1%}" for x in quality.energy_share]
     rows = [[*r, share] for r, share in zip(rows, shares)] + [["residue", *[""] * len(columns), shares[-1]]]
-    return summary_html(title, [*facts, *quality_facts(quality)], ([*header, "energy share"], rows), quality.warnings)
+    tables = [([*header, "energy share"], rows)]
+    return summary_html(title, [*facts, *quality_facts(quality)], tables, quality.warnings)
 
 
 def decomposition_repr(name: str, text: str, quality: Quality | None) -> str:

@@ -159,6 +159,19 @@ class Surface:
         kind = f"mesh, {len(self._triangles)} faces" if self.is_mesh else "point cloud"
         return f"Surface({self.name!r}: {self.n_vertices} vertices, {kind})"
 
+    def _repr_html_(self) -> str:
+        """The summary table a notebook shows (:func:`hht3d.viz.notebook.surface_html`)."""
+        from ..viz.notebook import surface_html
+
+        return surface_html(self)
+
+    def show(self, field: str | np.ndarray | None = None, **options: Any) -> Any:
+        """The viewer inline in a notebook, showing ``field`` (an attribute's name or per-vertex values)
+        first (:func:`hht3d.viz.notebook.surface_view`: ``height``, ``max_vertices``, ...)."""
+        from ..viz.notebook import surface_view
+
+        return surface_view(self, field, **options)
+
     # -- basic properties -------------------------------------------------------------
     @property
     def is_mesh(self) -> bool:

@@ -10,13 +10,24 @@ from scipy.sparse.csgraph import connected_components
 
 from .surface import Surface
 
-__all__ = ["edge_face_counts", "describe"]
+__all__ = ["edge_face_counts", "boundary_loops", "describe"]
 
 
 def edge_face_counts(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unique undirected edges ``(e, 2)`` and how many faces use each."""
     e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
     return np.unique(e, axis=0, return_counts=True)
+
+
+def boundary_loops(n: int, edges: np.ndarray, counts: np.ndarray) -> int:
+    """Connected chains of boundary edges (edges of one face) among the ``edges`` of :func:`edge_face_counts`
+    of a mesh of ``n`` vertices: 0 for a closed mesh, 1 for a disc, 2 for an open cylinder."""
+    boundary = edges[counts == 1]
+    if not len(boundary):
+        return 0
+    graph = sp.coo_matrix((np.ones(len(boundary)), (boundary[:, 0], boundary[:, 1])), shape=(n, n))
+    labels = connected_components(graph, directed=False)[1]
+    return len(np.unique(labels[np.unique(boundary)]))
 
 
 def _non_manifold_vertices(surface: Surface) -> int:
@@ -46,23 +57,17 @@ def describe(surface: Surface) -> dict:
     if not surface.is_mesh:
         return info
     edges, counts = edge_face_counts(cast(np.ndarray, surface.faces))
-    boundary = edges[counts == 1]
     n = surface.n_vertices
-    loops = 0
-    if len(boundary):
-        graph = sp.coo_matrix((np.ones(len(boundary)), (boundary[:, 0], boundary[:, 1])), shape=(n, n))
-        labels = connected_components(graph, directed=False)[1]
-        loops = len(np.unique(labels[np.unique(boundary)]))
     info.update(
         {
             "faces": len(cast(np.ndarray, surface.faces)),
             "edges": len(edges),
             "euler_characteristic": n - len(edges) + len(cast(np.ndarray, surface.faces)),
-            "boundary_loops": loops,
+            "boundary_loops": boundary_loops(n, edges, counts),
             "boundary_vertices": int(surface.boundary_vertices.sum()),
             "non_manifold_edges": int(np.sum(counts > 2)),
             "non_manifold_vertices": _non_manifold_vertices(surface),
-            "closed": bool(len(boundary) == 0),
+            "closed": bool(np.all(counts != 1)),
             "surface_area": float(surface.face_areas.sum()),
         }
     )

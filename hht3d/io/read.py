@@ -49,8 +49,11 @@ __all__ = [
 def data_path(name: str) -> Path:
     """Path of a file shipped in the package's ``data`` folder.
 
-    ``spot.ply`` (Keenan Crane's cow, 2,930 vertices, CC0), ``sphere_oct4098.ply``
-    (the paper's octahedral sphere) and ``demo.yaml`` (the demo pipeline).
+    Parameters
+    ----------
+    name : str
+        ``spot.ply`` (Keenan Crane's cow, 2,930 vertices, CC0), ``sphere_oct4098.ply``
+        (the paper's octahedral sphere) or ``demo.yaml`` (the demo pipeline).
 
     Examples
     --------

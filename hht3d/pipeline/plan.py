@@ -11,9 +11,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..dataset.summary import summary_paths
+from ..decomposition.display import summary_html
 from ..execution import ExecutionOptions
 from ..io.storage import join, parent_name, stem
 from ..output_formats import Format
+from ..redaction import redact
 from .params import yaml_text
 from .registry import Operation
 
@@ -128,6 +130,44 @@ class Pipeline:
         ref = step.refs[slot]
         return step.id if ref == FILE else self.surface_of(ref)
 
+    def __repr__(self) -> str:
+        return (
+            f"Pipeline({self.name!r}: {_count(len(self.inputs), 'input')}, {_count(len(self.steps), 'step')}, "
+            f"{_count(len(self.outputs), 'output')} per input, folder {redact(str(self.folder))!r})"
+        )
+
+    def _repr_html_(self) -> str:
+        """The plan as a notebook shows it: the inputs, each step with the parameters the pipeline
+        set, and each output with the file it makes from the first input."""
+        ex = self.execution
+        facts = [
+            ("source", self.source),
+            ("execution", f"scheduler {ex.scheduler}, workers {ex.workers or 'one per core'}, seed {ex.seed}"),
+            ("output folder", redact(str(self.folder)) + (" (with summary.json/.csv)" if self.summary else "")),
+        ]
+        inputs = (["input"], [[redact(str(p))] for p in self.inputs])
+        steps = (
+            ["step", "operation", "uses", "parameters set", "result"],
+            [
+                [
+                    s.id,
+                    s.op.name,
+                    ", ".join(f"{slot}={'file' if ref == FILE else ref}" for slot, ref in s.refs.items()),
+                    ", ".join(f"{k}={yaml_text(s.params[k])}" for k in s.given) or "defaults",
+                    s.kind,
+                ]
+                for s in self.steps
+            ],
+        )
+        outputs = (
+            ["output of", "path", "format", "e.g."],
+            [
+                [o.step, o.path, o.format.name, redact(str(path))]
+                for o, path in zip(self.outputs, self.output_paths(self.inputs[0]))
+            ],
+        )
+        return summary_html(f"Pipeline: {self.name}", facts, [inputs, steps, outputs])
+
     def describe(self) -> str:
         """The planned graph as text (``hht3d validate``)."""
         ex = self.execution
@@ -156,3 +196,7 @@ class Pipeline:
             options = "".join(f", {k}={yaml_text(o.options[k])}" for k in o.given)
             lines.append(f"  {o.step} -> {o.path} ({o.format.name}{options}), e.g. {path}")
         return "\n".join(lines)
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}{'' if n == 1 else 's'}"

@@ -6,7 +6,7 @@ Data flow: :mod:`.render` (colour scales, cameras, renderers) → :mod:`.figures
 """
 
 from .figures import hht_figure, spectrum_figure, write_figures
-from .notebook import INLINE_MAX_BYTES, INLINE_VERTEX_BUDGET, InlineView, inline_view
+from .notebook import INLINE_MAX_BYTES, INLINE_VERTEX_BUDGET, InlineView, inline_view, surface_html, surface_view
 from .panels import field_figure, render_png, save_figure
 from .shown import VERTEX_BUDGET, color_limits, shown_copy
 from .viewer import (
@@ -42,6 +42,8 @@ __all__ = [
     "write_page",
     "InlineView",
     "inline_view",
+    "surface_view",
+    "surface_html",
     "INLINE_VERTEX_BUDGET",
     "INLINE_MAX_BYTES",
 ]

@@ -14,8 +14,12 @@ from hht3d.viz.viewer import write_page
 
 
 def page_data(path) -> dict:
-    """The JSON the page's script reads."""
-    text = path.read_text(encoding="utf-8")
+    """The JSON the script of the page in the file ``path`` reads."""
+    return page_json(path.read_text(encoding="utf-8"))
+
+
+def page_json(text: str) -> dict:
+    """The JSON the script of the page ``text`` reads."""
     match = re.search(r'<script type="application/json" id="hht3d-data">(.*?)</script>', text, re.S)
     return json.loads(match.group(1))
 
