@@ -29,6 +29,7 @@ RENDERERS = {
     "riesz": ("bench_riesz", lambda d: (d["fig2"], d["ladder"], d["meta"])),
     "frequency": ("bench_frequency", lambda d: (d,)),
     "quality": ("bench_quality", lambda d: (d,)),
+    "methods": ("bench_methods", lambda d: (d,)),
     "apps": ("bench_apps", lambda d: (d["models"], d["meta"])),
     "graph": ("bench_graph", lambda d: (d,)),
     "storage": ("bench_storage", lambda d: (d,)),
