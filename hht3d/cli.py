@@ -108,47 +108,47 @@ def _not_done(plan: Pipeline, folder: OutputFolder) -> str:
 def _execute(plan: Pipeline, args: argparse.Namespace) -> int:
     from .dataset.summary import summary_paths, write_summary
     from .execution import ClusterLost
-    from .pipeline import failures, run_pipeline
     from .pipeline.resources import check_resources, resource_lines
-    from .pipeline.runner import output_folder
+    from .pipeline.runner import failures, output_folder, run_pipeline
     from .stopping import Stopped, clean_stop
 
     folder = output_folder(plan)
     check_resources(plan)
     for line in resource_lines(plan):
         _LOG.info(line)
-    try:
-        rows = run_pipeline(
-            plan,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            address=args.address,
-            progress=False if args.quiet else None,
-            resume=args.resume,
-            overwrite=args.overwrite,
-            summary=False,
-            run=folder.run,
-        )
-        for row in rows:
-            print(redact("\n".join(_row_lines(row))), flush=True)
-        slow = [row for row in rows if row.solver_advice]
-        if slow:  # once per run, for its largest input
-            _LOG.warning(max(slow, key=lambda row: cast(int, row.vertices)).solver_advice)  # set with the advice
-        if plan.summary:
-            write_summary(rows, plan.folder, folder.run, plan.storage_options)
-            print(redact(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}"))
-    except Stopped as stop:
-        clean_stop(folder.part_folders(plan.written_paths()))
-        print(
-            f"hht3d: stopped by {stop}: {_not_done(plan, folder)}; temporary files removed; run again with "
-            "--resume to finish",
-            file=sys.stderr,
-            flush=True,
-        )
-        sys.stdout.flush()
-        os._exit(stop.exit_code)  # worker threads of the stopped run are not waited for
-    except ClusterLost as exc:
-        raise ClusterLost(f"{exc}; {_not_done(plan, folder)}; run again with --resume to finish") from None
+    with folder.lock():  # a URL folder's, for the whole run (a stop releases it in clean_stop)
+        try:
+            rows = run_pipeline(
+                plan,
+                scheduler=args.scheduler,
+                workers=args.workers,
+                address=args.address,
+                progress=False if args.quiet else None,
+                resume=args.resume,
+                overwrite=args.overwrite,
+                summary=False,
+                run=folder.run,
+            )
+            for row in rows:
+                print(redact("\n".join(_row_lines(row))), flush=True)
+            slow = [row for row in rows if row.solver_advice]
+            if slow:  # once per run, for its largest input
+                _LOG.warning(max(slow, key=lambda row: cast(int, row.vertices)).solver_advice)  # set with the advice
+            if plan.summary:
+                write_summary(rows, plan.folder, folder.run, plan.storage_options)
+                print(redact(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}"))
+        except Stopped as stop:
+            clean_stop(folder.part_folders(plan.written_paths()))
+            print(
+                f"hht3d: stopped by {stop}: {_not_done(plan, folder)}; temporary files removed; run again with "
+                "--resume to finish",
+                file=sys.stderr,
+                flush=True,
+            )
+            sys.stdout.flush()
+            os._exit(stop.exit_code)  # worker threads of the stopped run are not waited for
+        except ClusterLost as exc:
+            raise ClusterLost(f"{exc}; {_not_done(plan, folder)}; run again with --resume to finish") from None
     failed = failures(rows)
     if failed:
         raise PipelineError(f"{len(failed)} of {len(rows)} inputs failed; first: {failed[0]}")

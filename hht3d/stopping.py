@@ -4,8 +4,9 @@
 :class:`Stopped` in the main thread (later ones are ignored while the run
 stops).  :func:`clean_stop` then refuses new temporary files
 (:func:`hht3d.io.atomic.stop_writes`), ends the worker processes this process
-started (a process pool, a local Dask cluster), and removes the temporary
-files of this process and of ended ones in the output folders.  Outputs are
+started (a process pool, a local Dask cluster), releases the locks of URL
+output folders, and removes the temporary files of this process and of
+ended ones in the output folders.  Outputs are
 written atomically and recorded in the folder's manifest before their
 rename, so the run is resumable with ``--resume``.  The CLI exits with
 128 + the signal number (143 for SIGTERM, 130 for SIGINT).
@@ -69,20 +70,22 @@ def stop_on_signals() -> Iterator[None]:
 
 
 def clean_stop(folders: Iterable[Path | str]) -> list:
-    """End this process's worker processes and remove the temporary files left in ``folders``, and
-    the temporary folders of downloads and uploads of this process and of its ended workers (their
-    ``with`` blocks never finish: the stop ends with ``os._exit``).  Writes open in other threads (the
-    threads scheduler) are waited for, up to :data:`WRITE_GRACE` seconds: each removes its temporary
-    file instead of renaming it.  (The I/O it needs is imported here: this module loads before
+    """End this process's worker processes, release its URL folders' locks, remove the temporary files
+    left in ``folders``, and the temporary folders of downloads and uploads of this process and of its
+    ended workers (their ``with`` blocks never finish: the stop ends with ``os._exit``).  Writes open in
+    other threads (the threads scheduler) are waited for, up to :data:`WRITE_GRACE` seconds: each
+    removes its temporary file instead of renaming it.  (The I/O it needs is imported here: this module loads before
     numpy, so that the command line catches a signal from its first moment, :mod:`hht3d.__main__`.)"""
     import psutil
 
     from .io import remove_stale_parts
     from .io.atomic import stop_writes, wait_for_writes
     from .io.storage import remove_temporary_folders
+    from .io.url_lock import release_all
 
     stop_writes()
     wait_for_writes(WRITE_GRACE)  # a thread writing a figure would otherwise make its file after the removal
+    release_all()  # the locks of URL output folders: the next run need not wait for their expiry
     pids = {os.getpid(), *(p.pid for p in psutil.Process().children(recursive=True))}
     children = multiprocessing.active_children()
     for child in children:

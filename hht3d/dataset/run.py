@@ -198,7 +198,8 @@ def run_dataset(
     progress: bool = True,
     **options: Any,
 ) -> list[ItemSummary]:
-    """Build :func:`dataset_graph`, compute it, write the summary, return its rows.
+    """Build :func:`dataset_graph`, compute it, write the summary, return its rows; a URL folder's lock
+    is held meanwhile (:meth:`hht3d.io.folder.OutputFolder.lock`).
 
     Parameters
     ----------
@@ -231,13 +232,15 @@ def run_dataset(
     ['spot_hht.npz', 'spot_hht.ply', 'summary.csv', 'summary.json']
     """
     run, out_dir = options.pop("run", None) or new_run_id(), local_path(out_dir)
-    (rows,) = compute(
-        dataset_graph(inputs, out_dir, run=run, **options),
-        scheduler=scheduler,
-        workers=workers,
-        address=address,
-        progress=progress,
-    )
-    OutputFolder(out_dir, storage_options=options.get("storage_options"), run=run).finish([], written_outputs(rows))
-    write_summary(rows, out_dir, run, options.get("storage_options"))
+    folder = OutputFolder(out_dir, storage_options=options.get("storage_options"), run=run)
+    with folder.lock():
+        (rows,) = compute(
+            dataset_graph(inputs, out_dir, run=run, **options),
+            scheduler=scheduler,
+            workers=workers,
+            address=address,
+            progress=progress,
+        )
+        folder.finish([], written_outputs(rows))
+        write_summary(rows, out_dir, run, options.get("storage_options"))
     return rows

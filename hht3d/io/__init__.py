@@ -9,6 +9,7 @@
 * :mod:`~hht3d.io.atomic` — atomic writes and their stale temporary files;
 * :mod:`~hht3d.io.manifest` — what hht3d wrote in an output folder (overwrite and resume rules);
 * :mod:`~hht3d.io.lock` — the lock an output folder's runs share;
+* :mod:`~hht3d.io.url_lock` — the lock a URL output folder's run holds, where the store writes conditionally;
 * :mod:`~hht3d.io.folder` — an output folder's rules, local (manifest, lock, confinement) or URL;
 * :mod:`~hht3d.io.storage` — fsspec URLs (``s3://``, ``gs://``, ...): locations, back-ends, listing, reading;
 * :mod:`~hht3d.io.uploads` — writing to them: atomic uploads, conditional updates, the check before a run.

@@ -13,17 +13,19 @@
   the run that it can be written, each file written locally by the worker
   and uploaded atomically, and a manifest object of the same shape written
   after the outputs (:meth:`OutputFolder.finish`), so that ``resume`` trusts
-  only outputs of the recorded size and checksum.  It has no lock: on S3 the
-  manifest is updated conditionally (:func:`hht3d.io.uploads.update_object`),
-  elsewhere the last writer wins; no rule keeps hht3d from replacing an
-  object it did not write.
+  only outputs of the recorded size and checksum.  A run holds the folder's
+  lock object where the store writes conditionally (S3,
+  :mod:`hht3d.io.url_lock`), and the manifest is updated conditionally
+  (:func:`hht3d.io.uploads.update_object`); elsewhere the last writer wins.
+  No rule keeps hht3d from replacing an object it did not write.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path, PurePosixPath
 from typing import Any, cast
 
@@ -43,6 +45,7 @@ from .manifest import (
 )
 from .paths import check_name, check_output_location
 from .sealed import Sealed, seal, unsealed
+from .url_lock import url_lock
 
 __all__ = ["OutputFolder", "Uploaded", "check_locations"]
 
@@ -91,6 +94,22 @@ class OutputFolder:
         self.is_url, self.allow_outside = storage.is_url(self.location), allow_outside
         self.run = run or new_run_id()
         self._known: dict | None = None
+
+    @contextlib.contextmanager
+    def lock(self) -> Iterator[None]:
+        """Hold a URL folder's lock for a run (:func:`hht3d.io.url_lock.url_lock`); a local folder is
+        locked by each write of its manifest and summary instead (:mod:`hht3d.io.lock`).
+
+        Raises
+        ------
+        OutputError
+            Another run held the lock for the whole timeout (names it).
+        """
+        if not self.is_url:
+            yield
+            return
+        with url_lock(self._url, self.storage_options, self.run):
+            yield
 
     def prepare(self, paths: Iterable[Path | str], *, overwrite: bool = False) -> None:
         """Before a run: the outputs can be written; locally, none replaces a file hht3d did not write

@@ -131,7 +131,8 @@ def run_pipeline(
     Raises
     ------
     OutputError
-        An output or the summary cannot be written, or would replace a file hht3d did not write.
+        An output or the summary cannot be written, would replace a file hht3d did not write, or
+        another run held a URL folder's lock for the whole timeout.
     PipelineError
         A bad ``scheduler`` or ``workers``.
 
@@ -156,17 +157,18 @@ def run_pipeline(
     }
     execution = dataclasses.replace(plan.execution, **checked)
     folder = output_folder(plan, run)
-    folder.prepare(plan.written_paths(), overwrite=overwrite)
-    (rows,) = compute(
-        pipeline_graph(plan, resume=resume, folder=folder),
-        scheduler=execution.scheduler,
-        workers=execution.workers,
-        address=execution.address,
-        progress=execution.progress,
-    )
-    folder.finish(plan.written_paths(), written_outputs(rows))
-    if summary and plan.summary:
-        write_summary(rows, plan.folder, folder.run, plan.storage_options)
+    with folder.lock():
+        folder.prepare(plan.written_paths(), overwrite=overwrite)
+        (rows,) = compute(
+            pipeline_graph(plan, resume=resume, folder=folder),
+            scheduler=execution.scheduler,
+            workers=execution.workers,
+            address=execution.address,
+            progress=execution.progress,
+        )
+        folder.finish(plan.written_paths(), written_outputs(rows))
+        if summary and plan.summary:
+            write_summary(rows, plan.folder, folder.run, plan.storage_options)
     return rows
 
 
