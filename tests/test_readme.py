@@ -75,6 +75,13 @@ MIRRORED = {
     ("docs/guide/clusters.md", "Running on a cluster", 3): Mirror(
         "tests/io/test_storage.py::PIPELINE", "a lab's scheduler and S3 endpoint: the same pipeline shape on moto"
     ),
+    ("docs/guide/formats.md", "LAS and LAZ (airborne and mobile LiDAR)", 0): Mirror(
+        ".ci/setup::lidar", "CI installs the lidar extra with the package"
+    ),
+    ("docs/guide/formats.md", "LAS and LAZ (airborne and mobile LiDAR)", 1): Mirror(
+        "tests/io/test_las.py::test_a_pipeline_filters_classes_reads_intensity_and_writes_imfs_as_extra_bytes",
+        "the same steps and output on a LAZ scan written by laspy",
+    ),
     ("README.md", "Development", 0): Mirror(
         ".ci/run::python3 -m pytest -q",
         "the tests are CI's command; the benchmark "

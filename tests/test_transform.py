@@ -120,8 +120,8 @@ def test_hht_settings_reach_every_stage(frequency):
 def test_record_field_names_are_disjoint():
     """hht's flat settings are routed by name: no two records of an HHT declare the same one."""
     from hht3d.decomposition import EMDOptions, EnsembleOptions
-    from hht3d.spectral import RieszOptions
     from hht3d.hht_options import PARTS
+    from hht3d.spectral import RieszOptions
 
     names = [name for record in (EMDOptions, RieszOptions, EnsembleOptions) for name in record.specs()]
     assert len(names) == len(set(names))

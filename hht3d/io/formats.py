@@ -25,7 +25,7 @@ __all__ = [
 ]
 
 MESH_EXTENSIONS = (".ply", ".obj", ".off", ".stl", ".glb", ".gltf")
-POINT_CLOUD_EXTENSIONS = (".ply", ".pcd", ".xyz", ".xyzn", ".pts")
+POINT_CLOUD_EXTENSIONS = (".ply", ".pcd", ".xyz", ".xyzn", ".pts", ".las", ".laz")
 #: PLY vertex properties with a fixed meaning (position, normal, colour).
 PLY_RESERVED = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha"}
 #: Attribute names hht3d writes as PLY properties.

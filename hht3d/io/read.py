@@ -7,6 +7,8 @@
 * OBJ, OFF, STL, GLB/GLTF meshes and PCD, XYZ, XYZN, PTS point clouds are read
   with Open3D, after the files they refer to are checked
   (:mod:`hht3d.io.references`).
+* LAS and LAZ point clouds are read with laspy (:mod:`hht3d.io.las`), in chunks, at the file's
+  scale and relative to a local origin (``surface.origin``).
 * Only regular files are read (:func:`~hht3d.io.formats.check_regular_file`).
 """
 
@@ -29,8 +31,10 @@ from .formats import (
     POINT_CLOUD_EXTENSIONS,
     check_extension,
     check_regular_file,
+    short,
     usable_name,
 )
+from .las import LAS_EXTENSIONS, read_las
 from .references import check_references
 from .sealed import Sealed, unsealed
 
@@ -70,6 +74,13 @@ class LoadOptions(SurfaceOptions):
     label = "load"
 
     clean: bool = option(True, "weld duplicate vertices, drop degenerate faces and unused vertices")
+    classes: tuple[int, ...] | None = option(
+        None,
+        "LAS/LAZ: keep only points of these classification codes (2 ground, 6 building)",
+        kind="ints",
+        minimum=0,
+        maximum=255,
+    )
 
 
 def load(
@@ -85,13 +96,14 @@ def load(
     Parameters
     ----------
     path : str or Path
-        PLY, OBJ, OFF, STL, GLB, GLTF (meshes); PLY, PCD, XYZ, XYZN, PTS (points);
+        PLY, OBJ, OFF, STL, GLB, GLTF (meshes); PLY, PCD, XYZ, XYZN, PTS, LAS, LAZ (points);
         a local path or an fsspec URL (``s3://bucket/scan.ply``, :mod:`hht3d.io.storage`).
     options : LoadOptions or dict, optional
         ``clean``: weld duplicate vertices and drop degenerate/duplicate faces and
         unreferenced vertices (:mod:`hht3d.geometry.cleaning`; the report is in
         ``surface.clean_report``); ``laplacian`` and ``n_neighbors``: passed to
-        :class:`~hht3d.geometry.surface.Surface`.
+        :class:`~hht3d.geometry.surface.Surface`; ``classes``: the classification codes of the
+        LAS/LAZ points kept.
     name : str, optional
         Defaults to the file stem.
     storage_options : dict, optional
@@ -123,7 +135,11 @@ def load(
     check_extension(path)
     check_declared(path)
     ext = path.suffix.lower()
-    if ext == ".ply":
+    if options.classes is not None and ext not in LAS_EXTENSIONS:
+        raise InputError(f"{short(path)}: load option classes filters LAS/LAZ points; this is a {ext} file")
+    if ext in LAS_EXTENSIONS:
+        data = read_las(path, options.classes)
+    elif ext == ".ply":
         data = _read_ply(path)
     elif ext in MESH_EXTENSIONS:
         check_references(path)

@@ -41,7 +41,7 @@ from .validation import EXECUTION, MAX_ID, VERSION, builtin_models
 
 __all__ = ["pipeline_schema", "schema_text", "param_schema"]
 
-_TYPES = {"int": "integer", "float": "number", "bool": "boolean", "str": "string"}
+_TYPES = {"int": "integer", "float": "number", "bool": "boolean", "str": "string", "ints": "array"}
 
 
 def param_schema(param: Param) -> dict:
@@ -56,10 +56,14 @@ def param_schema(param: Param) -> dict:
     schema["description"] = param.doc
     if not param.required and _is_json(param.default):
         schema["default"] = param.default
+    numbers = schema
+    if param.kind == "ints":  # the range holds for each item
+        numbers = schema["items"] = {"type": "integer"}
+        schema["minItems"] = 1
     for bound, key in ((param.minimum, "minimum"), (param.maximum, "maximum")):
         if bound is not None:
             is_open = param.open_minimum if key == "minimum" else param.open_maximum
-            schema["exclusiveM" + key[1:] if is_open else key] = bound
+            numbers["exclusiveM" + key[1:] if is_open else key] = bound
     return schema
 
 
