@@ -11,12 +11,15 @@ from .ensemble import combine_eemd, eemd, eemd_member
 from .envelopes import EnvelopeSolver, envelope_interpolation, envelope_operator
 from .extrema import extrema_spacing, local_extrema
 from .options import (
+    CUTS,
     EMD_DEFAULTS,
     ENSEMBLE_DEFAULTS,
     ENVELOPES,
     EXTREMA_RULES,
     FILTERING_OPTIONS,
+    FILTERS,
     GUARD_TENSIONS,
+    METHODS,
     PAPER_OPTIONS,
     STOPPING_RULES,
     EMDOptions,
