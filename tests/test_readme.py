@@ -82,6 +82,9 @@ MIRRORED = {
         "tests/io/test_las.py::test_a_pipeline_filters_classes_reads_intensity_and_writes_imfs_as_extra_bytes",
         "the same steps and output on a LAZ scan written by laspy",
     ),
+    ("docs/guide/formats.md", "VTK and the meshio formats (ParaView, PyVista, simulation tools)", 0): Mirror(
+        ".ci/setup::meshio", "CI installs the meshio extra with the package"
+    ),
     ("README.md", "Development", 0): Mirror(
         ".ci/run::python3 -m pytest -q",
         "the tests are CI's command; the benchmark "

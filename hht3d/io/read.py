@@ -7,6 +7,8 @@
 * OBJ, OFF, STL, GLB/GLTF meshes and PCD, XYZ, XYZN, PTS point clouds are read
   with Open3D, after the files they refer to are checked
   (:mod:`hht3d.io.references`).
+* VTU, VTK, Gmsh, Medit, Abaqus, Nastran, SU2, ... (:data:`~hht3d.io.formats.MESHIO_EXTENSIONS`)
+  are read with meshio (:mod:`hht3d.io.mesh_files`); quads and polygons are split into triangles.
 * LAS and LAZ point clouds are read with laspy (:mod:`hht3d.io.las`), in chunks, at the file's
   scale and relative to a local origin (``surface.origin``).
 * Only regular files are read (:func:`~hht3d.io.formats.check_regular_file`).
@@ -27,6 +29,7 @@ from ..open3d_quiet import quiet_open3d
 from ..records import option
 from .formats import (
     MESH_EXTENSIONS,
+    MESHIO_EXTENSIONS,
     PLY_RESERVED,
     POINT_CLOUD_EXTENSIONS,
     check_extension,
@@ -35,6 +38,7 @@ from .formats import (
     usable_name,
 )
 from .las import LAS_EXTENSIONS, read_las
+from .mesh_files import read_meshio
 from .references import check_references
 from .sealed import Sealed, unsealed
 
@@ -96,7 +100,8 @@ def load(
     Parameters
     ----------
     path : str or Path
-        PLY, OBJ, OFF, STL, GLB, GLTF (meshes); PLY, PCD, XYZ, XYZN, PTS, LAS, LAZ (points);
+        PLY, OBJ, OFF, STL, GLB, GLTF, VTU, VTK and the meshio formats (meshes); PLY, PCD, XYZ, XYZN,
+        PTS, LAS, LAZ (points);
         a local path or an fsspec URL (``s3://bucket/scan.ply``, :mod:`hht3d.io.storage`).
     options : LoadOptions or dict, optional
         ``clean``: weld duplicate vertices and drop degenerate/duplicate faces and
@@ -141,6 +146,8 @@ def load(
         data = read_las(path, options.classes)
     elif ext == ".ply":
         data = _read_ply(path)
+    elif ext in MESHIO_EXTENSIONS:
+        data = read_meshio(path)
     elif ext in MESH_EXTENSIONS:
         check_references(path)
         data = _read_open3d_mesh(path)

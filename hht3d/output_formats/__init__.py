@@ -13,6 +13,9 @@ surface     ``ply``, ``png`` (shaded), ``html`` (interactive page; a filtered or
             reconstructed surface beside the one it was made from)
 features    ``ply`` (the surface with ``feature_count`` and ``feature``, features red),
             ``npz`` (vertices, counts, points, vertex_counts, min_count)
+every kind  ``las``, ``laz`` (the points, a LAS input's dimensions, the fields as
+            extra bytes; ``lidar`` extra), ``vtu`` (``meshio`` extra), ``vtp``: the
+            surface with every field (:mod:`hht3d.output_formats.points`)
 ==========  ==========================================================================
 
 Every writer is ``write(value, surface, path, **options) -> Path`` and writes
@@ -25,7 +28,8 @@ pipeline parameters :func:`hht3d.pipeline.params.record_params` makes.
 
 :meth:`HHTResult.save <hht3d.transform.HHTResult.save>` and
 :func:`hht3d.dataset.run_dataset` write the formats of a kind that take no
-options (:func:`plain_formats`: ``.ply`` and ``.npz`` of an HHT result); a
+options (:func:`plain_formats`: ``.ply``, ``.npz``, ``.vtu`` and ``.vtp`` of an HHT
+result; ``run_dataset`` writes ``.ply`` and ``.npz`` unless asked); a
 pipeline's ``outputs.files`` take any of them (:mod:`hht3d.pipeline.output_checks`),
 and ``hht3d ops`` and the JSON Schema list them.
 
@@ -33,7 +37,7 @@ Examples
 --------
 >>> from hht3d.output_formats import FORMATS, by_suffix, plain_formats
 >>> list(plain_formats("hht")), by_suffix()[".ply"]
-(['.ply', '.npz'], 'ply')
+(['.ply', '.npz', '.vtu', '.vtp'], 'ply')
 >>> list(FORMATS["hht"]["png"].options.specs())
 ['figure', 'field', 'signal_name', 'view', 'up']
 """

@@ -1,5 +1,6 @@
-"""The formats that write any result as its surface's points with every field: LAS and LAZ
-(:func:`hht3d.io.las.write_las`, the ``lidar`` extra)."""
+"""The formats that write any result as its surface with every field: LAS and LAZ
+(:func:`hht3d.io.las.write_las`, the ``lidar`` extra), VTU (through meshio, the ``meshio`` extra)
+and VTP (:mod:`hht3d.io.mesh_files`)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import numpy as np
 
 from ..geometry.surface import Surface
 from ..io.las import write_las
+from ..io.mesh_files import write_vtp, write_vtu
 from .options import Format, Points
 
 __all__ = ["emd_fields", "feature_fields", "point_formats"]
@@ -53,4 +55,6 @@ def point_formats(kind: str) -> list[Format]:
     return [
         Format("las", ".las", "the points, a LAS input's dimensions, and every field as extra bytes", las, Points),
         Format("laz", ".laz", "as las, compressed", las, Points),
+        Format("vtu", ".vtu", "VTK unstructured grid: the cells, every field as point data", _writer(kind, write_vtu)),
+        Format("vtp", ".vtp", "VTK PolyData: the cells, every field as point data", _writer(kind, write_vtp)),
     ]
