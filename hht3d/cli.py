@@ -183,17 +183,14 @@ def _validate(args: argparse.Namespace) -> int:
 
 def _ops(args: argparse.Namespace) -> int:
     from .output_formats import FORMATS
-    from .pipeline import OPERATIONS
-    from .pipeline.params import did_you_mean, record_params, yaml_text
+    from .pipeline.params import record_params, yaml_text
+    from .pipeline.plugins import operation, operations, plugin_sources
 
-    names = args.op or list(OPERATIONS)
-    for name in names:
-        if name not in OPERATIONS:
-            raise PipelineError(f"unknown op {shown(name)}{did_you_mean(name, OPERATIONS)}")
-    for name in names:
-        op = OPERATIONS[name]
+    sources = plugin_sources()
+    for op in [operation(name, "hht3d ops") for name in args.op] or operations().values():
         takes = ", ".join(f"{s.name}: {'|'.join(s.kinds)}" for s in op.slots)
-        print(f"{op.name}({takes}) -> {op.output}\n    {op.summary}")
+        source = f"  [plugin: {sources[op.name]}]" if op.name in sources else ""
+        print(f"{op.name}({takes}) -> {op.output}{source}\n    {op.summary}")
         width = max((len(p.name) for p in op.params), default=0)
         for p in op.params:
             print(f"    {p.name:<{width}}  {yaml_text(p.default):<10}  {p.describe()} — {p.doc}")

@@ -85,6 +85,10 @@ MIRRORED = {
     ("docs/guide/formats.md", "VTK and the meshio formats (ParaView, PyVista, simulation tools)", 0): Mirror(
         ".ci/setup::meshio", "CI installs the meshio extra with the package"
     ),
+    ("docs/guide/pipelines.md", "Operations from other packages", 0): Mirror(
+        "tests/pipeline/test_plugins.py::ENTRY_POINTS",
+        "the same entry points, in the dist-info of a test distribution on sys.path",
+    ),
     ("README.md", "Development", 0): Mirror(
         ".ci/run::python3 -m pytest -q",
         "the tests are CI's command; the benchmark "

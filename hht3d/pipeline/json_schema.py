@@ -36,7 +36,7 @@ from typing import Any
 from ..apps.filters import GAINS
 from ..output_formats import FORMATS
 from .params import Param, record_params
-from .registry import OPERATIONS
+from .plugins import operations
 from .validation import EXECUTION, MAX_ID, VERSION, builtin_models
 
 __all__ = ["pipeline_schema", "schema_text", "param_schema"]
@@ -121,7 +121,7 @@ def _step_schema() -> dict:
         "type": "object",
         "properties": {
             "id": {**reference, "description": "the step's name (default: the op)"},
-            "op": {"enum": list(OPERATIONS), "description": "the operation (`hht3d ops` lists them)"},
+            "op": {"enum": list(operations()), "description": "the operation (`hht3d ops` lists them)"},
             "from": {
                 "description": "the step whose result feeds it, or {slot: step id}",
                 "anyOf": [reference, {"type": "object", "additionalProperties": reference}],
@@ -138,7 +138,7 @@ def _step_schema() -> dict:
                     "properties": {"params": _object(op.params, description=op.summary)},
                 },
             }
-            for op in OPERATIONS.values()
+            for op in operations().values()
         ],
     }
 
