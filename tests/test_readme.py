@@ -89,6 +89,9 @@ MIRRORED = {
         "tests/pipeline/test_plugins.py::ENTRY_POINTS",
         "the same entry points, in the dist-info of a test distribution on sys.path",
     ),
+    ("docs/guide/formats.md", "E57 (terrestrial scanners)", 0): Mirror(
+        ".ci/setup::e57", "CI installs the e57 extra with the package"
+    ),
     ("README.md", "Development", 0): Mirror(
         ".ci/run::python3 -m pytest -q",
         "the tests are CI's command; the benchmark "

@@ -2,7 +2,10 @@
 
 * :mod:`~hht3d.io.read` — meshes, point clouds, PLY and NPZ headers;
 * :mod:`~hht3d.io.write` — PLY, NPZ and coloured PLY writers;
+* :mod:`~hht3d.io.headers` — what PLY and PCD headers declare, checked before reading;
 * :mod:`~hht3d.io.las` — LAS/LAZ point clouds through laspy (the ``lidar`` extra);
+* :mod:`~hht3d.io.e57` — E57 scans through pye57 (the ``e57`` extra);
+* :mod:`~hht3d.io.mesh_files` — VTU/VTP writers and the meshio formats (the ``meshio`` extra);
 * :mod:`~hht3d.io.open3d` — conversion to and from Open3D geometries;
 * :mod:`~hht3d.io.formats` — readable extensions, regular-file and property-name checks, name limits;
 * :mod:`~hht3d.io.references` — files a glTF or OBJ refers to, confined to its folder;

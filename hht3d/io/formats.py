@@ -28,7 +28,7 @@ __all__ = [
 #: Suffixes read through meshio (:mod:`hht3d.io.mesh_files`), of its formats that need no other package.
 MESHIO_EXTENSIONS = (".vtu", ".vtk", ".msh", ".mesh", ".inp", ".bdf", ".nas", ".su2", ".avs", ".ugrid", ".mdpa")
 MESH_EXTENSIONS = (".ply", ".obj", ".off", ".stl", ".glb", ".gltf", *MESHIO_EXTENSIONS)
-POINT_CLOUD_EXTENSIONS = (".ply", ".pcd", ".xyz", ".xyzn", ".pts", ".las", ".laz")
+POINT_CLOUD_EXTENSIONS = (".ply", ".pcd", ".xyz", ".xyzn", ".pts", ".las", ".laz", ".e57")
 #: PLY vertex properties with a fixed meaning (position, normal, colour).
 PLY_RESERVED = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha"}
 #: Attribute names hht3d writes as PLY properties.

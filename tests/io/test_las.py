@@ -132,7 +132,7 @@ def test_clear_errors(tmp_path, monkeypatch, sphere):
         load(tmp_path / "scan.las", classes=[9])
     with pytest.raises(InputError, match="classification codes"):
         load(tmp_path / "scan.las", classes=[256])
-    with pytest.raises(InputError, match="classes filters LAS/LAZ points; this is a .ply file"):
+    with pytest.raises(InputError, match="load option classes is for .las, .laz files; this is .ply"):
         from hht3d.io import write_ply
 
         load(write_ply(tmp_path / "sphere.ply", sphere), classes=[2])
