@@ -150,9 +150,9 @@ def load(
     check_extension(path)
     check_declared(path)
     ext = path.suffix.lower()
-    for name, suffixes in (("classes", LAS_EXTENSIONS), ("scan", (".e57",))):
-        if getattr(options, name) is not None and ext not in suffixes:
-            raise InputError(f"{short(path)}: load option {name} is for {', '.join(suffixes)} files; this is {ext}")
+    for setting, suffixes in (("classes", LAS_EXTENSIONS), ("scan", (".e57",))):
+        if getattr(options, setting) is not None and ext not in suffixes:
+            raise InputError(f"{short(path)}: load option {setting} is for {', '.join(suffixes)} files; this is {ext}")
     if ext in LAS_EXTENSIONS:
         data = read_las(path, options.classes)
     elif ext == ".e57":

@@ -38,6 +38,7 @@ def test_all_scans_merge_with_their_poses(scans):
     surface = load(path, clean=False)
     expected = np.vstack([w[0] for w in written])
     assert surface.n_vertices == 600 and np.abs(surface.vertices).max() < 100  # near the local origin
+    assert surface.name == "site"  # the file's stem, whatever load options are checked
     np.testing.assert_allclose(surface.vertices + surface.origin, expected, rtol=0, atol=1e-6)
     np.testing.assert_array_equal(surface.attributes["scan"], np.repeat([0.0, 1.0], 300))
     np.testing.assert_array_equal(surface.attributes["intensity"], np.concatenate([w[1] for w in written]))
