@@ -122,6 +122,20 @@ def test_a_mesh_written_as_las_keeps_its_points_at_the_chosen_scale(tmp_path, sp
     np.testing.assert_allclose(written.xyz, sphere.vertices, rtol=0, atol=scale / 2 + 1e-12)
 
 
+def test_hht3d_info_reports_the_points_classes_and_dimensions(tmp_path, capsys):
+    import json
+
+    from hht3d.cli import main
+
+    original = scan(tmp_path / "scan.laz")
+    assert main(["info", str(tmp_path / "scan.laz"), "--no-clean", "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    codes = np.asarray(original.classification)
+    assert info["vertices"] == 900 and info["classes"] == {"2": int((codes == 2).sum()), "6": int((codes == 6).sum())}
+    assert {"intensity", "return_number", "gps_time", "echo_width", "luminance"} <= set(info["attributes"])
+    np.testing.assert_allclose(info["bounding_box_min"], original.header.mins, rtol=0, atol=1e-6)
+
+
 def test_clear_errors(tmp_path, monkeypatch, sphere):
     scan(tmp_path / "scan.las")
     with pytest.raises(
