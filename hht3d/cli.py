@@ -128,6 +128,7 @@ def _execute(plan: Pipeline, args: argparse.Namespace) -> int:
             overwrite=args.overwrite,
             summary=False,
             run=folder.run,
+            allow_plugins=args.allow_plugins or None,
         )
         for row in rows:
             print(redact("\n".join(_row_lines(row))), flush=True)
@@ -285,6 +286,7 @@ def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -
         help="skip inputs whose outputs are done: recorded complete (same size and "
         "checksum) in the output folder's manifest",
     )
+    parser.add_argument("--allow-plugins", action="store_true", help="run operations of plugins (their packages' code)")
     parser.add_argument(
         "--overwrite",
         action="store_true",

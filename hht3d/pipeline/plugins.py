@@ -12,13 +12,16 @@ comes from), the JSON Schema and the task graph read :func:`operations`.  Entry 
 loaded once, on the first call, not when hht3d is imported.  A plugin that fails to import, names
 something that is not an ``Operation``, uses an unknown kind or takes the name of a built-in or an
 earlier plugin's operation is left out and reported in one line (:func:`plugin_problems`, logged as
-a warning); the others still load.
+a warning); the others still load.  Pipelines are shared files and a plugin's operation runs its
+package's code, so a run refuses one unless the user allows it (:func:`check_allowed`:
+``hht3d run --allow-plugins``, or ``HHT3D_ALLOW_PLUGINS=1`` in the user's environment).
 """
 
 from __future__ import annotations
 
 import functools
 import importlib.metadata
+import os
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
@@ -28,10 +31,12 @@ from ..logs import get_logger
 from .params import did_you_mean
 from .registry import OPERATIONS, Operation
 
-__all__ = ["GROUP", "KINDS", "operations", "operation", "plugin_sources", "plugin_problems"]
+__all__ = ["GROUP", "KINDS", "ALLOW", "operations", "operation", "plugin_sources", "plugin_problems", "check_allowed"]
 
 #: The entry-point group plugins register in.
 GROUP = "hht3d.operations"
+#: The user's environment variable that lets every run use plugin operations (``1``); never the pipeline's.
+ALLOW = "HHT3D_ALLOW_PLUGINS"
 #: The kinds a slot takes and an operation makes (:mod:`hht3d.pipeline.registry`).
 KINDS = ("file", "surface", "signal", "emd", "hht", "features")
 
@@ -114,3 +119,23 @@ def operation(name: str, where: str) -> Operation:
             f"{where}: unknown op {shown(name)}{did_you_mean(name, known)} (`hht3d ops` lists them){failed}"
         )
     return known[name]
+
+
+def check_allowed(steps: Iterable[Any], allow: bool | None = None) -> None:
+    """Refuse a step whose operation comes from a plugin unless ``allow`` (``None``: whether the
+    user's environment sets :data:`ALLOW` to ``1``).
+
+    Raises
+    ------
+    PipelineError
+        Naming the step, the operation, its distribution and how to allow it.
+    """
+    if allow if allow is not None else os.environ.get(ALLOW) == "1":
+        return
+    sources = plugin_sources()
+    for step in steps:
+        if step.op.name in sources:
+            raise PipelineError(
+                f"step {step.id!r} runs op {step.op.name!r} of the plugin {sources[step.op.name]}, which runs that "
+                f"package's code; pass --allow-plugins (or set {ALLOW}=1) to run it"
+            )

@@ -75,7 +75,7 @@ def test_hht3d_ops_lists_the_plugin_with_its_source_and_reports_each_broken_one_
     assert "scale_signal" in pipeline_schema()["$defs"]["step"]["properties"]["op"]["enum"]
 
 
-def test_a_pipeline_runs_the_plugin_operation_and_validates_its_parameters(installed, tmp_path, mesh_file):
+def test_a_pipeline_runs_the_plugin_operation_once_allowed_and_validates_its_parameters(installed, tmp_path, mesh_file):
     text = textwrap.dedent(f"""\
         version: 1
         execution: {{scheduler: synchronous, progress: false}}
@@ -88,7 +88,15 @@ def test_a_pipeline_runs_the_plugin_operation_and_validates_its_parameters(insta
           files:
             - {{from: scaled, path: scaled.npz}}
         """)
-    (row,) = run_pipeline(parse_pipeline(text))
+    plan = parse_pipeline(text)
+    refusal = (
+        r"step 'scaled' runs op 'scale_signal' of the plugin hht3d-fakeplug 0.1, which runs that package's code; "
+        r"pass --allow-plugins \(or set HHT3D_ALLOW_PLUGINS=1\) to run it"
+    )
+    with pytest.raises(PipelineError, match=f"^{refusal}$"):  # the pipeline file alone cannot allow it
+        run_pipeline(plan)
+    assert not (tmp_path / "out").exists()  # refused before any output is written
+    (row,) = run_pipeline(plan, allow_plugins=True)
     assert row.status == "ok", row.error
     expected = 3 * mean_curvature(load(mesh_file))
     np.testing.assert_allclose(np.load(tmp_path / "out" / "scaled.npz")["signal"], expected, rtol=1e-12)
@@ -112,3 +120,28 @@ def mesh_file(tmp_path):
     from hht3d.io import write_ply
 
     return write_ply(tmp_path / "ball.ply", Surface(*icosphere(2)))
+
+
+def test_hht3d_run_refuses_a_plugin_step_in_one_line_unless_the_user_allows_it(
+    installed, tmp_path, mesh_file, monkeypatch, capsys
+):
+    pipeline = tmp_path / "p.yaml"
+    pipeline.write_text(
+        textwrap.dedent(f"""\
+            version: 1
+            execution: {{scheduler: synchronous, progress: false}}
+            inputs: {mesh_file}
+            steps:
+              - {{id: curvature, op: signal, params: {{kind: mean_curvature}}}}
+              - {{id: scaled, op: scale_signal}}
+            outputs: {{folder: {tmp_path / "out"}, files: [{{from: scaled, path: scaled.npz}}]}}
+            """)
+    )
+    assert main(["run", str(pipeline)]) != 0
+    assert capsys.readouterr().err.splitlines()[-1] == (  # after the broken plugins' warnings
+        "hht3d: error: step 'scaled' runs op 'scale_signal' of the plugin hht3d-fakeplug 0.1, which runs that "
+        "package's code; pass --allow-plugins (or set HHT3D_ALLOW_PLUGINS=1) to run it"
+    )
+    assert main(["run", str(pipeline), "--allow-plugins"]) == 0
+    monkeypatch.setenv("HHT3D_ALLOW_PLUGINS", "1")  # the user's own setting
+    assert main(["run", str(pipeline)]) == 0
