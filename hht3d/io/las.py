@@ -202,7 +202,7 @@ def write_las(path: Path | str, surface: Surface, fields: dict | None = None, *,
             continue
         kind = las.points[dimension].dtype if dimension not in added else np.dtype(precision)
         column = np.asarray(values_of, dtype=np.float64)
-        las[dimension] = column.astype(kind) if kind.kind == "f" else np.round(column).astype(kind)
+        las[dimension] = column.astype(kind) if kind.kind == "f" else np.rint(column).astype(kind)
     if surface.colors is not None and "red" in header.point_format.dimension_names:
         rgb = np.round(np.clip(surface.colors, 0, 1) * source.color_scale).astype(np.uint16)
         las.red, las.green, las.blue = rgb[:, 0], rgb[:, 1], rgb[:, 2]

@@ -161,6 +161,15 @@ def test_clear_errors(tmp_path, monkeypatch, sphere):
     cut.write_bytes(data[: laspy.read(str(tmp_path / "scan.las")).header.offset_to_point_data + 10 * 38])
     with pytest.raises(InputError, match="declares 900 points of .* more than its .* bytes hold"):
         load(cut)
+    scan(tmp_path / "scan.laz")  # a LAZ chunk table past the end, and a LAZ cut short
+    data = bytearray((tmp_path / "scan.laz").read_bytes())
+    start = laspy.read(str(tmp_path / "scan.laz")).header.offset_to_point_data
+    (tmp_path / "cut.laz").write_bytes(data[: start + 200])
+    data[start : start + 8] = (len(data) + 10**6).to_bytes(8, "little")  # where the chunk table is said to be
+    (tmp_path / "table.laz").write_bytes(data)
+    for name in ("table.laz", "cut.laz"):
+        with pytest.raises(InputError, match=rf"{name}: the points cannot be read \(.*\)$"):
+            load(tmp_path / name)
     (tmp_path / "junk.laz").write_bytes(b"LASF" + bytes(400))
     with pytest.raises(InputError, match="junk.laz: not a readable LAS/LAZ file"):
         load(tmp_path / "junk.laz")
@@ -168,3 +177,30 @@ def test_clear_errors(tmp_path, monkeypatch, sphere):
     monkeypatch.setitem(sys.modules, "laspy", None)  # laspy not installed
     with pytest.raises(InputError, match=r"^LAS/LAZ files need laspy: pip install 'hht3d\[lidar\]'$"):
         load(tmp_path / "scan.las")
+
+
+@pytest.mark.parametrize("suffix", [".las", ".laz"])
+def test_a_real_scan_round_trips(tmp_path, shared_model, suffix):
+    """The Kinect office frame (62,143 points with their real RGB) as a LAS 1.4 point format 7 scan
+    10⁶ m from its datum at 0.01 mm, written by laspy; read and written back by hht3d, read by laspy."""
+    from plyfile import PlyData
+
+    vertex = PlyData.read(str(shared_model("office_kinect_colored.ply")))["vertex"].data
+    header = laspy.LasHeader(point_format=7, version="1.4")
+    header.offsets, header.scales = OFFSETS, np.full(3, 1e-5)
+    data = laspy.LasData(header)
+    data.x, data.y, data.z = (OFFSETS[k] + np.asarray(vertex[c], dtype=np.float64) for k, c in enumerate("xyz"))
+    data.red, data.green, data.blue = (np.asarray(vertex[c], dtype=np.uint16) * 257 for c in ("red", "green", "blue"))
+    data.intensity = np.arange(len(vertex), dtype=np.uint16)
+    data.write(str(tmp_path / f"office{suffix}"))
+    original = laspy.read(str(tmp_path / f"office{suffix}"))
+
+    surface = load(tmp_path / f"office{suffix}", clean=False)
+    assert surface.n_vertices == len(vertex) == 62_143
+    np.testing.assert_array_equal(
+        np.round((surface.vertices + surface.origin - OFFSETS) / 1e-5),
+        np.column_stack([original.X, original.Y, original.Z]),
+    )
+    written = laspy.read(str(write_las(tmp_path / f"back{suffix}", surface)))
+    for name in original.point_format.dimension_names:
+        np.testing.assert_array_equal(np.asarray(written[name]), np.asarray(original[name]), err_msg=name)
