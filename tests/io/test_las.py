@@ -114,6 +114,20 @@ def test_a_pipeline_filters_classes_reads_intensity_and_writes_imfs_as_extra_byt
         np.testing.assert_allclose(written[name], expected, rtol=1e-5, atol=1e-5 * np.abs(expected).max(), err_msg=name)
 
 
+def test_a_filtered_scan_is_written_back_in_its_frame(tmp_path):
+    from hht3d.apps import filter_geometry
+    from hht3d.apps.filters import LowPass
+
+    original = scan(tmp_path / "scan.las", n=400)
+    surface = load(tmp_path / "scan.las", clean=False)
+    result = hht(surface, signal(surface, "mean_curvature"), max_imfs=1)
+    smoothed = filter_geometry(result, LowPass(cutoff=1.0))
+    written = laspy.read(str(FORMATS["surface"]["las"].write(smoothed, surface, tmp_path / "smooth.las")))
+    moved = np.abs(written.xyz - original.xyz).max()
+    assert 0 < moved < 1  # moved by the filter, not by 10⁶ m
+    np.testing.assert_array_equal(written.intensity, original.intensity)
+
+
 def test_a_mesh_written_as_las_keeps_its_points_at_the_chosen_scale(tmp_path, sphere):
     path = FORMATS["surface"]["las"].write(sphere, sphere, tmp_path / "sphere.las", precision="float64")
     written = laspy.read(str(path))
