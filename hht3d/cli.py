@@ -128,6 +128,7 @@ def _execute(plan: Pipeline, args: argparse.Namespace) -> int:
                 overwrite=args.overwrite,
                 summary=False,
                 run=folder.run,
+                allow_plugins=args.allow_plugins or None,
             )
             for row in rows:
                 print(redact("\n".join(_row_lines(row))), flush=True)
@@ -183,17 +184,14 @@ def _validate(args: argparse.Namespace) -> int:
 
 def _ops(args: argparse.Namespace) -> int:
     from .output_formats import FORMATS
-    from .pipeline import OPERATIONS
-    from .pipeline.params import did_you_mean, record_params, yaml_text
+    from .pipeline.params import record_params, yaml_text
+    from .pipeline.plugins import operation, operations, plugin_sources
 
-    names = args.op or list(OPERATIONS)
-    for name in names:
-        if name not in OPERATIONS:
-            raise PipelineError(f"unknown op {shown(name)}{did_you_mean(name, OPERATIONS)}")
-    for name in names:
-        op = OPERATIONS[name]
+    sources = plugin_sources()
+    for op in [operation(name, "hht3d ops") for name in args.op] or operations().values():
         takes = ", ".join(f"{s.name}: {'|'.join(s.kinds)}" for s in op.slots)
-        print(f"{op.name}({takes}) -> {op.output}\n    {op.summary}")
+        source = f"  [plugin: {sources[op.name]}]" if op.name in sources else ""
+        print(f"{op.name}({takes}) -> {op.output}{source}\n    {op.summary}")
         width = max((len(p.name) for p in op.params), default=0)
         for p in op.params:
             print(f"    {p.name:<{width}}  {yaml_text(p.default):<10}  {p.describe()} — {p.doc}")
@@ -288,6 +286,7 @@ def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -
         help="skip inputs whose outputs are done: recorded complete (same size and "
         "checksum) in the output folder's manifest",
     )
+    parser.add_argument("--allow-plugins", action="store_true", help="run operations of plugins (their packages' code)")
     parser.add_argument(
         "--overwrite",
         action="store_true",

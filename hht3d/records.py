@@ -43,8 +43,8 @@ R = TypeVar("R", bound="Record")
 
 __all__ = ["Spec", "Record", "option", "route", "renamed_keywords"]
 
-#: Kinds of settings.
-KINDS = ("int", "float", "bool", "str", "choice")
+#: Kinds of settings (``ints``: a list of integers, each in the range).
+KINDS = ("int", "float", "bool", "str", "choice", "ints")
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,7 @@ class Spec:
     """One setting's type, allowed values and one-line description.
 
     ``kind`` is one of :data:`KINDS`; ``choices`` the values of a
-    ``"choice"``; ``minimum``/``maximum`` the range of numbers, open at an
+    ``"choice"``; ``minimum``/``maximum`` the range of numbers (of each number of ``"ints"``), open at an
     end when ``open_minimum``/``open_maximum``; ``nullable`` allows ``None``.
     """
 
@@ -84,9 +84,13 @@ class Spec:
         if self.kind == "choice":
             text = "one of " + ", ".join(map(str, self.choices))
         else:
-            text = {"int": "an integer", "float": "a number", "bool": "true or false", "str": "a string"}[
-                self.kind
-            ] + self.range_text()
+            text = {
+                "int": "an integer",
+                "float": "a number",
+                "bool": "true or false",
+                "str": "a string",
+                "ints": "a list of integers",
+            }[self.kind] + self.range_text()
         return text + (f" or {null}" if self.nullable and null else "")
 
     def accepts(self, value: Any) -> bool:
@@ -99,6 +103,10 @@ class Spec:
             return isinstance(value, bool)
         if self.kind == "str":
             return isinstance(value, str)
+        if self.kind == "ints":
+            return (
+                isinstance(value, (list, tuple)) and bool(value) and all(_is_int(v) and self.in_range(v) for v in value)
+            )
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             return False
         if self.kind == "int" and not isinstance(value, numbers.Integral):
@@ -175,8 +183,14 @@ def route(settings: dict, *records: type[Record]) -> list[dict]:
     return [{k: v for k, v in settings.items() if k in record.specs()} for record in records]
 
 
+def _is_int(value: Any) -> bool:
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+
+
 def _converted(spec: Spec, value: Any) -> Any:
-    """A valid value with ints as ``int`` and numbers as ``float``."""
+    """A valid value with ints as ``int``, numbers as ``float`` and lists of integers as tuples."""
+    if spec.kind == "ints" and value is not None:
+        return tuple(int(v) for v in value)
     if value is None or spec.kind not in ("int", "float"):
         return value
     return int(value) if spec.kind == "int" else float(value)

@@ -170,7 +170,8 @@ def test_a_new_format_is_one_entry_and_one_writer(monkeypatch, tmp_path, mesh_fi
     assert main(["ops"]) == 0
     assert "signal    txt          the values as text [digits=6]" in capsys.readouterr().out
 
-    assert list(plain_formats("hht")) == [".ply", ".npz", ".energy"] and by_suffix()[".energy"] == "energy"
+    assert list(plain_formats("hht")) == [".ply", ".npz", ".vtu", ".vtp", ".energy"]
+    assert by_suffix()[".energy"] == "energy"
     surface = Surface(*icosphere(2))
     result = hht(surface, surface.vertices[:, 0], max_imfs=1)
     with np.load(result.save(tmp_path / "x.energy"), allow_pickle=False) as saved:

@@ -77,6 +77,23 @@ MIRRORED = {
     ("docs/guide/clusters.md", "Running on a cluster", 3): Mirror(
         "tests/io/test_storage.py::PIPELINE", "a lab's scheduler and S3 endpoint: the same pipeline shape on moto"
     ),
+    ("docs/guide/formats.md", "LAS and LAZ (airborne and mobile LiDAR)", 0): Mirror(
+        ".ci/setup::lidar", "CI installs the lidar extra with the package"
+    ),
+    ("docs/guide/formats.md", "LAS and LAZ (airborne and mobile LiDAR)", 1): Mirror(
+        "tests/io/test_las.py::test_a_pipeline_filters_classes_reads_intensity_and_writes_imfs_as_extra_bytes",
+        "the same steps and output on a LAZ scan written by laspy",
+    ),
+    ("docs/guide/formats.md", "VTK and the meshio formats (ParaView, PyVista, simulation tools)", 0): Mirror(
+        ".ci/setup::meshio", "CI installs the meshio extra with the package"
+    ),
+    ("docs/guide/pipelines.md", "Operations from other packages", 0): Mirror(
+        "tests/pipeline/test_plugins.py::ENTRY_POINTS",
+        "the same entry points, in the dist-info of a test distribution on sys.path",
+    ),
+    ("docs/guide/formats.md", "E57 (terrestrial scanners)", 0): Mirror(
+        ".ci/setup::e57", "CI installs the e57 extra with the package"
+    ),
     ("README.md", "Development", 0): Mirror(
         ".ci/run::python3 -m pytest -q",
         "the tests are CI's command; the benchmark "

@@ -211,6 +211,8 @@ def manifold_harmonics_filter(
         laplacian=surface.laplacian,
         n_neighbors=surface.n_neighbors,
         name=name or f"{surface.name}_mhb",
+        origin=surface.origin,
+        header=surface.header,
     )
 
 

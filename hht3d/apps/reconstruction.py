@@ -230,8 +230,8 @@ def reconstruct_from_change(
 
 
 def moved(surface: Surface, displacement: np.ndarray | float, name: str | None) -> Surface:
-    """``surface`` with its vertices moved by ``displacement`` (faces, colours, fields and
-    Laplacian kept), named ``name`` or ``<name>_filtered``."""
+    """``surface`` with its vertices moved by ``displacement`` (faces, colours, fields, Laplacian and
+    file frame kept: origin and header), named ``name`` or ``<name>_filtered``."""
     return Surface(
         surface.vertices + displacement,
         surface.faces,
@@ -240,6 +240,8 @@ def moved(surface: Surface, displacement: np.ndarray | float, name: str | None) 
         laplacian=surface.laplacian,
         n_neighbors=surface.n_neighbors,
         name=name or f"{surface.name}_filtered",
+        origin=surface.origin,
+        header=surface.header,
     )
 
 

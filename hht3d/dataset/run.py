@@ -66,9 +66,10 @@ __all__ = [
     "items_graph",
 ]
 
-#: The files a dataset item's result is saved as by default: the formats of an HHT result that take no
-#: options (:func:`hht3d.output_formats.plain_formats`, written by :meth:`HHTResult.save`).
-RESULT_SUFFIXES = tuple(plain_formats("hht"))
+#: The files a dataset item's result is saved as by default: PLY and NPZ.  ``formats=`` may name any
+#: format of an HHT result that takes no options (:func:`hht3d.output_formats.plain_formats`, written
+#: by :meth:`HHTResult.save`: also ``.vtu``, ``.vtp``).
+RESULT_SUFFIXES = (".ply", ".npz")
 
 
 def output_paths(

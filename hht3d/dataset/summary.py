@@ -26,9 +26,9 @@ from ..decomposition.quality import decomposition_quality
 from ..errors import InputError
 from ..io import is_recorded, new_run_id, read_npz_shapes, read_ply_header
 from ..io.folder import OutputFolder
+from ..io.headers import _MAX_HEADER
 from ..io.lock import folder_lock
 from ..io.manifest import recording
-from ..io.read import _MAX_HEADER
 from ..io.storage import file_name, is_url, join, local_copy, local_path
 from ..io.uploads import atomic_location, update_object
 from ..linalg.estimate import slow_fallback

@@ -75,6 +75,11 @@ class Surface:
         Shown in messages and used for output names.
     clean_report : CleanReport, optional
         Set by the loaders when cleaning changed the input.
+    origin : (3,) array_like, optional
+        Where the local frame of ``vertices`` lies in the file's frame: the file's coordinates are
+        ``vertices + origin`` (a LAS scan 10⁶ m from its datum is read near 0; writers add it back).
+    header : object, optional
+        What a reader kept to write the file's format back (a LAS file's ``laspy`` header).
     """
 
     def __init__(
@@ -89,6 +94,8 @@ class Surface:
         n_neighbors: int = 30,
         name: str | None = None,
         clean_report: CleanReport | None = None,
+        origin: np.ndarray | None = None,
+        header: Any = None,
     ) -> None:
         self.name = name or "surface"
         self.vertices = _as_vertices(vertices, self.name)
@@ -107,6 +114,8 @@ class Surface:
             str(k): _as_per_vertex(v, n, None, f"attribute {k!r}", self.name) for k, v in (attributes or {}).items()
         }
         self.clean_report = clean_report
+        self.origin = np.zeros(3) if origin is None else _as_per_vertex(origin, 3, None, "origin", self.name)
+        self.header = header
         self.cache: dict = {}
         if normals is not None:
             normals = _as_per_vertex(normals, n, 3, "normals", self.name)

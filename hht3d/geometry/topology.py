@@ -41,17 +41,23 @@ def _non_manifold_vertices(surface: Surface) -> int:
 
 
 def describe(surface: Surface) -> dict:
-    """Vertices, faces, components, boundary, manifoldness, Euler characteristic, bounding box."""
+    """Vertices, faces, components, boundary, manifoldness, Euler characteristic, bounding box (in the
+    file's frame: ``vertices + origin``), the stored attributes and, with a ``classification``
+    attribute (LAS), the number of points of each class."""
     lo, hi = surface.vertices.min(axis=0), surface.vertices.max(axis=0)
-    info = {
+    info: dict = {
         "name": surface.name,
         "kind": "mesh" if surface.is_mesh else "point cloud",
         "vertices": surface.n_vertices,
         "components": surface.n_components,
-        "bounding_box_min": lo.tolist(),
-        "bounding_box_max": hi.tolist(),
+        "bounding_box_min": (lo + surface.origin).tolist(),
+        "bounding_box_max": (hi + surface.origin).tolist(),
         "bounding_box_diagonal": float(np.linalg.norm(hi - lo)),
+        "attributes": sorted(surface.attributes),
     }
+    if "classification" in surface.attributes:
+        codes, counts = np.unique(surface.attributes["classification"], return_counts=True)
+        info["classes"] = {str(int(c)): int(k) for c, k in zip(codes, counts)}
     if surface.clean_report is not None:
         info["cleaning"] = surface.clean_report.summary()
     if not surface.is_mesh:

@@ -2,6 +2,10 @@
 
 * :mod:`~hht3d.io.read` — meshes, point clouds, PLY and NPZ headers;
 * :mod:`~hht3d.io.write` — PLY, NPZ and coloured PLY writers;
+* :mod:`~hht3d.io.headers` — what PLY and PCD headers declare, checked before reading;
+* :mod:`~hht3d.io.las` — LAS/LAZ point clouds through laspy (the ``lidar`` extra);
+* :mod:`~hht3d.io.e57` — E57 scans through pye57 (the ``e57`` extra);
+* :mod:`~hht3d.io.mesh_files` — VTU/VTP writers and the meshio formats (the ``meshio`` extra);
 * :mod:`~hht3d.io.open3d` — conversion to and from Open3D geometries;
 * :mod:`~hht3d.io.formats` — readable extensions, regular-file and property-name checks, name limits;
 * :mod:`~hht3d.io.references` — files a glTF or OBJ refers to, confined to its folder;
@@ -19,6 +23,7 @@ from ..geometry.normals import estimate_point_normals
 from . import storage, uploads
 from .atomic import atomic_path, check_output_paths, remove_stale_parts
 from .formats import MESH_EXTENSIONS, POINT_CLOUD_EXTENSIONS, check_regular_file
+from .las import write_las
 from .manifest import check_overwrites, is_recorded, new_run_id, record
 from .open3d import surface_from_open3d, surface_to_open3d
 from .paths import check_name, check_output_location, confined, resolve_inputs
@@ -50,6 +55,7 @@ __all__ = [
     "check_output_location",
     "confined",
     "write_ply",
+    "write_las",
     "write_npz",
     "field_colors",
     "write_colored_ply",

@@ -13,6 +13,7 @@ from ..errors import shown as shown_value
 
 __all__ = [
     "MESH_EXTENSIONS",
+    "MESHIO_EXTENSIONS",
     "POINT_CLOUD_EXTENSIONS",
     "PLY_RESERVED",
     "check_extension",
@@ -24,8 +25,10 @@ __all__ = [
     "short",
 ]
 
-MESH_EXTENSIONS = (".ply", ".obj", ".off", ".stl", ".glb", ".gltf")
-POINT_CLOUD_EXTENSIONS = (".ply", ".pcd", ".xyz", ".xyzn", ".pts")
+#: Suffixes read through meshio (:mod:`hht3d.io.mesh_files`), of its formats that need no other package.
+MESHIO_EXTENSIONS = (".vtu", ".vtk", ".msh", ".mesh", ".inp", ".bdf", ".nas", ".su2", ".avs", ".ugrid", ".mdpa")
+MESH_EXTENSIONS = (".ply", ".obj", ".off", ".stl", ".glb", ".gltf", *MESHIO_EXTENSIONS)
+POINT_CLOUD_EXTENSIONS = (".ply", ".pcd", ".xyz", ".xyzn", ".pts", ".las", ".laz", ".e57")
 #: PLY vertex properties with a fixed meaning (position, normal, colour).
 PLY_RESERVED = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha"}
 #: Attribute names hht3d writes as PLY properties.

@@ -7,6 +7,11 @@
 * OBJ, OFF, STL, GLB/GLTF meshes and PCD, XYZ, XYZN, PTS point clouds are read
   with Open3D, after the files they refer to are checked
   (:mod:`hht3d.io.references`).
+* VTU, VTK, Gmsh, Medit, Abaqus, Nastran, SU2, ... (:data:`~hht3d.io.formats.MESHIO_EXTENSIONS`)
+  are read with meshio (:mod:`hht3d.io.mesh_files`); quads and polygons are split into triangles.
+* LAS and LAZ point clouds are read with laspy (:mod:`hht3d.io.las`), in chunks, at the file's
+  scale and relative to a local origin (``surface.origin``); E57 scans with pye57
+  (:mod:`hht3d.io.e57`), one or all merged with their poses.
 * Only regular files are read (:func:`~hht3d.io.formats.check_regular_file`).
 """
 
@@ -23,14 +28,20 @@ from ..errors import InputError, one_line
 from ..geometry.surface import Surface, SurfaceOptions
 from ..open3d_quiet import quiet_open3d
 from ..records import option
+from .e57 import read_e57
 from .formats import (
     MESH_EXTENSIONS,
+    MESHIO_EXTENSIONS,
     PLY_RESERVED,
     POINT_CLOUD_EXTENSIONS,
     check_extension,
     check_regular_file,
+    short,
     usable_name,
 )
+from .headers import PlyHeader, check_declared, read_ply_header
+from .las import LAS_EXTENSIONS, read_las
+from .mesh_files import read_meshio
 from .references import check_references
 from .sealed import Sealed, unsealed
 
@@ -73,6 +84,20 @@ class LoadOptions(SurfaceOptions):
     label = "load"
 
     clean: bool = option(True, "weld duplicate vertices, drop degenerate faces and unused vertices")
+    classes: tuple[int, ...] | None = option(
+        None,
+        "LAS/LAZ: keep only points of these classification codes (2 ground, 6 building)",
+        kind="ints",
+        minimum=0,
+        maximum=255,
+    )
+    scan: int | None = option(
+        None,
+        "E57: read this scan (0-based); default all, merged with their poses",
+        kind="int",
+        minimum=0,
+        maximum=10**6,
+    )
 
 
 def load(
@@ -88,13 +113,15 @@ def load(
     Parameters
     ----------
     path : str or Path
-        PLY, OBJ, OFF, STL, GLB, GLTF (meshes); PLY, PCD, XYZ, XYZN, PTS (points);
+        PLY, OBJ, OFF, STL, GLB, GLTF, VTU, VTK and the meshio formats (meshes); PLY, PCD, XYZ, XYZN,
+        PTS, LAS, LAZ, E57 (points);
         a local path or an fsspec URL (``s3://bucket/scan.ply``, :mod:`hht3d.io.storage`).
     options : LoadOptions or dict, optional
         ``clean``: weld duplicate vertices and drop degenerate/duplicate faces and
         unreferenced vertices (:mod:`hht3d.geometry.cleaning`; the report is in
         ``surface.clean_report``); ``laplacian`` and ``n_neighbors``: passed to
-        :class:`~hht3d.geometry.surface.Surface`.
+        :class:`~hht3d.geometry.surface.Surface`; ``classes``: the classification codes of the
+        LAS/LAZ points kept; ``scan``: the E57 scan read (default all).
     name : str, optional
         Defaults to the file stem.
     storage_options : dict, optional
@@ -126,8 +153,17 @@ def load(
     check_extension(path)
     check_declared(path)
     ext = path.suffix.lower()
-    if ext == ".ply":
+    for setting, suffixes in (("classes", LAS_EXTENSIONS), ("scan", (".e57",))):
+        if getattr(options, setting) is not None and ext not in suffixes:
+            raise InputError(f"{short(path)}: load option {setting} is for {', '.join(suffixes)} files; this is {ext}")
+    if ext in LAS_EXTENSIONS:
+        data = read_las(path, options.classes)
+    elif ext == ".e57":
+        data = read_e57(path, options.scan)
+    elif ext == ".ply":
         data = _read_ply(path)
+    elif ext in MESHIO_EXTENSIONS:
+        data = read_meshio(path)
     elif ext in MESH_EXTENSIONS:
         check_references(path)
         data = _read_open3d_mesh(path)
@@ -171,122 +207,6 @@ def _read_ply(path: Path) -> dict:
             attributes.setdefault(usable_name(key), np.asarray(vertex[key], dtype=np.float64))
     data["attributes"] = attributes
     return data
-
-
-@dataclass(frozen=True)
-class PlyHeader:
-    """What the header of a PLY file declares: element counts, vertex property names, properties per element."""
-
-    counts: dict
-    vertex_properties: tuple[str, ...]
-    property_counts: dict
-
-
-#: The longest PLY header :func:`read_ply_header` reads.
-_MAX_HEADER = 1 << 20
-
-
-def read_ply_header(path: Path | str) -> PlyHeader:
-    """The header of a PLY file, without reading its data (cheap for any file size).
-
-    Raises
-    ------
-    InputError
-        Not a PLY header (no ``ply`` line or no ``end_header`` in the first megabyte).
-    """
-    path = Path(path)
-    check_regular_file(path, "a PLY file")
-    counts: dict[str, int] = {}
-    properties: list[Any] = []
-    per_element: dict[str, Any] = {}
-    element = None
-    try:
-        with open(path, "rb") as handle:
-            lines = handle.read(_MAX_HEADER).split(b"\n")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read ({exc.strerror or one_line(exc)})") from None
-    if lines[0].strip() != b"ply":
-        raise InputError(f"{path}: not a PLY file (it does not start with 'ply')")
-    for line in lines[1:]:
-        words = line.decode("ascii", "replace").split()
-        if words[:1] == ["end_header"]:
-            return PlyHeader(counts, tuple(properties), per_element)
-        if words[:1] == ["element"] and len(words) == 3 and words[2].isdigit():
-            element = words[1]
-            counts[element] = int(words[2])
-        elif words[:1] == ["property"] and element is not None and len(words) >= 3:
-            per_element[element] = per_element.get(element, 0) + 1
-            if element == "vertex":
-                properties.append(words[-1])
-    raise InputError(f"{path}: not a readable PLY file (no end_header)")
-
-
-#: Properties one PLY element may declare (scans carry a few dozen; plyfile builds a dtype of all).
-MAX_PLY_PROPERTIES = 10_000
-#: Bytes of a PCD header :func:`check_declared` reads.
-_MAX_PCD_HEADER = 1 << 16
-
-
-def check_declared(path: Path) -> None:
-    """Refuse a PLY or PCD file whose header declares more than the file can hold or the reader may
-    build (10⁷ properties, 10¹² points), before any reader allocates for it.
-
-    Every declared item takes at least one byte per property in the file; a point takes 24 bytes
-    of memory once read.
-
-    Raises
-    ------
-    InputError
-    """
-    from ..linalg.estimate import available_memory
-
-    ext = path.suffix.lower()
-    if ext == ".ply":
-        with open(path, "rb") as handle:
-            if handle.read(3) != b"ply":  # not a PLY at all: the reader says what is wrong
-                return
-        header = read_ply_header(path)
-        crowded = {e: n for e, n in header.property_counts.items() if n > MAX_PLY_PROPERTIES}
-        if crowded:
-            element, count = next(iter(crowded.items()))
-            raise InputError(
-                f"{path}: the PLY element {element!r} declares {count:,} properties; at most "
-                f"{MAX_PLY_PROPERTIES:,} are read"
-            )
-        needed = sum(n * max(1, header.property_counts.get(e, 1)) for e, n in header.counts.items())
-        points = header.counts.get("vertex", 0)
-    elif ext == ".pcd":
-        needed = points = _pcd_points(path)
-    else:
-        return
-    size = path.stat().st_size
-    if needed > size:
-        raise InputError(
-            f"{path}: the header declares {points:,} vertices ({needed:,} values), more than its "
-            f"{size:,} bytes can hold: the file is truncated or its header is wrong"
-        )
-    memory = available_memory()
-    if memory is not None and 24 * points > memory:
-        raise InputError(
-            f"{path}: {points:,} vertices need {24 * points / 2**30:.1f} GiB to read; "
-            f"{memory / 2**30:.1f} GiB are available"
-        )
-
-
-def _pcd_points(path: Path) -> int:
-    """The ``POINTS`` a PCD header declares (0 if it declares none)."""
-    try:
-        with open(path, "rb") as handle:
-            head = handle.read(_MAX_PCD_HEADER)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read ({exc.strerror or one_line(exc)})") from None
-    for line in head.split(b"\n"):
-        words = line.decode("ascii", "replace").split()
-        if words[:1] == ["POINTS"] and len(words) == 2 and words[1].isdigit():
-            return int(words[1])
-        if words[:1] == ["DATA"]:
-            break
-    return 0
 
 
 def read_npz(path: Path | str) -> dict[str, np.ndarray]:

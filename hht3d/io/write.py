@@ -30,14 +30,15 @@ def write_ply(
 ) -> Path:
     """Write the surface with named float64 per-vertex ``attributes`` to a binary PLY.
 
-    Positions and normals are float64; ``colors`` (n, 3) in [0, 1] (default:
-    the surface's own) become uchar red/green/blue.  The file's stored scalars
+    Positions (in the file's frame: ``vertices + origin``) and normals are float64; ``colors``
+    (n, 3) in [0, 1] (default: the surface's own) become uchar red/green/blue.  The file's stored scalars
     (``surface.attributes``) are written too unless overridden by name.
     """
     from plyfile import PlyData, PlyElement
 
     fields = {**surface.attributes, **(attributes or {})}
-    columns = {"x": surface.vertices[:, 0], "y": surface.vertices[:, 1], "z": surface.vertices[:, 2]}
+    placed = surface.vertices + surface.origin  # the file's frame (a LAS scan's local origin added back)
+    columns = {"x": placed[:, 0], "y": placed[:, 1], "z": placed[:, 2]}
     normals = surface.normals
     columns.update(nx=normals[:, 0], ny=normals[:, 1], nz=normals[:, 2])
     dtype = [(k, "f8") for k in columns]

@@ -1,8 +1,8 @@
 """Declarative YAML pipelines: load → process → export, validated before anything runs.
 
 A pipeline file (schema in :mod:`hht3d.pipeline.validation`) names its inputs,
-a list of steps (operations of :data:`~hht3d.pipeline.registry.OPERATIONS`
-with parameters and references to earlier steps) and the files to write.
+a list of steps (operations of :data:`~hht3d.pipeline.registry.OPERATIONS`, or of installed
+plugins: :mod:`hht3d.pipeline.plugins`, with parameters and references to earlier steps) and the files to write.
 :func:`load_pipeline` validates it into a typed :class:`Pipeline`;
 :func:`run_pipeline` compiles that to the lazy graph of :mod:`hht3d.graph.stages`
 and runs it on any scheduler of :mod:`hht3d.execution`.
@@ -27,6 +27,7 @@ from ..output_formats import FORMATS, Format
 from .document import apply_overrides
 from .params import Param
 from .plan import ExecutionOptions, Output, Pipeline, Step
+from .plugins import operations
 from .registry import OPERATIONS, Operation, Slot
 from .runner import failures, pipeline_graph, run_pipeline
 from .validation import VERSION, builtin_models, load_pipeline, parse_pipeline
@@ -42,6 +43,7 @@ __all__ = [
     "Step",
     "Output",
     "OPERATIONS",
+    "operations",
     "Operation",
     "Slot",
     "Param",

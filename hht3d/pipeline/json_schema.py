@@ -36,12 +36,12 @@ from typing import Any
 from ..apps.filters import GAINS
 from ..output_formats import FORMATS
 from .params import Param, record_params
-from .registry import OPERATIONS
+from .plugins import operations
 from .validation import EXECUTION, MAX_ID, VERSION, builtin_models
 
 __all__ = ["pipeline_schema", "schema_text", "param_schema"]
 
-_TYPES = {"int": "integer", "float": "number", "bool": "boolean", "str": "string"}
+_TYPES = {"int": "integer", "float": "number", "bool": "boolean", "str": "string", "ints": "array"}
 
 
 def param_schema(param: Param) -> dict:
@@ -56,10 +56,14 @@ def param_schema(param: Param) -> dict:
     schema["description"] = param.doc
     if not param.required and _is_json(param.default):
         schema["default"] = param.default
+    numbers = schema
+    if param.kind == "ints":  # the range holds for each item
+        numbers = schema["items"] = {"type": "integer"}
+        schema["minItems"] = 1
     for bound, key in ((param.minimum, "minimum"), (param.maximum, "maximum")):
         if bound is not None:
             is_open = param.open_minimum if key == "minimum" else param.open_maximum
-            schema["exclusiveM" + key[1:] if is_open else key] = bound
+            numbers["exclusiveM" + key[1:] if is_open else key] = bound
     return schema
 
 
@@ -117,7 +121,7 @@ def _step_schema() -> dict:
         "type": "object",
         "properties": {
             "id": {**reference, "description": "the step's name (default: the op)"},
-            "op": {"enum": list(OPERATIONS), "description": "the operation (`hht3d ops` lists them)"},
+            "op": {"enum": list(operations()), "description": "the operation (`hht3d ops` lists them)"},
             "from": {
                 "description": "the step whose result feeds it, or {slot: step id}",
                 "anyOf": [reference, {"type": "object", "additionalProperties": reference}],
@@ -134,7 +138,7 @@ def _step_schema() -> dict:
                     "properties": {"params": _object(op.params, description=op.summary)},
                 },
             }
-            for op in OPERATIONS.values()
+            for op in operations().values()
         ],
     }
 

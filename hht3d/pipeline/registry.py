@@ -35,7 +35,8 @@ then add one entry to :data:`OPERATIONS`::
               record_params(SmoothOptions), func=smooth),
 
 Its lazy twin, if wanted outside pipelines, is one line in
-:mod:`hht3d.graph.stages`: ``smooth = mirror(smooth)``.
+:mod:`hht3d.graph.stages`: ``smooth = mirror(smooth)``.  Another package adds operations
+without changing this file through an entry point (:mod:`hht3d.pipeline.plugins`).
 """
 
 from __future__ import annotations
@@ -64,20 +65,20 @@ from ..apps.reconstruction import ReconstructionOptions
 from ..decomposition.decompose import emd
 from ..decomposition.ensemble import ensemble_settings
 from ..decomposition.options import EMDOptions, EnsembleOptions
-from ..errors import InputError, PipelineError, shown
+from ..errors import InputError, PipelineError
 from ..geometry.signals import SIGNALS, check_signal_path, signal
 from ..graph.tasks import GraphOptions
 from ..io.read import LoadOptions, load
 from ..spectral.options import RieszOptions
 from ..transform import decomposition_stage
-from .params import REQUIRED, Param, did_you_mean, record_params
+from .params import REQUIRED, Param, record_params
 
 if TYPE_CHECKING:
     from hht3d.geometry.surface import Surface
     from hht3d.graph.tasks import Builder
 
 
-__all__ = ["Slot", "Operation", "OPERATIONS", "RENAMED", "operation"]
+__all__ = ["Slot", "Operation", "OPERATIONS", "RENAMED"]
 
 
 class _Solvers(Sequence):
@@ -372,12 +373,3 @@ OPERATIONS: dict[str, Operation] = {
         ),
     )
 }
-
-
-def operation(name: str, where: str) -> Operation:
-    """The operation called ``name``; a :class:`PipelineError` with "did you mean" otherwise."""
-    if not isinstance(name, str) or name not in OPERATIONS:
-        raise PipelineError(
-            f"{where}: unknown op {shown(name)}{did_you_mean(name, OPERATIONS)} (`hht3d ops` lists them)"
-        )
-    return OPERATIONS[name]

@@ -35,6 +35,7 @@ from ..io.folder import OutputFolder
 from ..io.sealed import seal
 from ..io.storage import file_name
 from .plan import FILE, Pipeline
+from .plugins import check_allowed
 from .validation import EXECUTION
 
 __all__ = ["output_folder", "pipeline_graph", "run_pipeline", "failures"]
@@ -115,6 +116,7 @@ def run_pipeline(
     overwrite: bool = False,
     summary: bool = True,
     run: str | None = None,
+    allow_plugins: bool | None = None,
 ) -> list[ItemSummary]:
     """Run a pipeline; return one :class:`~hht3d.dataset.summary.ItemSummary` per input file.
 
@@ -122,7 +124,9 @@ def run_pipeline(
     are checked like it.  The output locations are checked first, so a run
     that could not write its results computes nothing; in a local folder,
     an existing file that hht3d did not write is refused unless
-    ``overwrite``.  ``run`` is the run id of the manifest (default: a new one).  Failed items are
+    ``overwrite``.  ``run`` is the run id of the manifest (default: a new one).  A step whose
+    operation comes from a plugin runs only with ``allow_plugins`` (default: the user's
+    ``HHT3D_ALLOW_PLUGINS=1``; :func:`~hht3d.pipeline.plugins.check_allowed`).  Failed items are
     reported in the rows (see :func:`failures`), not raised.  With
     ``summary`` and the pipeline's ``outputs.summary``, the rows are also
     written to ``summary.json`` and ``summary.csv`` in the output folder (the
@@ -134,7 +138,7 @@ def run_pipeline(
         An output or the summary cannot be written, would replace a file hht3d did not write, or
         another run held a URL folder's lock for the whole timeout.
     PipelineError
-        A bad ``scheduler`` or ``workers``.
+        A bad ``scheduler`` or ``workers``, or a plugin's operation not allowed.
 
     Examples
     --------
@@ -151,6 +155,7 @@ def run_pipeline(
     >>> [(row.status, row.imfs) for row in rows], sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
     ([('ok', 2)], ['spot_hht.npz'])
     """
+    check_allowed(plan.steps, allow_plugins)
     given = {"scheduler": scheduler, "workers": workers, "address": address, "progress": progress}
     checked = {
         p.name: p.check(given[p.name], f"{p.name}={given[p.name]}") for p in EXECUTION if given.get(p.name) is not None

@@ -17,7 +17,7 @@
       client_kwargs: {endpoint_url: https://s3.example.org}  # those come from the environment)
     steps:                          # run per input file
       - id: curvature               # optional; default the op name
-        op: signal                  # one of `hht3d ops`
+        op: signal                  # one of `hht3d ops` (built-in, or a plugin's: plugins.py)
         params: {kind: mean_curvature}
       - id: hht
         op: hht
@@ -35,12 +35,11 @@
         # (no format specs); every output must resolve inside folder and never be an input
 
 Steps without ``load`` get an implicit first step ``{id: load, op: load}``
-(``--set steps.load.params.laplacian=robust`` reaches it).
-A slot not named in ``from`` takes the result of the nearest earlier step
-of a kind it accepts, so a linear chain needs no references.  Relative paths
-are relative to the working directory.  Every error is a
-:class:`~hht3d.errors.PipelineError` naming the file and line (or the
-``--set`` override) and what to change.
+(``--set steps.load.params.laplacian=robust`` reaches it).  A slot not named in
+``from`` takes the result of the nearest earlier step of a kind it accepts, so a
+linear chain needs no references.  Relative paths are relative to the working
+directory.  Every error is a :class:`~hht3d.errors.PipelineError` naming the
+file and line (or the ``--set`` override) and what to change.
 
 Validation checks everything cheap to know before computing, and builds no
 task graph: every parameter against its record's range (``hht3d ops``),
@@ -64,7 +63,8 @@ from .order import run_order
 from .output_checks import FILE_KEYS, OUTPUTS_KEYS, check_plan_outputs, read_outputs
 from .params import did_you_mean, record_params
 from .plan import FILE, ExecutionOptions, Pipeline, Step
-from .registry import OPERATIONS, RENAMED, operation
+from .plugins import operation, operations
+from .registry import RENAMED
 from .storage_options import storage_options
 
 __all__ = [
@@ -349,7 +349,7 @@ class Validator:
             else:
                 earlier = [p[0] for p in parsed[:i] if p[1].output in slot.kinds]
                 if not earlier:
-                    makers = sorted(o.name for o in OPERATIONS.values() if o.output in slot.kinds)
+                    makers = sorted(o.name for o in operations().values() if o.output in slot.kinds)
                     raise PipelineError(
                         f"{at(entry)}: step {shown(step_id)} (op {op.name}) needs {' or '.join(slot.kinds)} input "
                         f"{shown(slot.name)}, and no earlier step makes one; add a step with op "

@@ -63,7 +63,7 @@ INVALID = {
     ),
     "output of the wrong kind": (
         [("_imfs.npz", "_imfs.png")],
-        "step 'emd' makes emd, which can be written as npz, ply, not 'png'",
+        "step 'emd' makes emd, which can be written as npz, ply, las, laz, vtu, vtp, not 'png'",
     ),
     "unknown output field": (
         [

@@ -13,6 +13,9 @@ surface     ``ply``, ``png`` (shaded), ``html`` (interactive page; a filtered or
             reconstructed surface beside the one it was made from)
 features    ``ply`` (the surface with ``feature_count`` and ``feature``, features red),
             ``npz`` (vertices, counts, points, vertex_counts, min_count)
+every kind  ``las``, ``laz`` (the points, a LAS input's dimensions, the fields as
+            extra bytes; ``lidar`` extra), ``vtu`` (``meshio`` extra), ``vtp``: the
+            surface with every field (:mod:`hht3d.output_formats.points`)
 ==========  ==========================================================================
 
 Every writer is ``write(value, surface, path, **options) -> Path`` and writes
@@ -25,7 +28,8 @@ pipeline parameters :func:`hht3d.pipeline.params.record_params` makes.
 
 :meth:`HHTResult.save <hht3d.transform.HHTResult.save>` and
 :func:`hht3d.dataset.run_dataset` write the formats of a kind that take no
-options (:func:`plain_formats`: ``.ply`` and ``.npz`` of an HHT result); a
+options (:func:`plain_formats`: ``.ply``, ``.npz``, ``.vtu`` and ``.vtp`` of an HHT
+result; ``run_dataset`` writes ``.ply`` and ``.npz`` unless asked); a
 pipeline's ``outputs.files`` take any of them (:mod:`hht3d.pipeline.output_checks`),
 and ``hht3d ops`` and the JSON Schema list them.
 
@@ -33,26 +37,33 @@ Examples
 --------
 >>> from hht3d.output_formats import FORMATS, by_suffix, plain_formats
 >>> list(plain_formats("hht")), by_suffix()[".ply"]
-(['.ply', '.npz'], 'ply')
+(['.ply', '.npz', '.vtu', '.vtp'], 'ply')
 >>> list(FORMATS["hht"]["png"].options.specs())
 ['figure', 'field', 'signal_name', 'view', 'up']
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import InputError, did_you_mean, shown
-from .io.write import write_colored_ply, write_npz, write_ply
-from .records import Record, option
-from .transform import FIELDS, IMF_FIELDS, field_imf
-from .viz.render import UP_AXES, VIEWS
-from .viz.viewer import VERTEX_BUDGET
+from ..errors import InputError, shown
+from ..io.write import write_colored_ply, write_npz, write_ply
+from .options import (
+    Format,
+    FormatOptions,
+    _Colours,
+    _FieldColours,
+    _HHTFigure,
+    _HHTPage,
+    _SignalFigure,
+    _SurfaceFigure,
+    _SurfacePage,
+)
+from .points import emd_fields, feature_fields, point_formats
 
 if TYPE_CHECKING:
     from hht3d.geometry.surface import Surface
@@ -62,115 +73,8 @@ if TYPE_CHECKING:
 
 __all__ = ["Format", "FormatOptions", "FORMATS", "by_suffix", "plain_formats"]
 
-_NAMES = (*FIELDS, *(f"{kind}_K" for kind in IMF_FIELDS))
-#: The fields of an HHT result, in words: ``signal, residue, imf_K, ... or frequency_K``.
-_FIELDS_TEXT = f"{', '.join(_NAMES[:-1])} or {_NAMES[-1]}"
 _FEATURE_RED = np.array([0.85, 0.1, 0.1])
 _FEATURE_GREY = np.array([0.75, 0.75, 0.73])
-
-
-@dataclass(frozen=True)
-class FormatOptions(Record):
-    """Base of a format's options; besides the fields' types and ranges it refuses what a
-    :class:`~hht3d.records.Spec` cannot say: a ``field`` no HHT result has (``imf_0``,
-    ``frequncy_1``) and a ``cmap`` Matplotlib does not know."""
-
-    label = "output"
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        name = getattr(self, "field", None)
-        if name is not None and name not in FIELDS and field_imf(name) is None:
-            raise InputError(f"unknown field {shown(name)}; use {_FIELDS_TEXT} (K = 1 for the finest IMF)")
-        cmap = getattr(self, "cmap", None)
-        if cmap is not None:
-            import matplotlib
-
-            if cmap not in matplotlib.colormaps:
-                raise InputError(
-                    f"unknown colour map {shown(cmap)}{did_you_mean(cmap, matplotlib.colormaps, listing=False)}"
-                )
-
-
-@dataclass(frozen=True)
-class Format:
-    """A way to write one kind of result: its name, file suffix, summary, writer and options."""
-
-    name: str
-    suffix: str
-    summary: str
-    write: Callable = field(repr=False)
-    options: type[FormatOptions] = FormatOptions
-
-
-def _field() -> Any:
-    return option("signal", _FIELDS_TEXT)
-
-
-def _view() -> Any:
-    return option("front", "camera direction", choices=tuple(VIEWS))
-
-
-def _up() -> Any:
-    return option("y", "the model's up axis", choices=UP_AXES)
-
-
-def _max_vertices() -> Any:
-    return option(VERTEX_BUDGET, "larger surfaces are shown as a decimated copy carrying the fields", minimum=4)
-
-
-@dataclass(frozen=True)
-class _FieldColours(FormatOptions):
-    field: str = _field()
-    cmap: str = option("viridis", "Matplotlib colour map")
-
-
-@dataclass(frozen=True)
-class _Colours(FormatOptions):
-    cmap: str = option("viridis", "Matplotlib colour map")
-
-
-@dataclass(frozen=True)
-class _HHTFigure(FormatOptions):
-    figure: str = option("hht", "which figure", choices=("hht", "spectrum", "field"))
-    field: str = _field()
-    signal_name: str = option("signal", "name of the signal in titles")
-    view: str = _view()
-    up: str = _up()
-
-
-@dataclass(frozen=True)
-class _View(FormatOptions):
-    view: str = _view()
-    up: str = _up()
-
-
-@dataclass(frozen=True)
-class _FieldView(FormatOptions):
-    field: str = _field()
-    view: str = _view()
-    up: str = _up()
-
-
-@dataclass(frozen=True)
-class _HHTPage(_FieldView):
-    max_vertices: int = _max_vertices()
-
-
-@dataclass(frozen=True)
-class _SignalFigure(_View):
-    cmap: str | None = option(None, "Matplotlib colour map (default: diverging for signed fields)", kind="str")
-    title: str | None = option(None, "figure title (default: the surface name)", kind="str")
-
-
-@dataclass(frozen=True)
-class _SurfaceFigure(_View):
-    title: str | None = option(None, "figure title (default: the surface name)", kind="str")
-
-
-@dataclass(frozen=True)
-class _SurfacePage(_View):
-    max_vertices: int = _max_vertices()
 
 
 def _hht_field(result: HHTResult, name: str) -> np.ndarray:
@@ -205,8 +109,8 @@ def _hht_png(
     view: View,
     up: View,
 ) -> Path:
-    from .viz.figures import hht_figure, spectrum_figure
-    from .viz.panels import field_figure, save_figure
+    from ..viz.figures import hht_figure, spectrum_figure
+    from ..viz.panels import field_figure, save_figure
 
     if figure == "hht":
         fig = hht_figure(result, view=view, up=up, signal_name=signal_name)
@@ -230,8 +134,7 @@ def _emd_npz(decomposition: Any, surface: Surface, path: Path | str) -> Path:
 
 
 def _emd_ply(decomposition: Any, surface: Surface, path: Path | str) -> Path:
-    fields = {f"imf_{k + 1}": imf for k, imf in enumerate(decomposition.imfs)}
-    return write_ply(path, surface, {**fields, "residue": decomposition.residue})
+    return write_ply(path, surface, emd_fields(decomposition))
 
 
 def _signal_npz(values: np.ndarray, surface: Surface, path: Path | str) -> Path:
@@ -245,7 +148,7 @@ def _signal_colored(values: np.ndarray, surface: Surface, path: Path | str, *, c
 def _signal_png(
     values: np.ndarray, surface: Surface, path: Path | str, *, view: View, up: View, cmap: str, title: str | None
 ) -> Path:
-    from .viz.panels import render_png
+    from ..viz.panels import render_png
 
     return render_png(path, surface, values, view=view, up=up, cmap=cmap, title=title or f"{surface.name}: signal")
 
@@ -255,13 +158,13 @@ def _surface_ply(surface: Surface, _: Any, path: Path | str) -> Path:
 
 
 def _surface_png(surface: Surface, _: Any, path: Path | str, *, view: View, up: View, title: str | None) -> Path:
-    from .viz.panels import render_png
+    from ..viz.panels import render_png
 
     return render_png(path, surface, None, view=view, up=up, title=title)
 
 
 def _surface_html(surface: Surface, origin: Any, path: Path | str, *, view: View, up: View, max_vertices: int) -> Path:
-    from .viz.viewer import SHAPE, surfaces_html, write_page
+    from ..viz.viewer import SHAPE, surfaces_html, write_page
 
     if origin is surface:
         return write_page(
@@ -278,15 +181,9 @@ def _surface_html(surface: Surface, origin: Any, path: Path | str, *, view: View
 
 
 def _features_ply(features: Any, surface: Surface, path: Path | str) -> Path:
-    is_feature = np.zeros(surface.n_vertices)
-    is_feature[features.vertices] = 1.0
-    colors = np.where(is_feature[:, None] > 0, _FEATURE_RED, _FEATURE_GREY)
-    return write_ply(
-        path,
-        surface,
-        {"feature_count": features.vertex_counts.astype(np.float64), "feature": is_feature},
-        colors=colors,
-    )
+    fields = feature_fields(features, surface)
+    colors = np.where(fields["feature"][:, None] > 0, _FEATURE_RED, _FEATURE_GREY)
+    return write_ply(path, surface, fields, colors=colors)
 
 
 def _features_npz(features: Any, surface: Surface, path: Path | str) -> Path:
@@ -363,6 +260,9 @@ FORMATS: dict[str, dict[str, Format]] = {
         )
     },
 }
+
+for _kind, _formats in FORMATS.items():  # every kind's surface and fields as points: LAS, LAZ, VTK, ...
+    _formats.update({f.name: f for f in point_formats(_kind)})
 
 
 def by_suffix() -> dict[str, str]:

@@ -1,0 +1,220 @@
+"""LAS and LAZ point clouds through laspy (``pip install 'hht3d[lidar]'``; lazrs decompresses LAZ).
+
+Coordinates are read as the file stores them, integers ``X`` scaled and offset, in float64 and
+relative to a local origin (the file's offset plus its first chunk's smallest integer coordinate):
+``surface.vertices + surface.origin`` are the file's coordinates, and a scan 10⁶ m from its datum
+keeps every digit of its scale.  Writing turns them back into the same integers.
+
+Every scalar per-point dimension becomes a stored attribute (:func:`~hht3d.io.formats.usable_name`
+of its name): ``intensity``, ``classification``, ``return_number``, ``gps_time``, ..., every
+extra-bytes dimension, and ``luminance`` (Rec. 709) beside the colours of RGB formats.  Array-valued
+extra-bytes dimensions are not read.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, one_line
+from ..geometry.surface import MIN_VERTICES, Surface
+from .atomic import atomic_path
+from .formats import short, usable_name
+
+__all__ = ["LAS_EXTENSIONS", "CHUNK_POINTS", "LasSource", "read_las", "write_las", "bytes_per_point"]
+
+LAS_EXTENSIONS = (".las", ".laz")
+#: Points decoded at a time.
+CHUNK_POINTS = 1_000_000
+#: Dimensions read as positions and colours, not as attributes.
+_GEOMETRY = ("X", "Y", "Z", "red", "green", "blue")
+_LUMA = np.array([0.2126, 0.7152, 0.0722])
+#: Extra-bytes names hold at most 32 bytes.
+_MAX_EXTRA_NAME = 32
+
+
+@dataclass(frozen=True)
+class LasSource:
+    """What :func:`read_las` keeps to write the file back: its laspy header (point format, scales,
+    offsets, VLRs such as the CRS) and the full-scale value of its colours (255 or 65535)."""
+
+    header: Any
+    color_scale: float = 65535.0
+
+
+def _laspy(compressed: bool = False) -> ModuleType:
+    try:
+        import laspy
+    except ImportError:
+        raise InputError("LAS/LAZ files need laspy: pip install 'hht3d[lidar]'") from None
+    if compressed and not laspy.LazBackend.detect_available():
+        raise InputError("LAZ files need lazrs: pip install 'hht3d[lidar]'")
+    return laspy
+
+
+def _attribute_dimensions(point_format: Any) -> list[str]:
+    """The scalar dimensions read as attributes."""
+    return [d.name for d in point_format.dimensions if d.name not in _GEOMETRY and d.num_elements == 1]
+
+
+def bytes_per_point(point_format: Any) -> int:
+    """Memory one kept point takes once read: float64 coordinates, attributes, colours and luminance."""
+    has_rgb = "red" in point_format.dimension_names
+    return 8 * (3 + len(_attribute_dimensions(point_format)) + (4 if has_rgb else 0))
+
+
+def read_las(path: Path, classes: Sequence[int] | None = None) -> dict:
+    """The arrays of a :class:`~hht3d.geometry.surface.Surface` from a LAS or LAZ file, read in chunks
+    of :data:`CHUNK_POINTS`.
+
+    Memory: :func:`bytes_per_point` per point the header declares (8 bytes × (3 + the scalar
+    dimensions + 4 with RGB): 160 bytes for point format 3, 168 for format 7), plus about 60 bytes
+    per point of one chunk (its decoded records and temporaries; measured peak 219 bytes per point
+    for a 10⁶-point format-3 file, one chunk); with ``classes``, the kept points are copied out.
+    ``classes`` keeps only points of these classification codes.
+
+    Raises
+    ------
+    InputError
+        laspy (or lazrs for LAZ) missing, not a LAS file, a header declaring more points than the file
+        holds or memory can take, no points, or fewer than 4 left by ``classes``.
+    """
+    from ..linalg.estimate import available_memory
+
+    laspy = _laspy(path.suffix.lower() == ".laz")
+    try:
+        reader = laspy.open(str(path))
+    except Exception as exc:  # laspy raises many types on a corrupt header
+        raise InputError(f"{short(path)}: not a readable LAS/LAZ file ({one_line(exc)})") from None
+    with reader:
+        header = reader.header
+        count, point_format = int(header.point_count), header.point_format
+        if count == 0:
+            raise InputError(f"{short(path)}: the file holds no points")
+        size = path.stat().st_size
+        if not header.are_points_compressed and header.offset_to_point_data + count * point_format.size > size:
+            raise InputError(
+                f"{short(path)}: the header declares {count:,} points of {point_format.size} bytes, more than "
+                f"its {size:,} bytes hold: the file is truncated or its header is wrong"
+            )
+        need, memory = count * bytes_per_point(point_format), available_memory()
+        if memory is not None and need > memory:
+            raise InputError(
+                f"{short(path)}: {count:,} points need {need / 2**30:.1f} GiB to read; "
+                f"{memory / 2**30:.1f} GiB are available"
+            )
+        try:
+            data = _read_points(reader, count, classes)
+        except InputError:
+            raise
+        except Exception as exc:  # lazrs and laspy raise their own types on corrupt point data
+            raise InputError(f"{short(path)}: the points cannot be read ({one_line(exc)})") from None
+    kept, seen = len(data["vertices"]), data.pop("classes_seen")
+    if classes is not None and kept < MIN_VERTICES:
+        raise InputError(
+            f"{short(path)}: classes {list(classes)} keep {kept:,} of {count:,} points; a surface needs at "
+            f"least {MIN_VERTICES} (the file's classes: {', '.join(map(str, seen)) or 'none'})"
+        )
+    return data
+
+
+def _read_points(reader: Any, count: int, classes: Sequence[int] | None) -> dict:
+    header = reader.header
+    names = _attribute_dimensions(header.point_format)
+    has_rgb = "red" in header.point_format.dimension_names
+    xyz = np.empty((count, 3))
+    columns = {name: np.empty(count) for name in names}
+    rgb = np.empty((count, 3)) if has_rgb else None
+    reference: np.ndarray | None = None
+    seen = np.zeros(256, dtype=bool)
+    filled = read = 0
+    for chunk in reader.chunk_iterator(CHUNK_POINTS):
+        code = np.asarray(chunk.classification)
+        read += len(code)
+        seen |= np.bincount(code, minlength=256)[:256] > 0
+        keep = None if classes is None else np.flatnonzero(np.isin(code, classes))
+        end = filled + (len(code) if keep is None else len(keep))
+        if reference is None:
+            reference = np.array([np.asarray(chunk[name]).min() for name in "XYZ"], dtype=np.int64)
+        for axis, name in enumerate("XYZ"):
+            ints = np.asarray(chunk[name]) if keep is None else np.asarray(chunk[name])[keep]
+            xyz[filled:end, axis] = (ints.astype(np.int64) - reference[axis]) * header.scales[axis]
+        for name in names:
+            values = np.asarray(chunk[name])
+            columns[name][filled:end] = values if keep is None else values[keep]
+        if rgb is not None:
+            for axis, name in enumerate(("red", "green", "blue")):
+                values = np.asarray(chunk[name])
+                rgb[filled:end, axis] = values if keep is None else values[keep]
+        filled = end
+    if read < count:
+        raise InputError(f"the file holds {read:,} of the {count:,} points its header declares")
+    trim = (lambda a: a[:filled].copy()) if filled < count else (lambda a: a)
+    scale = 255.0 if rgb is not None and filled and rgb[:filled].max() <= 255 else 65535.0
+    data: dict[str, Any] = {
+        "vertices": trim(xyz),
+        "faces": None,
+        "attributes": {usable_name(name): trim(values) for name, values in columns.items()},
+        "origin": np.asarray(header.offsets) + np.asarray(header.scales) * (0 if reference is None else reference),
+        "header": LasSource(copy.deepcopy(header), scale),
+        "classes_seen": np.flatnonzero(seen).tolist(),
+    }
+    if rgb is not None:
+        data["colors"] = trim(rgb) / scale
+        data["attributes"]["luminance"] = data["colors"] @ _LUMA
+    return data
+
+
+def write_las(path: Path | str, surface: Surface, fields: dict | None = None, *, precision: str = "float64") -> Path:
+    """Write the surface's points as LAS (LAZ for a ``.laz`` suffix) atomically.
+
+    A surface read from LAS keeps its point format, scales, offsets, VLRs and every dimension (from
+    its attributes and colours); other attributes and ``fields`` (IMFs, amplitude, frequency, ...) are
+    added as extra-bytes dimensions of type ``precision``.  Another surface becomes point format 0
+    (7 with colours) with a scale of 10⁻⁷ of its bounding box.
+    """
+    path = Path(path)
+    compress = path.suffix.lower() == ".laz"
+    laspy = _laspy(compress)
+    source = surface.header if isinstance(surface.header, LasSource) else _new_source(laspy, surface)
+    header = copy.deepcopy(source.header)
+    standard = {usable_name(d): d for d in header.point_format.dimension_names}
+    values = {**surface.attributes, **(fields or {})}
+    added = [name for name in values if name not in standard and name != "luminance"]
+    for name in added:
+        if len(name) > _MAX_EXTRA_NAME:
+            raise InputError(f"{name!r}: a LAS extra-bytes name holds at most {_MAX_EXTRA_NAME} characters")
+    header.add_extra_dims([laspy.ExtraBytesParams(name, type=np.dtype(precision)) for name in added])
+    las = laspy.LasData(header, points=laspy.ScaleAwarePointRecord.zeros(surface.n_vertices, header=header))
+    scales, offsets = np.asarray(header.scales), np.asarray(header.offsets)
+    reference = np.round((surface.origin - offsets) / scales).astype(np.int64)
+    integers = reference + np.round(surface.vertices / scales).astype(np.int64)
+    las.X, las.Y, las.Z = integers[:, 0], integers[:, 1], integers[:, 2]
+    for name, values_of in values.items():
+        dimension = standard.get(name, name)
+        if dimension in _GEOMETRY or name == "luminance":
+            continue
+        kind = las.points[dimension].dtype if dimension not in added else np.dtype(precision)
+        column = np.asarray(values_of, dtype=np.float64)
+        las[dimension] = column.astype(kind) if kind.kind == "f" else np.rint(column).astype(kind)
+    if surface.colors is not None and "red" in header.point_format.dimension_names:
+        rgb = np.round(np.clip(surface.colors, 0, 1) * source.color_scale).astype(np.uint16)
+        las.red, las.green, las.blue = rgb[:, 0], rgb[:, 1], rgb[:, 2]
+    with atomic_path(path) as tmp, open(tmp, "wb") as handle:  # a stream: laspy compresses a path by its suffix
+        las.write(handle, do_compress=compress)
+    return path
+
+
+def _new_source(laspy: ModuleType, surface: Surface) -> LasSource:
+    header = laspy.LasHeader(point_format=7 if surface.colors is not None else 0, version="1.4")
+    lowest = surface.vertices.min(axis=0)
+    extent = max(surface.bounding_box_diagonal, 1e-300)
+    header.scales = np.full(3, 10.0 ** np.floor(np.log10(extent * 1e-7)))
+    header.offsets = surface.origin + lowest
+    return LasSource(header)

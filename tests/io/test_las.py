@@ -1,0 +1,220 @@
+"""LAS and LAZ (hht3d.io.las): files written by laspy, read by hht3d, written back and read by laspy again.
+
+The oracle is laspy's own read: coordinates are compared as the integers the file stores (exact at
+its scale, with offsets of 10⁶ m), dimensions as their stored values.
+"""
+
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from hht3d import hht, load
+from hht3d.errors import InputError
+from hht3d.geometry.signals import signal
+from hht3d.io import las as las_module
+from hht3d.io import write_las
+from hht3d.output_formats import FORMATS
+from hht3d.pipeline import parse_pipeline, run_pipeline
+
+laspy = pytest.importorskip("laspy")
+
+OFFSETS = np.array([512_000.0, 5_400_000.0, 250.0])  # a UTM-like datum: 10⁶ m from the origin
+
+
+def scan(path, n=900, *, point_format=3, seed=0):
+    """A wavy patch of ``n`` points 10⁶ m from the origin, at millimetre scale, with intensity,
+    classes 2 (x < 5) and 6, RGB and an extra-bytes dimension with a space in its name."""
+    rng = np.random.default_rng(seed)
+    u, v = rng.uniform(0, 10, n), rng.uniform(0, 10, n)
+    header = laspy.LasHeader(point_format=point_format, version="1.4")
+    header.offsets, header.scales = OFFSETS, np.full(3, 0.001)
+    header.add_extra_dims([laspy.ExtraBytesParams("echo width", type=np.float32)])
+    data = laspy.LasData(header)
+    data.x, data.y = OFFSETS[0] + 1234.5678 + u, OFFSETS[1] + v
+    data.z = OFFSETS[2] + np.sin(u) + 0.2 * np.cos(2 * v)
+    data.intensity = (1000 + 400 * np.sin(3 * u)).astype(np.uint16)
+    data.classification = np.where(u < 5, 2, 6).astype(np.uint8)
+    data.return_number = rng.integers(1, 3, n).astype(np.uint8)
+    data.gps_time = 3e8 + np.arange(n) * 1e-5
+    data.red, data.green, data.blue = (rng.integers(0, 65536, (3, n))).astype(np.uint16)
+    data["echo width"] = rng.uniform(0, 4, n).astype(np.float32)
+    data.write(str(path))
+    return laspy.read(str(path))
+
+
+@pytest.mark.parametrize("suffix", [".las", ".laz"])
+def test_a_scan_round_trips_exactly_at_its_scale(tmp_path, suffix):
+    original = scan(tmp_path / f"scan{suffix}")
+    surface = load(tmp_path / f"scan{suffix}", clean=False)
+    assert not surface.is_mesh and surface.n_vertices == len(original.points)
+    # local coordinates near 0, the file's frame through the origin; the integers exact
+    assert np.abs(surface.vertices).max() < 20
+    np.testing.assert_array_equal(
+        np.round((surface.vertices + surface.origin - OFFSETS) / 0.001),
+        np.column_stack([original.X, original.Y, original.Z]),
+    )
+    for name in ("intensity", "classification", "return_number", "gps_time"):
+        np.testing.assert_array_equal(surface.attributes[name], np.asarray(original[name]), err_msg=name)
+    np.testing.assert_array_equal(surface.attributes["echo_width"], original["echo width"])
+    rgb = np.column_stack([original.red, original.green, original.blue]) / 65535
+    np.testing.assert_allclose(surface.attributes["luminance"], rgb @ [0.2126, 0.7152, 0.0722], rtol=1e-12)
+
+    path = write_las(tmp_path / f"back{suffix}", surface, {"wave": surface.vertices[:, 2]})
+    with laspy.open(str(path)) as reader:
+        assert reader.header.are_points_compressed == (suffix == ".laz")
+    written = laspy.read(str(path))
+    assert written.header.point_format.id == 3 and np.array_equal(written.header.offsets, OFFSETS)
+    for name in original.point_format.dimension_names:
+        np.testing.assert_array_equal(np.asarray(written[name]), np.asarray(original[name]), err_msg=name)
+    np.testing.assert_array_equal(written["wave"], surface.vertices[:, 2])
+    assert "luminance" not in written.point_format.dimension_names  # derived from RGB, not written
+
+
+def test_chunks_and_the_classes_filter_read_what_laspy_reads(tmp_path, monkeypatch):
+    monkeypatch.setattr(las_module, "CHUNK_POINTS", 128)  # 900 points: 8 chunks, the last one short
+    original = scan(tmp_path / "scan.laz")
+    ground = np.asarray(original.classification) == 2
+    surface = load(tmp_path / "scan.laz", clean=False, classes=[2])
+    assert surface.n_vertices == ground.sum()
+    np.testing.assert_array_equal(surface.attributes["intensity"], np.asarray(original.intensity)[ground])
+    np.testing.assert_array_equal(
+        np.round((surface.vertices + surface.origin - OFFSETS) / 0.001),
+        np.column_stack([original.X, original.Y, original.Z])[ground],
+    )
+    assert load(tmp_path / "scan.laz", clean=False, classes=[2, 6]).n_vertices == len(original.points)
+
+
+def test_a_pipeline_filters_classes_reads_intensity_and_writes_imfs_as_extra_bytes(tmp_path):
+    original = scan(tmp_path / "scan.laz", n=700)
+    text = textwrap.dedent(f"""\
+        version: 1
+        execution: {{scheduler: synchronous, progress: false}}
+        inputs: {tmp_path / "scan.laz"}
+        steps:
+          - {{id: load, op: load, params: {{classes: [2, 6], clean: false}}}}
+          - {{id: intensity, op: signal, params: {{kind: stored, attribute: intensity}}}}
+          - {{id: hht, op: hht, params: {{max_imfs: 1}}}}
+        outputs:
+          folder: {tmp_path / "out"}
+          files:
+            - {{from: hht, path: "{{stem}}_hht.laz", precision: float32}}
+        """)
+    (row,) = run_pipeline(parse_pipeline(text))
+    assert row.status == "ok", row.error
+    written = laspy.read(str(tmp_path / "out" / "scan_hht.laz"))
+    surface = load(tmp_path / "scan.laz", clean=False)
+    result = hht(surface, signal(surface, "stored", attribute="intensity"), max_imfs=1)
+    np.testing.assert_array_equal(written.X, original.X)
+    np.testing.assert_array_equal(written.intensity, original.intensity)
+    for name in ("signal", "residue", "imf_1", "amplitude_1", "frequency_1"):
+        assert written.point_format.dimension_by_name(name).dtype == np.float32, name
+        expected = result.vertex_attributes()[name].astype(np.float32)
+        np.testing.assert_allclose(written[name], expected, rtol=1e-5, atol=1e-5 * np.abs(expected).max(), err_msg=name)
+
+
+def test_a_filtered_scan_is_written_back_in_its_frame(tmp_path):
+    from hht3d.apps import filter_geometry
+    from hht3d.apps.filters import LowPass
+
+    original = scan(tmp_path / "scan.las", n=400)
+    surface = load(tmp_path / "scan.las", clean=False)
+    result = hht(surface, signal(surface, "mean_curvature"), max_imfs=1)
+    smoothed = filter_geometry(result, LowPass(cutoff=1.0))
+    written = laspy.read(str(FORMATS["surface"]["las"].write(smoothed, surface, tmp_path / "smooth.las")))
+    moved = np.abs(written.xyz - original.xyz).max()
+    assert 0 < moved < 1  # moved by the filter, not by 10⁶ m
+    np.testing.assert_array_equal(written.intensity, original.intensity)
+
+
+def test_a_mesh_written_as_las_keeps_its_points_at_the_chosen_scale(tmp_path, sphere):
+    path = FORMATS["surface"]["las"].write(sphere, sphere, tmp_path / "sphere.las", precision="float64")
+    written = laspy.read(str(path))
+    scale = written.header.scales[0]
+    assert scale <= 1e-6 * sphere.bounding_box_diagonal
+    np.testing.assert_allclose(written.xyz, sphere.vertices, rtol=0, atol=scale / 2 + 1e-12)
+
+
+def test_hht3d_info_reports_the_points_classes_and_dimensions(tmp_path, capsys):
+    import json
+
+    from hht3d.cli import main
+
+    original = scan(tmp_path / "scan.laz")
+    assert main(["info", str(tmp_path / "scan.laz"), "--no-clean", "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    codes = np.asarray(original.classification)
+    assert info["vertices"] == 900 and info["classes"] == {"2": int((codes == 2).sum()), "6": int((codes == 6).sum())}
+    assert {"intensity", "return_number", "gps_time", "echo_width", "luminance"} <= set(info["attributes"])
+    np.testing.assert_allclose(info["bounding_box_min"], original.header.mins, rtol=0, atol=1e-6)
+
+
+def test_clear_errors(tmp_path, monkeypatch, sphere):
+    scan(tmp_path / "scan.las")
+    with pytest.raises(
+        InputError,
+        match=r"classes \[9\] keep 0 of 900 points; a surface needs at least 4 "
+        r"\(the file's classes: 2, 6\)",
+    ):
+        load(tmp_path / "scan.las", classes=[9])
+    with pytest.raises(InputError, match="classification codes"):
+        load(tmp_path / "scan.las", classes=[256])
+    with pytest.raises(InputError, match="load option classes is for .las, .laz files; this is .ply"):
+        from hht3d.io import write_ply
+
+        load(write_ply(tmp_path / "sphere.ply", sphere), classes=[2])
+
+    empty = laspy.LasData(laspy.LasHeader(point_format=0, version="1.4"))
+    empty.write(str(tmp_path / "empty.las"))
+    with pytest.raises(InputError, match="empty.las: the file holds no points"):
+        load(tmp_path / "empty.las")
+
+    data = bytearray((tmp_path / "scan.las").read_bytes())  # the header declares 900 points; keep 10
+    cut = tmp_path / "cut.las"
+    cut.write_bytes(data[: laspy.read(str(tmp_path / "scan.las")).header.offset_to_point_data + 10 * 38])
+    with pytest.raises(InputError, match="declares 900 points of .* more than its .* bytes hold"):
+        load(cut)
+    scan(tmp_path / "scan.laz")  # a LAZ chunk table past the end, and a LAZ cut short
+    data = bytearray((tmp_path / "scan.laz").read_bytes())
+    start = laspy.read(str(tmp_path / "scan.laz")).header.offset_to_point_data
+    (tmp_path / "cut.laz").write_bytes(data[: start + 200])
+    data[start : start + 8] = (len(data) + 10**6).to_bytes(8, "little")  # where the chunk table is said to be
+    (tmp_path / "table.laz").write_bytes(data)
+    for name in ("table.laz", "cut.laz"):
+        with pytest.raises(InputError, match=rf"{name}: the points cannot be read \(.*\)$"):
+            load(tmp_path / name)
+    (tmp_path / "junk.laz").write_bytes(b"LASF" + bytes(400))
+    with pytest.raises(InputError, match="junk.laz: not a readable LAS/LAZ file"):
+        load(tmp_path / "junk.laz")
+
+    monkeypatch.setitem(sys.modules, "laspy", None)  # laspy not installed
+    with pytest.raises(InputError, match=r"^LAS/LAZ files need laspy: pip install 'hht3d\[lidar\]'$"):
+        load(tmp_path / "scan.las")
+
+
+@pytest.mark.parametrize("suffix", [".las", ".laz"])
+def test_a_real_scan_round_trips(tmp_path, shared_model, suffix):
+    """The Kinect office frame (62,143 points with their real RGB) as a LAS 1.4 point format 7 scan
+    10⁶ m from its datum at 0.01 mm, written by laspy; read and written back by hht3d, read by laspy."""
+    from plyfile import PlyData
+
+    vertex = PlyData.read(str(shared_model("office_kinect_colored.ply")))["vertex"].data
+    header = laspy.LasHeader(point_format=7, version="1.4")
+    header.offsets, header.scales = OFFSETS, np.full(3, 1e-5)
+    data = laspy.LasData(header)
+    data.x, data.y, data.z = (OFFSETS[k] + np.asarray(vertex[c], dtype=np.float64) for k, c in enumerate("xyz"))
+    data.red, data.green, data.blue = (np.asarray(vertex[c], dtype=np.uint16) * 257 for c in ("red", "green", "blue"))
+    data.intensity = np.arange(len(vertex), dtype=np.uint16)
+    data.write(str(tmp_path / f"office{suffix}"))
+    original = laspy.read(str(tmp_path / f"office{suffix}"))
+
+    surface = load(tmp_path / f"office{suffix}", clean=False)
+    assert surface.n_vertices == len(vertex) == 62_143
+    np.testing.assert_array_equal(
+        np.round((surface.vertices + surface.origin - OFFSETS) / 1e-5),
+        np.column_stack([original.X, original.Y, original.Z]),
+    )
+    written = laspy.read(str(write_las(tmp_path / f"back{suffix}", surface)))
+    for name in original.point_format.dimension_names:
+        np.testing.assert_array_equal(np.asarray(written[name]), np.asarray(original[name]), err_msg=name)
