@@ -286,7 +286,7 @@ def _add_run_options(parser: argparse.ArgumentParser, *, running: bool = True) -
         help="skip inputs whose outputs are done: recorded complete (same size and "
         "checksum) in the output folder's manifest",
     )
-    parser.add_argument("--allow-plugins", action="store_true", help="run operations of plugins (their packages' code)")
+    parser.add_argument("--allow-plugins", action="store_true", help="run plugins' operations and python steps")
     parser.add_argument(
         "--overwrite",
         action="store_true",

@@ -45,7 +45,7 @@ class Step:
 
     @property
     def kind(self) -> str:
-        return self.op.output
+        return self.op.output_kind(self.params)
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ loaded once, on the first call, not when hht3d is imported.  A plugin that fails
 something that is not an ``Operation``, uses an unknown kind or takes the name of a built-in or an
 earlier plugin's operation is left out and reported in one line (:func:`plugin_problems`, logged as
 a warning); the others still load.  Pipelines are shared files and a plugin's operation runs its
-package's code, so a run refuses one unless the user allows it (:func:`check_allowed`:
+package's code, so a run refuses one, and a ``python`` step, unless the user allows it (:func:`check_allowed`:
 ``hht3d run --allow-plugins``, or ``HHT3D_ALLOW_PLUGINS=1`` in the user's environment).
 """
 
@@ -28,6 +28,7 @@ from typing import Any
 
 from ..errors import PipelineError, one_line, shown
 from ..logs import get_logger
+from . import python_step
 from .params import did_you_mean
 from .registry import OPERATIONS, Operation
 
@@ -122,8 +123,9 @@ def operation(name: str, where: str) -> Operation:
 
 
 def check_allowed(steps: Iterable[Any], allow: bool | None = None) -> None:
-    """Refuse a step whose operation comes from a plugin unless ``allow`` (``None``: whether the
-    user's environment sets :data:`ALLOW` to ``1``).
+    """Refuse a step whose operation comes from a plugin, or a ``python`` step
+    (:mod:`hht3d.pipeline.python_step`), unless ``allow`` (``None``: whether the user's environment
+    sets :data:`ALLOW` to ``1``).
 
     Raises
     ------
@@ -138,4 +140,9 @@ def check_allowed(steps: Iterable[Any], allow: bool | None = None) -> None:
             raise PipelineError(
                 f"step {step.id!r} runs op {step.op.name!r} of the plugin {sources[step.op.name]}, which runs that "
                 f"package's code; pass --allow-plugins (or set {ALLOW}=1) to run it"
+            )
+        if step.op.name == python_step.NAME:
+            raise PipelineError(
+                f"step {step.id!r} is a python step calling {step.params['function']}, which runs that code; "
+                f"pass --allow-plugins (or set {ALLOW}=1) to run it"
             )

@@ -71,6 +71,7 @@ from ..graph.tasks import GraphOptions
 from ..io.read import LoadOptions, load
 from ..spectral.options import RieszOptions
 from ..transform import decomposition_stage
+from . import python_step
 from .params import REQUIRED, Param, record_params
 
 if TYPE_CHECKING:
@@ -132,6 +133,8 @@ class Operation:
         parameter combinations the types cannot express.
     vertices : callable, optional
         ``vertices(params)`` gives ``(parameter, count)``: the fewest vertices an input needs.
+    kind_of : callable, optional
+        ``kind_of(params)`` gives the result's kind when a parameter chooses it (``output`` is the default).
     """
 
     name: str
@@ -143,6 +146,7 @@ class Operation:
     build: Callable | None = field(default=None, repr=False)
     check: Callable | None = field(default=None, repr=False)
     vertices: Callable | None = field(default=None, repr=False)
+    kind_of: Callable | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if (self.func is None) == (self.build is None):
@@ -161,6 +165,10 @@ class Operation:
             return {"result": builder.task(self.name, self.func)(*args, **params)}
         made = cast(Callable[..., Any], self.build)(builder, *args, **params)  # func or build is set
         return made if isinstance(made, dict) else {"result": made}
+
+    def output_kind(self, params: dict) -> str:
+        """The kind of the result for these parameters."""
+        return self.output if self.kind_of is None else self.kind_of(params)
 
     def fewest_vertices(self, params: dict) -> tuple[str, int] | None:
         """``(parameter, count)``: the fewest vertices an input needs for these parameters, if any."""
@@ -370,6 +378,16 @@ OPERATIONS: dict[str, Operation] = {
             (_GAIN, *record_params(HarmonicFilterOptions), _BACKEND),
             func=manifold_harmonics_filter,
             vertices=_eigenpair_vertices,
+        ),
+        Operation(
+            python_step.NAME,
+            "call an importable function module:function on a step's result (runs code: --allow-plugins)",
+            (Slot("input", tuple(python_step.RESULTS)),),
+            "signal",
+            python_step.PARAMS,
+            func=python_step.call,
+            check=python_step.check_function,
+            kind_of=lambda params: params["output"],
         ),
     )
 }

@@ -36,6 +36,7 @@ from ..io.sealed import seal
 from ..io.storage import file_name
 from .plan import FILE, Pipeline
 from .plugins import check_allowed
+from .python_step import resolve_steps
 from .validation import EXECUTION
 
 __all__ = ["output_folder", "pipeline_graph", "run_pipeline", "failures"]
@@ -125,8 +126,9 @@ def run_pipeline(
     that could not write its results computes nothing; in a local folder,
     an existing file that hht3d did not write is refused unless
     ``overwrite``.  ``run`` is the run id of the manifest (default: a new one).  A step whose
-    operation comes from a plugin runs only with ``allow_plugins`` (default: the user's
-    ``HHT3D_ALLOW_PLUGINS=1``; :func:`~hht3d.pipeline.plugins.check_allowed`).  Failed items are
+    operation comes from a plugin, and a ``python`` step, run only with ``allow_plugins`` (default: the
+    user's ``HHT3D_ALLOW_PLUGINS=1``; :func:`~hht3d.pipeline.plugins.check_allowed`); a ``python``
+    step's function is imported then, before anything is computed.  Failed items are
     reported in the rows (see :func:`failures`), not raised.  With
     ``summary`` and the pipeline's ``outputs.summary``, the rows are also
     written to ``summary.json`` and ``summary.csv`` in the output folder (the
@@ -138,7 +140,8 @@ def run_pipeline(
         An output or the summary cannot be written, would replace a file hht3d did not write, or
         another run held a URL folder's lock for the whole timeout.
     PipelineError
-        A bad ``scheduler`` or ``workers``, or a plugin's operation not allowed.
+        A bad ``scheduler`` or ``workers``, a plugin's operation or a ``python`` step not allowed,
+        or a ``python`` step's function that does not import.
 
     Examples
     --------
@@ -156,6 +159,7 @@ def run_pipeline(
     ([('ok', 2)], ['spot_hht.npz'])
     """
     check_allowed(plan.steps, allow_plugins)
+    resolve_steps(plan.steps)
     given = {"scheduler": scheduler, "workers": workers, "address": address, "progress": progress}
     checked = {
         p.name: p.check(given[p.name], f"{p.name}={given[p.name]}") for p in EXECUTION if given.get(p.name) is not None

@@ -337,7 +337,7 @@ class Validator:
 
     def _refs(self, entries: Sequence[Any], parsed: Sequence[Any], i: int) -> dict:
         entry, (step_id, op, _, _) = entries[i], parsed[i]
-        kinds = {p[0]: p[1].output for p in parsed}
+        kinds = {p[0]: p[1].output_kind(p[2]) for p in parsed}
         context = f"{at(entry, 'from')}: step {shown(step_id)} (op {op.name})"
         explicit = self._explicit_refs(entry, op, kinds, context)
         refs = {}
@@ -347,9 +347,9 @@ class Validator:
             elif slot.name in explicit:
                 refs[slot.name] = explicit[slot.name]
             else:
-                earlier = [p[0] for p in parsed[:i] if p[1].output in slot.kinds]
+                earlier = [p[0] for p in parsed[:i] if kinds[p[0]] in slot.kinds]
                 if not earlier:
-                    makers = sorted(o.name for o in operations().values() if o.output in slot.kinds)
+                    makers = sorted(o.name for o in operations().values() if o.output in slot.kinds and not o.kind_of)
                     raise PipelineError(
                         f"{at(entry)}: step {shown(step_id)} (op {op.name}) needs {' or '.join(slot.kinds)} input "
                         f"{shown(slot.name)}, and no earlier step makes one; add a step with op "
