@@ -235,6 +235,11 @@ class HHTResult:
         :meth:`vertex_attributes` as named (n, 1) float vertex attributes."""
         return io.surface_to_open3d(self.surface, self.vertex_attributes())
 
+    def to_pyvista(self) -> Any:
+        """A ``pyvista.PolyData`` carrying :meth:`vertex_attributes` as point data
+        (:func:`hht3d.io.surface_to_pyvista`; needs PyVista)."""
+        return io.surface_to_pyvista(self.surface, self.vertex_attributes())
+
 
 class Stages(Protocol):
     """How :func:`hht_stages` runs a stage: at once (:func:`hht`) or as graph tasks (:mod:`hht3d.graph`)."""

@@ -7,6 +7,7 @@
 * :mod:`~hht3d.io.e57` — E57 scans through pye57 (the ``e57`` extra);
 * :mod:`~hht3d.io.mesh_files` — VTU/VTP writers and the meshio formats (the ``meshio`` extra);
 * :mod:`~hht3d.io.open3d` — conversion to and from Open3D geometries;
+* :mod:`~hht3d.io.pyvista` — conversion to and from PyVista datasets, when PyVista is installed;
 * :mod:`~hht3d.io.formats` — readable extensions, regular-file and property-name checks, name limits;
 * :mod:`~hht3d.io.references` — files a glTF or OBJ refers to, confined to its folder;
 * :mod:`~hht3d.io.paths` — output confinement, file-name checks, input expansion;
@@ -27,6 +28,7 @@ from .las import write_las
 from .manifest import check_overwrites, is_recorded, new_run_id, record
 from .open3d import surface_from_open3d, surface_to_open3d
 from .paths import check_name, check_output_location, confined, resolve_inputs
+from .pyvista import surface_from_pyvista, surface_to_pyvista
 from .read import LoadOptions, PlyHeader, data_path, load, read_npz, read_npz_shapes, read_ply_header
 from .write import field_colors, write_colored_ply, write_npz, write_ply
 
@@ -42,6 +44,8 @@ __all__ = [
     "read_npz_shapes",
     "surface_from_open3d",
     "surface_to_open3d",
+    "surface_from_pyvista",
+    "surface_to_pyvista",
     "estimate_point_normals",
     "atomic_path",
     "check_output_paths",
