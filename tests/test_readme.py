@@ -91,6 +91,13 @@ MIRRORED = {
         "tests/pipeline/test_plugins.py::ENTRY_POINTS",
         "the same entry points, in the dist-info of a test distribution on sys.path",
     ),
+    ("docs/guide/pipelines.md", "A python step", 0): Mirror(
+        "tests/pipeline/test_python_step.py::test_a_python_step_is_refused_without_opt_in_then_makes_a_signal_and_a_surface",
+        "python steps from an hht step, on functions of a module written to tmp_path and put on sys.path",
+    ),
+    ("docs/guide/pipelines.md", "A python step", 1): Mirror(
+        "tests/pipeline/test_python_step.py::MODULE", "functions of the same shape, taking an HHTResult"
+    ),
     ("docs/guide/formats.md", "E57 (terrestrial scanners)", 0): Mirror(
         ".ci/setup::e57", "CI installs the e57 extra with the package"
     ),
