@@ -178,6 +178,20 @@ def write_las(path: Path | str, surface: Surface, fields: dict | None = None, *,
     its attributes and colours); other attributes and ``fields`` (IMFs, amplitude, frequency, ...) are
     added as extra-bytes dimensions of type ``precision``.  Another surface becomes point format 0
     (7 with colours) with a scale of 10⁻⁷ of its bounding box.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.las`` or ``.laz`` file.
+    surface : Surface
+    fields : dict of str to (n,) array, optional
+        Per-point values added as extra-bytes dimensions.
+    precision : {"float64", "float32"}
+        The type of the added dimensions.
+
+    Returns
+    -------
+    Path
     """
     path = Path(path)
     compress = path.suffix.lower() == ".laz"

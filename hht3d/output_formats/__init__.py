@@ -275,7 +275,17 @@ def by_suffix() -> dict[str, str]:
 
 
 def plain_formats(kind: str) -> dict[str, Format]:
-    """The formats of ``kind`` that take no options, by suffix (the first of each suffix)."""
+    """The formats of ``kind`` that take no options, by suffix (the first of each suffix).
+
+    Parameters
+    ----------
+    kind : str
+        A result kind (``"hht"``, ``"surface"``, ...).
+
+    Returns
+    -------
+    dict of str to Format
+    """
     plain: dict[str, Format] = {}
     for fmt in FORMATS[kind].values():
         if not fmt.options.specs():
