@@ -250,6 +250,20 @@ def repeatability(points: np.ndarray, reference: np.ndarray, radius: float) -> f
     The measure of the paper's Fig. 8 comparison: features found on a
     perturbed copy, mapped to common positions, against the original's.
     Returns ``nan`` when ``points`` is empty.
+
+    Parameters
+    ----------
+    points : (p, 3) ndarray
+        The feature positions found on the perturbed copy.
+    reference : (q, 3) ndarray
+        The feature positions of the original.
+    radius : float
+        The largest distance at which a point counts as repeated.
+
+    Returns
+    -------
+    float
+        The fraction in [0, 1]; ``nan`` for no ``points``, 0 for no ``reference``.
     """
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     q = np.asarray(reference, dtype=np.float64).reshape(-1, 3)

@@ -74,7 +74,24 @@ RESULT_SUFFIXES = tuple(plain_formats("hht"))
 def output_paths(
     source: Path | str, out_dir: Path | str, formats: Iterable[str] = RESULT_SUFFIXES, pattern: str = "{stem}_hht"
 ) -> list:
-    """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format (paths or URLs)."""
+    """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format (paths or URLs).
+
+    Parameters
+    ----------
+    source : Path or str
+        The input file (or URL) whose stem names the outputs.
+    out_dir : Path or str
+        The output folder (a path or a URL).
+    formats : iterable of str, optional
+        The suffixes to write (default ``(".ply", ".npz")``).
+    pattern : str, optional
+        The file name without suffix; ``{stem}`` is its only field (default ``"{stem}_hht"``).
+
+    Returns
+    -------
+    list
+        One path (or URL string) per format, in order.
+    """
     try:
         base = str(pattern).format(stem=stem(source))
     except (IndexError, KeyError, ValueError, AttributeError):  # "{0}", "{name}", "{", "{stem.x}"

@@ -119,5 +119,18 @@ def active_extrema(surface: Surface, h: np.ndarray, options: EMDOptions) -> tupl
 
 
 def extrema_spacing(surface: Surface, n_extrema: int) -> float:
-    """``d = √(A / n)``: the mean spacing of ``n`` extrema spread over the surface area ``A``."""
+    """``d = √(A / n)``: the mean spacing of ``n`` extrema spread over the surface area ``A``.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface whose area ``A`` (sum of the lumped mass) is spread.
+    n_extrema : int
+        The number of extrema ``n`` (at least 1 is used).
+
+    Returns
+    -------
+    float
+        The spacing ``d``, in the surface's length unit.
+    """
     return math.sqrt(float(surface.mass_diagonal.sum()) / max(int(n_extrema), 1))

@@ -78,7 +78,20 @@ MAX_SEED = 2**32 - 1
 
 
 def start_tension(envelope: str, tension: float) -> float:
-    """The tension ``τ`` an envelope starts from: ``tension``, 0 (thin plate) or ``inf`` (membrane)."""
+    """The tension ``τ`` an envelope starts from: ``tension``, 0 (thin plate) or ``inf`` (membrane).
+
+    Parameters
+    ----------
+    envelope : str
+        The envelope: ``"tension"``, ``"biharmonic"`` or ``"harmonic"``.
+    tension : float
+        The tension of a ``"tension"`` envelope.
+
+    Returns
+    -------
+    float
+        The starting tension ``τ``.
+    """
     return {"tension": float(tension), "biharmonic": 0.0, "harmonic": math.inf}[envelope]
 
 

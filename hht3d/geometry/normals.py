@@ -24,6 +24,18 @@ def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
     Delaunay step fails) gets the plane's normal everywhere, its largest
     component positive.
 
+    Parameters
+    ----------
+    points : (n, 3) ndarray
+        The point positions.
+    k : int, optional
+        Neighbours of the PCA and of the orientation (default 30).
+
+    Returns
+    -------
+    (n, 3) ndarray
+        The unit normals.
+
     Raises
     ------
     InputError
@@ -53,7 +65,20 @@ def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
 
 
 def principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Singular values (descending) and principal axes of centred points; collinear points are an error."""
+    """Singular values (descending) and principal axes of centred points; collinear points are an error.
+
+    Parameters
+    ----------
+    centered : (n, 3) ndarray
+        Points with their mean subtracted.
+
+    Returns
+    -------
+    spread : (3,) ndarray
+        The singular values, descending.
+    axes : (3, 3) ndarray
+        The principal axes, one per row, in the same order.
+    """
     _, spread, axes = np.linalg.svd(centered, full_matrices=False)
     if spread[1] <= FLAT * spread[0]:
         raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two directions")

@@ -111,6 +111,16 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
 
     On any exception the temporary file is removed and ``path`` is untouched.
 
+    Parameters
+    ----------
+    path : Path or str
+        The file to write.
+
+    Yields
+    ------
+    Path
+        The temporary path to write to, in the ``with`` block.
+
     Raises
     ------
     OutputError
@@ -189,7 +199,20 @@ def _at(
 
 
 def confined(path: Path | str, folder: Path | str) -> Path | None:
-    """``path`` resolved (symlinks followed) if it lies inside ``folder`` resolved, else ``None``."""
+    """``path`` resolved (symlinks followed) if it lies inside ``folder`` resolved, else ``None``.
+
+    Parameters
+    ----------
+    path : Path or str
+        The path to check.
+    folder : Path or str
+        The folder it should lie in.
+
+    Returns
+    -------
+    Path or None
+        The resolved path, or ``None`` outside ``folder``.
+    """
     resolved, root = Path(os.path.realpath(path)), Path(os.path.realpath(folder))
     return resolved if resolved == root or root in resolved.parents else None
 
@@ -239,7 +262,20 @@ def _alive(pid: int) -> bool:
 
 def remove_stale_parts(folders: Iterable[Path | str], own: Collection[int] = ()) -> list[Path]:
     """Remove the temporary files of :func:`atomic_path` in ``folders`` (not below) whose writing
-    process has ended, or is one of ``own`` (pids of this run stopping); return what was removed."""
+    process has ended, or is one of ``own`` (pids of this run stopping); return what was removed.
+
+    Parameters
+    ----------
+    folders : iterable of Path or str
+        The folders to clean (missing ones are skipped).
+    own : collection of int, optional
+        Process ids whose parts are removed even while they run (default none).
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
     removed = []
     for folder in {Path(f) for f in folders}:
         try:
@@ -270,6 +306,11 @@ def check_output_paths(paths: Iterable[Path | str]) -> None:
     probe (a temporary folder, made and removed at once) succeeds, which
     catches read-only and pseudo file systems (``/proc``) and missing
     permissions before anything is computed.
+
+    Parameters
+    ----------
+    paths : iterable of Path or str
+        The files to be written.
 
     Raises
     ------

@@ -61,7 +61,15 @@ def check_extension(path: Path) -> None:
 
 def check_regular_file(path: Path, what: str = "a mesh or point-cloud file") -> None:
     """Raise :class:`InputError` unless ``path`` is (or links to) a regular file: missing, a folder,
-    a FIFO, a device (``/dev/urandom``) or a socket are each named as such."""
+    a FIFO, a device (``/dev/urandom``) or a socket are each named as such.
+
+    Parameters
+    ----------
+    path : Path
+        The file to check.
+    what : str, optional
+        What the error says the file should be (default ``"a mesh or point-cloud file"``).
+    """
     shown = one_line(path, MAX_SHOWN)
     try:
         mode = os.stat(path).st_mode

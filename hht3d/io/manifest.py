@@ -131,7 +131,22 @@ def _digest(path: Path | str) -> tuple[int, str]:
 
 
 def is_recorded(path: Path | str, folder: Path | str, known: dict | None = None) -> bool:
-    """Whether ``path`` is a complete file that hht3d wrote: recorded inside ``folder``, same size and checksum."""
+    """Whether ``path`` is a complete file that hht3d wrote: recorded inside ``folder``, same size and checksum.
+
+    Parameters
+    ----------
+    path : Path or str
+        The file to look up.
+    folder : Path or str
+        The folder whose manifest is read.
+    known : dict, optional
+        The manifest's entries, already read (default: read them).
+
+    Returns
+    -------
+    bool
+        Whether the file is as recorded.
+    """
     entry = (entries(folder) if known is None else known).get(_key(path, folder))
     try:
         if not entry or os.path.getsize(path) != entry["size"]:
@@ -150,6 +165,17 @@ def record(
     temporary file is recorded under its final name just before it is
     renamed.  A file outside ``folder`` (``allow_outside``) is not recorded.
     Invalid entries of the manifest (:func:`valid_entries`) are dropped.
+
+    Parameters
+    ----------
+    paths : iterable of Path or str
+        The complete files to record.
+    folder : Path or str
+        The folder whose manifest records them.
+    run : str
+        The run id they are recorded under.
+    named : sequence of Path or str, optional
+        The names to record them under, one per path (default ``paths``).
     """
     found = {_key(n, folder): _digest(p) for p, n in zip(paths, named or paths)}
     found.pop(None, None)
@@ -219,6 +245,15 @@ def recorded_names(folder: Path | str) -> set[str]:
 
 def check_overwrites(paths: Iterable[Path | str], folder: Path | str, overwrite: bool) -> None:
     """Refuse to replace an existing file that hht3d did not write (unless ``overwrite``).
+
+    Parameters
+    ----------
+    paths : iterable of Path or str
+        The files to be written.
+    folder : Path or str
+        The output folder, whose manifest records what hht3d wrote.
+    overwrite : bool
+        Replace any existing file (the check is skipped).
 
     Raises
     ------

@@ -19,6 +19,22 @@ def surface_from_open3d(geometry: Any, *, clean: bool = True, name: str | None =
 
     Colours and (tensor geometries) every other float vertex attribute are
     carried over; point-cloud normals are kept when present.
+
+    Parameters
+    ----------
+    geometry : open3d geometry
+        A legacy or tensor ``TriangleMesh`` or ``PointCloud``.
+    clean : bool, optional
+        Build with :meth:`Surface.cleaned` (default ``True``), else :class:`Surface` as given.
+    name : str, optional
+        The surface's name.
+    **options
+        Further keyword arguments of :class:`Surface` (e.g. ``laplacian``).
+
+    Returns
+    -------
+    Surface
+        The surface.
     """
     import open3d as o3d
 
@@ -59,7 +75,20 @@ def surface_from_open3d(geometry: Any, *, clean: bool = True, name: str | None =
 
 def surface_to_open3d(surface: Surface, attributes: dict | None = None) -> Any:
     """Tensor ``TriangleMesh``/``PointCloud`` carrying the surface's attributes and ``attributes``
-    as (n, 1) float vertex attributes."""
+    as (n, 1) float vertex attributes.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface to convert.
+    attributes : dict, optional
+        More per-vertex fields, by name (they override stored ones of the same name).
+
+    Returns
+    -------
+    open3d.t.geometry.TriangleMesh or open3d.t.geometry.PointCloud
+        The tensor geometry.
+    """
     import open3d as o3d
     import open3d.core as o3c
 

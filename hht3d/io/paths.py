@@ -39,6 +39,15 @@ __all__ = ["NAME_MAX", "PATH_MAX", "confined", "check_output_location", "check_n
 def check_output_location(path: Path | str, folder: Path | str, where: str) -> None:
     """Refuse an output that resolves outside ``folder`` (``where`` names the step or output).
 
+    Parameters
+    ----------
+    path : Path or str
+        The output path.
+    folder : Path or str
+        The output folder.
+    where : str
+        The step or output the error names.
+
     Raises
     ------
     OutputError
@@ -53,6 +62,13 @@ def check_output_location(path: Path | str, folder: Path | str, where: str) -> N
 
 def check_name(path: Path | str, where: str) -> None:
     """Refuse a path that no file system takes: control characters, a component or the whole too long.
+
+    Parameters
+    ----------
+    path : Path or str
+        The output path.
+    where : str
+        The step or output the error names.
 
     Raises
     ------
@@ -83,6 +99,16 @@ def resolve_inputs(spec: Any) -> list[Path]:
     existing file is taken as named even when its name holds ``*?[``; a
     file found again through a symlink loop is listed once (by its
     shortest path).
+
+    Parameters
+    ----------
+    spec : str, Path or list
+        A file, a folder, a glob pattern, or a list of these.
+
+    Returns
+    -------
+    list of Path
+        The input files, sorted, without duplicates.
 
     Raises
     ------

@@ -189,6 +189,11 @@ _MAX_HEADER = 1 << 20
 def read_ply_header(path: Path | str) -> PlyHeader:
     """The header of a PLY file, without reading its data (cheap for any file size).
 
+    Parameters
+    ----------
+    path : Path or str
+        The PLY file.
+
     Raises
     ------
     InputError
@@ -292,6 +297,11 @@ def _pcd_points(path: Path) -> int:
 def read_npz(path: Path | str) -> dict[str, np.ndarray]:
     """Every array of a ``.npz`` file (no pickled objects).
 
+    Parameters
+    ----------
+    path : Path or str
+        The ``.npz`` file.
+
     Raises
     ------
     InputError
@@ -310,6 +320,11 @@ def read_npz(path: Path | str) -> dict[str, np.ndarray]:
 
 def read_npz_shapes(path: Path | str) -> dict[str, tuple[int, ...]]:
     """The shape of every array in a ``.npz`` file, from the array headers alone (no data is read).
+
+    Parameters
+    ----------
+    path : Path or str
+        The ``.npz`` file.
 
     Raises
     ------

@@ -33,6 +33,22 @@ def write_ply(
     Positions and normals are float64; ``colors`` (n, 3) in [0, 1] (default:
     the surface's own) become uchar red/green/blue.  The file's stored scalars
     (``surface.attributes``) are written too unless overridden by name.
+
+    Parameters
+    ----------
+    path : Path or str
+        The PLY file to write.
+    surface : Surface
+        The surface.
+    attributes : dict, optional
+        Per-vertex fields, by name, written as float64 properties.
+    colors : (n, 3) ndarray, optional
+        Vertex colours in [0, 1] (default: the surface's own, if any).
+
+    Returns
+    -------
+    Path
+        The path written.
     """
     from plyfile import PlyData, PlyElement
 
@@ -63,14 +79,42 @@ def write_ply(
 
 
 def write_npz(path: Path | str, arrays: dict) -> Path:
-    """Write a compressed ``.npz`` of named arrays atomically."""
+    """Write a compressed ``.npz`` of named arrays atomically.
+
+    Parameters
+    ----------
+    path : Path or str
+        The ``.npz`` file to write.
+    arrays : dict
+        The arrays, by name.
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     with atomic_path(path) as tmp, open(tmp, "wb") as handle:
         np.savez_compressed(handle, **{k: np.asarray(v) for k, v in arrays.items()})  # type: ignore[arg-type]  # numpy's stub: **kwds could reach allow_pickle
     return Path(path)
 
 
 def field_colors(values: np.ndarray, *, cmap: str = "viridis", limits: tuple[float, float] | None = None) -> np.ndarray:
-    """Map a scalar field to RGB in [0, 1]; default limits: 1st and 99th percentile."""
+    """Map a scalar field to RGB in [0, 1]; default limits: 1st and 99th percentile.
+
+    Parameters
+    ----------
+    values : (n,) ndarray
+        The scalar field; non-finite values take the colour of the low limit.
+    cmap : str, optional
+        A Matplotlib colormap name (default ``"viridis"``).
+    limits : tuple of float, optional
+        ``(low, high)`` of the colour scale (default: the 1st and 99th percentile).
+
+    Returns
+    -------
+    (n, 3) ndarray
+        RGB colours in [0, 1].
+    """
     import matplotlib
 
     values = np.asarray(values, dtype=np.float64)
@@ -93,6 +137,27 @@ def write_colored_ply(
     name: str = "field",
 ) -> Path:
     """Write a PLY whose vertex colours show one field (for any mesh viewer); the raw
-    values are kept as attribute ``name``."""
+    values are kept as attribute ``name``.
+
+    Parameters
+    ----------
+    path : Path or str
+        The PLY file to write.
+    surface : Surface
+        The surface.
+    values : (n,) ndarray
+        The field shown by the colours.
+    cmap : str, optional
+        A Matplotlib colormap name (default ``"viridis"``).
+    limits : tuple of float, optional
+        ``(low, high)`` of the colour scale (default: the 1st and 99th percentile).
+    name : str, optional
+        The attribute holding the raw values (default ``"field"``).
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     values = per_vertex(surface, name, values)
     return write_ply(path, surface, {name: values}, colors=field_colors(values, cmap=cmap, limits=limits))

@@ -137,7 +137,20 @@ _MODULES: dict[str, object] = {}
 
 
 def register_backend(backend: Backend, *, before: str | None = None) -> Backend:
-    """Add a solver backend, after the others or ahead of ``before`` in order of preference."""
+    """Add a solver backend, after the others or ahead of ``before`` in order of preference.
+
+    Parameters
+    ----------
+    backend : Backend
+        The backend; one of the same name is replaced.
+    before : str, optional
+        The backend it goes ahead of (default: after all others).
+
+    Returns
+    -------
+    Backend
+        ``backend`` itself.
+    """
     entries = [b for b in SOLVER_BACKENDS.values() if b.name != backend.name]
     at = next((i for i, b in enumerate(entries) if b.name == before), len(entries))
     entries.insert(at, backend)
@@ -209,7 +222,20 @@ def backend_report() -> tuple[list[BackendStatus], str]:
 
 
 def check_backend(backend: str | None, where: str = "backend") -> str:
-    """The backend to use: ``backend`` if it is registered and installed, :func:`default_backend` for ``None``."""
+    """The backend to use: ``backend`` if it is registered and installed, :func:`default_backend` for ``None``.
+
+    Parameters
+    ----------
+    backend : str or None
+        A backend name, or ``None`` for the default.
+    where : str, optional
+        The setting the error names (default ``"backend"``).
+
+    Returns
+    -------
+    str
+        The backend's name.
+    """
     if backend is None:
         return default_backend()
     if backend not in SOLVER_BACKENDS:

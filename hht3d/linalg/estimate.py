@@ -126,12 +126,34 @@ BASELINE = 100 * 2**20
 
 
 def backend_estimates(vertices: int) -> list[Estimate]:
-    """:func:`estimate_hht` for every installed, calibrated backend, fastest first."""
+    """:func:`estimate_hht` for every installed, calibrated backend, fastest first.
+
+    Parameters
+    ----------
+    vertices : int
+        The surface's vertex count.
+
+    Returns
+    -------
+    list of Estimate
+        One estimate per installed, calibrated backend, fastest first.
+    """
     return [e for e in (estimate_hht(vertices, name) for name in available_backends()) if e is not None]
 
 
 def estimate_lines(vertices: int) -> list[str]:
-    """For ``hht3d info --backends``: each installed backend's estimate at ``vertices``, and what is available."""
+    """For ``hht3d info --backends``: each installed backend's estimate at ``vertices``, and what is available.
+
+    Parameters
+    ----------
+    vertices : int
+        The surface's vertex count.
+
+    Returns
+    -------
+    list of str
+        A heading, then one line per backend.
+    """
     available = available_memory()
     lines = [
         f"estimated whole HHT of {vertices:,} vertices (memory available: "
@@ -177,6 +199,20 @@ def check_memory(vertices: int, backend: str | None = None, available: int | Non
 
     ``available`` defaults to :func:`available_memory`; returns the estimate.
 
+    Parameters
+    ----------
+    vertices : int
+        The surface's vertex count.
+    backend : str, optional
+        The backend (default :func:`default_backend`).
+    available : int, optional
+        The bytes available (default :func:`available_memory`).
+
+    Returns
+    -------
+    Estimate or None
+        The estimate, or ``None`` for a backend without calibration.
+
     Raises
     ------
     InputError
@@ -197,7 +233,20 @@ class SlowSolverWarning(UserWarning):
 
 
 def slow_fallback(vertices: int, backend: str | None = None) -> str | None:
-    """The advice to install a faster backend, when ``backend`` is slow and the mesh is large; else ``None``."""
+    """The advice to install a faster backend, when ``backend`` is slow and the mesh is large; else ``None``.
+
+    Parameters
+    ----------
+    vertices : int
+        The surface's vertex count.
+    backend : str, optional
+        The backend (default :func:`default_backend`).
+
+    Returns
+    -------
+    str or None
+        The advice, or ``None``.
+    """
     backend = check_backend(backend)
     cost = COSTS.get(backend)
     if cost is None or not cost.slow or vertices <= SLOW_FALLBACK_VERTICES:
@@ -214,7 +263,15 @@ _WARNED: set[str] = set()
 
 
 def warn_slow_fallback(vertices: int, backend: str | None = None) -> None:
-    """Issue :func:`slow_fallback`'s advice as a :class:`SlowSolverWarning`, once per process and backend."""
+    """Issue :func:`slow_fallback`'s advice as a :class:`SlowSolverWarning`, once per process and backend.
+
+    Parameters
+    ----------
+    vertices : int
+        The surface's vertex count.
+    backend : str, optional
+        The backend (default :func:`default_backend`).
+    """
     advice = slow_fallback(vertices, backend)
     if advice is not None and check_backend(backend) not in _WARNED:
         _WARNED.add(check_backend(backend))

@@ -67,7 +67,20 @@ class SymbolicFactorization:
 
 
 def factorize(a: Any, backend: str | None = None) -> Factor:
-    """Factorize one SPD sparse matrix (analysis and numeric phase)."""
+    """Factorize one SPD sparse matrix (analysis and numeric phase).
+
+    Parameters
+    ----------
+    a : sparse matrix
+        A symmetric positive definite matrix.
+    backend : str, optional
+        The backend (default :func:`default_backend`).
+
+    Returns
+    -------
+    Factor
+        The factor, which solves systems in ``a``.
+    """
     return SymbolicFactorization(a, backend).factorize(a)
 
 

@@ -158,6 +158,13 @@ def apply_overrides(document: Any, overrides: Iterable[str]) -> None:
     A path component names a mapping key, a list index, or the ``id`` (or
     ``op``) of a step in ``steps``: ``steps.hht.params.max_imfs=4``,
     ``inputs=[a.ply, b.ply]``, ``outputs.folder=out/run1``.
+
+    Parameters
+    ----------
+    document : dict
+        The pipeline document, as read from YAML; changed in place.
+    overrides : iterable of str
+        ``KEY.PATH=VALUE`` texts, applied in order.
     """
     for text in overrides:
         where = f"--set {one_line(text, MAX_SHOWN)}"

@@ -200,7 +200,20 @@ def spectral_bounds(
 
 
 def dense_eigenpairs(surface: Surface) -> tuple[np.ndarray, np.ndarray]:
-    """All non-zero generalized eigenpairs (ascending), eigenvectors M-orthonormal; cached."""
+    """All non-zero generalized eigenpairs (ascending), eigenvectors M-orthonormal; cached.
+
+    Parameters
+    ----------
+    surface : Surface
+        A surface of at most :data:`DENSE_MAX_VERTICES` vertices.
+
+    Returns
+    -------
+    values : (m,) ndarray
+        The non-zero eigenvalues, ascending.
+    vectors : (n, m) ndarray
+        The eigenvectors, M-orthonormal columns.
+    """
     n = surface.n_vertices
     if n > DENSE_MAX_VERTICES:
         raise InputError(
@@ -226,6 +239,15 @@ def smallest_eigenpairs(surface: Surface, count: int, *, backend: str | None = N
     when they are a large part of the spectrum (at least a tenth on surfaces
     within :data:`DENSE_MAX_VERTICES`, or half): then the dense
     eigendecomposition, cheaper there, is truncated.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface.
+    count : int
+        How many eigenpairs, in ``[1, n - components]``.
+    backend : str, optional
+        The sparse solver backend of the shift-invert (default :func:`hht3d.linalg.default_backend`).
 
     Returns
     -------

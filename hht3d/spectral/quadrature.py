@@ -120,7 +120,24 @@ def quadrature_plan(
     *,
     symbolic: linalg.SymbolicFactorization | None = None,
 ) -> QuadraturePlan:
-    """Bounds and nodes of the ``L^{-1/2}`` quadrature for ``surface`` at ``tol``."""
+    """Bounds and nodes of the ``L^{-1/2}`` quadrature for ``surface`` at ``tol``.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface.
+    tol : float, optional
+        The quadrature's relative tolerance (default 1e-8).
+    backend : str, optional
+        The sparse solver backend of the bounds (default :func:`hht3d.linalg.default_backend`).
+    symbolic : SymbolicFactorization, optional
+        A symbolic factorization of the operator's pattern to reuse.
+
+    Returns
+    -------
+    QuadraturePlan
+        The spectral bounds, ``tol`` and the nodes.
+    """
     bounds = spectral_bounds(surface, backend=backend, symbolic=symbolic)
     return QuadraturePlan(bounds, tol, *quadrature_nodes(*bounds, tol))
 
@@ -167,7 +184,20 @@ def quadrature_part(
 
 
 def combine_quadrature_parts(surface: Surface, parts: Sequence[np.ndarray]) -> np.ndarray:
-    """``L^{-1/2} f̃`` from all :func:`quadrature_part` results (kernel removed again)."""
+    """``L^{-1/2} f̃`` from all :func:`quadrature_part` results (kernel removed again).
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface the parts were computed on.
+    parts : sequence of ndarray
+        Every :func:`quadrature_part` result, each ``(k, n)``.
+
+    Returns
+    -------
+    (k, n) ndarray
+        The potential ``L^{-1/2} f̃``.
+    """
     return fluctuation(surface, np.sum(parts, axis=0))
 
 

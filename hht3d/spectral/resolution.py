@@ -26,6 +26,16 @@ def resolvable_frequency(surface: Surface) -> np.ndarray:
     (``π/h`` on a grid of spacing ``h``).  A pattern whose wavelength is
     shorter than about two sample spacings aliases: its frequency cannot be
     read from the samples.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface.
+
+    Returns
+    -------
+    (n,) ndarray
+        The highest resolvable frequency at each vertex.
     """
     check_surface(surface)
     return resolvable_from_area(surface.mass_diagonal)

@@ -201,7 +201,22 @@ def riesz(
 
 
 def vertex_gradient(surface: Surface, u: np.ndarray, kind: str = RIESZ_DEFAULTS.gradient) -> np.ndarray:
-    """Tangent gradients of (n,) or (k, n) per-vertex fields: (n, 3) or (k, n, 3)."""
+    """Tangent gradients of (n,) or (k, n) per-vertex fields: (n, 3) or (k, n, 3).
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface.
+    u : ndarray
+        One field ``(n,)`` or a stack ``(k, n)``.
+    kind : str, optional
+        The gradient operator, as in :class:`~hht3d.spectral.options.RieszOptions` (default ``"lsq"``).
+
+    Returns
+    -------
+    ndarray
+        ``(n, 3)`` for one field, ``(k, n, 3)`` for a stack.
+    """
     grad = surface.gradient(kind)
     n = surface.n_vertices
     u2 = np.atleast_2d(u)

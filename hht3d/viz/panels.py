@@ -175,7 +175,20 @@ def check_dpi(dpi: float) -> None:
 
 
 def save_figure(fig: Any, path: Path | str) -> Path:
-    """Write a Matplotlib figure to a PNG atomically at its own size and dpi; returns the path."""
+    """Write a Matplotlib figure to a PNG atomically at its own size and dpi; returns the path.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : Path or str
+        The PNG to write.
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     path = png_path(path)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=fig.dpi, facecolor="white")
@@ -187,6 +200,22 @@ def render_png(path: Path | str, surface: Surface, values: np.ndarray | None = N
 
     ``options`` are those of :func:`field_figure` (``title``, ``label``,
     ``size`` in pixels, ``dpi``, ``view``, ``up``, ``cmap``, ``limits``, ...).
+
+    Parameters
+    ----------
+    path : Path or str
+        The PNG to write.
+    surface : Surface
+        The surface.
+    values : ndarray, optional
+        The field (default ``None``: the shaded model without a colour bar).
+    **options
+        Keyword arguments of :func:`field_figure`.
+
+    Returns
+    -------
+    Path
+        The path written.
     """
     path = png_path(path)
     return save_figure(field_figure(surface, values, **options), path)

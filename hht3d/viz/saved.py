@@ -31,6 +31,11 @@ def read_fields(path: Path | str) -> tuple[Surface, dict, np.ndarray | None]:
     file of :func:`hht3d.io.read.load` (read without cleaning, so vertices keep
     their order): its numeric vertex properties are the fields.
 
+    Parameters
+    ----------
+    path : Path or str
+        A saved ``.npz`` result or a surface file.
+
     Returns
     -------
     surface, fields, area

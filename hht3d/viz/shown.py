@@ -64,6 +64,18 @@ def shown_copy(surface: Surface, max_vertices: int = VERTEX_BUDGET) -> Shown:
     keeps a random subset of its points (:data:`SUBSET_SEED`), which carry their own
     values.
 
+    Parameters
+    ----------
+    surface : Surface
+        The surface to draw.
+    max_vertices : int, optional
+        The vertex budget, at least 4 (default :data:`VERTEX_BUDGET`, 150 000).
+
+    Returns
+    -------
+    Shown
+        The drawn geometry and, per drawn vertex, its source vertex.
+
     Raises
     ------
     InputError
@@ -97,6 +109,13 @@ def shown_copy(surface: Surface, max_vertices: int = VERTEX_BUDGET) -> Shown:
 
 def color_limits(values: np.ndarray, percentiles: tuple[float, float] = PERCENTILES) -> dict:
     """Colour limits of a field in both scales and the one chosen by default.
+
+    Parameters
+    ----------
+    values : ndarray
+        The field.
+    percentiles : tuple of float, optional
+        The robust range's low and high percentiles (default ``(1, 99)``).
 
     Returns
     -------
