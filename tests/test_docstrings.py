@@ -36,42 +36,19 @@ WITHOUT_PARAMETERS = frozenset(
 #: Functions whose return value is not described in a Returns (or Yields) section yet.
 WITHOUT_RETURNS = frozenset(
     """
-    hht3d.apps.features_from_counts
     hht3d.data_path
-    hht3d.dataset.dataset_graph
-    hht3d.decomposition.combine_eemd
-    hht3d.decomposition.eemd
-    hht3d.decomposition.emd
-    hht3d.decomposition.envelope_operator
-    hht3d.eemd
-    hht3d.emd
-    hht3d.execution.compute
-    hht3d.execution.worker_count
-    hht3d.geometry.mean_curvature
-    hht3d.graph.compute
     hht3d.graph.mirror
-    hht3d.graph.worker_count
     hht3d.io.data_path
     hht3d.io.load
-    hht3d.io.new_run_id
     hht3d.io.read_npz
     hht3d.io.read_npz_shapes
     hht3d.io.read_ply_header
-    hht3d.linalg.available_backends
-    hht3d.linalg.available_memory
-    hht3d.linalg.default_backend
-    hht3d.linalg.estimate_hht
     hht3d.load
-    hht3d.load_result
     hht3d.pipeline.builtin_models
     hht3d.pipeline.load_pipeline
     hht3d.pipeline.parse_pipeline
-    hht3d.pipeline.pipeline_graph
-    hht3d.viz.field_figure
     hht3d.viz.file_html
-    hht3d.viz.hht_figure
     hht3d.viz.result_page
-    hht3d.viz.spectrum_figure
     """.split()
 )
 

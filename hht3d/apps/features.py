@@ -183,6 +183,11 @@ def features_from_counts(
         See :func:`merge_hits`.
     scores : (n,) array_like, optional
         Ranks hits within a merged group (default: the counts).
+
+    Returns
+    -------
+    FeatureResult
+        The merged feature vertices, their counts and positions.
     """
     r = merge_distance(merge_radius)
     n = surface.n_vertices

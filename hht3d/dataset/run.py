@@ -175,6 +175,11 @@ def dataset_graph(
         (``max_imfs=4``, ``potential="spectral"``, ...) and ``riesz_tasks``
         (:class:`hht3d.graph.tasks.GraphOptions`).
 
+    Returns
+    -------
+    Delayed
+        Computes to the list of :class:`ItemSummary`, one per input file.
+
     Raises
     ------
     InputError

@@ -145,6 +145,11 @@ def compute(
         application configured logging).
     client : distributed.Client, optional
         Reuse a client instead of opening one.
+
+    Returns
+    -------
+    tuple
+        The value of each graph, in order.
     """
     if address or client is not None:
         scheduler = "distributed"

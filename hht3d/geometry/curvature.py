@@ -172,6 +172,11 @@ def mean_curvature(surface: Surface, *, min_area: float = MIN_AREA_FRACTION) -> 
         the median) the largest error against 2H = 2 falls from 2.1 (cotan,
         pointwise) and 1,100 (robust Laplacian, pointwise) to 0.2.  0 gives
         Eq. (24) pointwise.
+
+    Returns
+    -------
+    (n,) ndarray
+        ``s_i`` at each vertex.
     """
     centred = _centred(surface)  # L 1 = 0, so L V = L (V − c) with less cancellation far from the origin
     if _fraction(min_area) == 0:

@@ -59,7 +59,13 @@ _SHA256 = re.compile(r"[0-9a-f]{64}")
 
 
 def new_run_id() -> str:
-    """A run id: UTC time and a random suffix."""
+    """A run id: UTC time and a random suffix.
+
+    Returns
+    -------
+    str
+        ``YYYYmmddTHHMMSSZ-xxxxxxxx``.
+    """
     return f"{time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())}-{uuid.uuid4().hex[:8]}"
 
 

@@ -160,7 +160,13 @@ def register_backend(backend: Backend, *, before: str | None = None) -> Backend:
 
 
 def available_backends() -> list[str]:
-    """Names of the installed backends, fastest first."""
+    """Names of the installed backends, fastest first.
+
+    Returns
+    -------
+    list of str
+        The backend names.
+    """
     return [name for name, backend in SOLVER_BACKENDS.items() if backend.available]
 
 
@@ -169,6 +175,11 @@ def default_backend() -> str:
 
     The one named by the environment variable :data:`BACKEND_VARIABLE` if set,
     else the fastest installed one.
+
+    Returns
+    -------
+    str
+        The backend's name.
     """
     chosen = os.environ.get(BACKEND_VARIABLE, "").strip()
     if chosen:

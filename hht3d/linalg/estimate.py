@@ -111,6 +111,11 @@ def estimate_hht(vertices: int, backend: str | None = None) -> Estimate | None:
         Vertices (or points) of the surface: the order of every sparse system.
     backend : str, optional
         Default :func:`~hht3d.linalg.backends.default_backend`.
+
+    Returns
+    -------
+    Estimate or None
+        The estimate, or ``None`` for an uncalibrated backend.
     """
     backend = check_backend(backend)
     cost = COSTS.get(backend)
@@ -167,7 +172,13 @@ def estimate_lines(vertices: int) -> list[str]:
 
 def available_memory() -> int | None:
     """Bytes this process may still allocate: the smallest of free memory, what the
-    address-space limit (``ulimit -v``) leaves and what the cgroup limit leaves; ``None`` if unknown."""
+    address-space limit (``ulimit -v``) leaves and what the cgroup limit leaves; ``None`` if unknown.
+
+    Returns
+    -------
+    int or None
+        The bytes, or ``None`` when no limit can be read.
+    """
     limits, vms = [], None
     try:
         import psutil

@@ -98,6 +98,11 @@ def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder
         checksum, in the folder's manifest (a URL folder's manifest object).
     folder : OutputFolder, optional
         Where the outputs go (default: :func:`output_folder` with a new run id).
+
+    Returns
+    -------
+    Delayed
+        Computes to the list of :class:`~hht3d.dataset.summary.ItemSummary`.
     """
     folder = folder or output_folder(plan)
     items = {source: plan.output_paths(source) for source in plan.inputs}

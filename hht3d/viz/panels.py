@@ -119,6 +119,11 @@ def field_figure(
         Dots per inch (sets the font scale; the pixel size stays ``size``).
     view, up, cmap, limits, symmetric, percentiles, backend, supersample, point_size
         See :func:`hht3d.viz.render.render`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     from matplotlib.figure import Figure
 
