@@ -55,7 +55,6 @@ WITHOUT_RETURNS = frozenset(
 #: Functions without an Examples section holding a doctest yet.
 WITHOUT_EXAMPLES = frozenset(
     """
-    hht3d.apps.automatic_weight
     hht3d.apps.check_mean_curvature_signal
     hht3d.apps.edit_frequency
     hht3d.apps.features_from_counts
@@ -67,44 +66,22 @@ WITHOUT_EXAMPLES = frozenset(
     hht3d.apps.imf_enhancement
     hht3d.apps.manifold_harmonics_filter
     hht3d.apps.merge_hits
-    hht3d.apps.position_weights
     hht3d.apps.prominent_features
     hht3d.apps.reconstruct
     hht3d.apps.reconstruct_from_change
-    hht3d.apps.repeatability
     hht3d.dataset.dataset_graph
-    hht3d.dataset.output_paths
     hht3d.dataset.write_summary
     hht3d.decomposition.combine_eemd
     hht3d.decomposition.eemd_member
     hht3d.decomposition.envelope_interpolation
     hht3d.decomposition.envelope_operator
-    hht3d.decomposition.extrema_spacing
     hht3d.decomposition.local_extrema
-    hht3d.decomposition.start_tension
-    hht3d.execution.compute
-    hht3d.execution.worker_count
-    hht3d.geometry.as_imfs
-    hht3d.geometry.as_signals
-    hht3d.geometry.centroid_distance
-    hht3d.geometry.check_signal
-    hht3d.geometry.check_signal_path
-    hht3d.geometry.coordinate
-    hht3d.geometry.estimate_point_normals
-    hht3d.geometry.gaussian_curvature
-    hht3d.geometry.load_signal
     hht3d.geometry.luminance
-    hht3d.geometry.mean_curvature
-    hht3d.geometry.principal_axes
     hht3d.geometry.stored
-    hht3d.geometry.unreliable_vertices
-    hht3d.graph.as_key
-    hht3d.graph.compute
     hht3d.graph.eemd
     hht3d.graph.emd
     hht3d.graph.filter_geometry
     hht3d.graph.filter_signal
-    hht3d.graph.from_surface
     hht3d.graph.hks_features
     hht3d.graph.imf_enhancement
     hht3d.graph.load
@@ -121,43 +98,25 @@ WITHOUT_EXAMPLES = frozenset(
     hht3d.graph.signal
     hht3d.graph.transform
     hht3d.graph.transform_file
-    hht3d.graph.worker_count
     hht3d.io.atomic_path
-    hht3d.io.check_name
-    hht3d.io.check_output_location
     hht3d.io.check_output_paths
     hht3d.io.check_overwrites
-    hht3d.io.check_regular_file
-    hht3d.io.confined
-    hht3d.io.estimate_point_normals
-    hht3d.io.field_colors
     hht3d.io.is_recorded
-    hht3d.io.new_run_id
     hht3d.io.read_npz
     hht3d.io.read_npz_shapes
     hht3d.io.read_ply_header
     hht3d.io.record
     hht3d.io.remove_stale_parts
-    hht3d.io.resolve_inputs
     hht3d.io.surface_from_open3d
     hht3d.io.surface_to_open3d
-    hht3d.io.write_colored_ply
-    hht3d.io.write_npz
-    hht3d.io.write_ply
-    hht3d.linalg.available_backends
     hht3d.linalg.available_memory
     hht3d.linalg.backend_estimates
     hht3d.linalg.backend_report
-    hht3d.linalg.check_backend
     hht3d.linalg.check_memory
-    hht3d.linalg.default_backend
-    hht3d.linalg.estimate_hht
     hht3d.linalg.estimate_lines
-    hht3d.linalg.factorize
     hht3d.linalg.register_backend
     hht3d.linalg.slow_fallback
     hht3d.linalg.warn_slow_fallback
-    hht3d.pipeline.apply_overrides
     hht3d.pipeline.builtin_models
     hht3d.pipeline.failures
     hht3d.pipeline.load_pipeline
@@ -171,11 +130,7 @@ WITHOUT_EXAMPLES = frozenset(
     hht3d.spectral.quadrature_part
     hht3d.spectral.quadrature_plan
     hht3d.spectral.resolution_report
-    hht3d.spectral.resolvable_frequency
-    hht3d.spectral.smallest_eigenpairs
     hht3d.spectral.spectral_bounds
-    hht3d.spectral.vertex_gradient
-    hht3d.viz.color_limits
     hht3d.viz.field_figure
     hht3d.viz.file_html
     hht3d.viz.hht_figure
@@ -184,8 +139,6 @@ WITHOUT_EXAMPLES = frozenset(
     hht3d.viz.render_png
     hht3d.viz.result_html
     hht3d.viz.result_page
-    hht3d.viz.save_figure
-    hht3d.viz.shown_copy
     hht3d.viz.spectrum_figure
     hht3d.viz.surface_html
     hht3d.viz.surfaces_html

@@ -269,6 +269,14 @@ def repeatability(points: np.ndarray, reference: np.ndarray, radius: float) -> f
     -------
     float
         The fraction in [0, 1]; ``nan`` for no ``points``, 0 for no ``reference``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.apps import repeatability
+    >>> reference = np.array([[0.0, 0, 0], [1, 0, 0]])
+    >>> repeatability(np.array([[0.01, 0, 0], [0.5, 0, 0]]), reference, radius=0.1)
+    0.5
     """
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     q = np.asarray(reference, dtype=np.float64).reshape(-1, 3)

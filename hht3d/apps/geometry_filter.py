@@ -120,6 +120,14 @@ def automatic_weight(surface: Surface, frequency: float) -> float:
     -------
     float
         The interior position weight ``μ``.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.apps import automatic_weight
+    >>> automatic_weight(spot, 20.0) > automatic_weight(spot, 10.0)  # grows as frequency⁴
+    True
     """
     return float(np.mean(surface.mass_diagonal)) ** 2 * (STIFFNESS_FRACTION * frequency) ** 4
 

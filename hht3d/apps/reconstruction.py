@@ -159,6 +159,15 @@ def position_weights(
     -------
     (n,) ndarray
         The weight of each vertex.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.apps import position_weights
+    >>> weights = position_weights(spot, interior_weight=0.05)
+    >>> weights.shape, set(weights.tolist())  # spot is closed: no boundary vertex
+    ((2930,), {0.05})
     """
     surface = check_surface(surface)
     interior = ReconstructionOptions.check("interior_weight", interior_weight)

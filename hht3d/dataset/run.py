@@ -91,6 +91,14 @@ def output_paths(
     -------
     list
         One path (or URL string) per format, in order.
+
+    Examples
+    --------
+    >>> from hht3d.dataset import output_paths
+    >>> [str(p) for p in output_paths("scans/bunny.ply", "out")]
+    ['out/bunny_hht.ply', 'out/bunny_hht.npz']
+    >>> output_paths("s3://lab/scans/bunny.ply", "s3://lab/out", formats=[".npz"], pattern="{stem}_v2")
+    ['s3://lab/out/bunny_v2.npz']
     """
     try:
         base = str(pattern).format(stem=stem(source))

@@ -132,5 +132,13 @@ def extrema_spacing(surface: Surface, n_extrema: int) -> float:
     -------
     float
         The spacing ``d``, in the surface's length unit.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> from hht3d.decomposition import extrema_spacing
+    >>> sphere = load(data_path("sphere_oct4098.ply"))  # the unit sphere, area 4π
+    >>> round(extrema_spacing(sphere, 100), 3)  # √(4π / 100)
+    0.354
     """
     return math.sqrt(float(surface.mass_diagonal.sum()) / max(int(n_extrema), 1))

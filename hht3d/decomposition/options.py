@@ -91,6 +91,12 @@ def start_tension(envelope: str, tension: float) -> float:
     -------
     float
         The starting tension ``τ``.
+
+    Examples
+    --------
+    >>> from hht3d.decomposition import start_tension
+    >>> start_tension("tension", 5.0), start_tension("biharmonic", 5.0), start_tension("harmonic", 5.0)
+    (5.0, 0.0, inf)
     """
     return {"tension": float(tension), "biharmonic": 0.0, "harmonic": math.inf}[envelope]
 

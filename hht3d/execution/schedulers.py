@@ -150,6 +150,13 @@ def compute(
     -------
     tuple
         The value of each graph, in order.
+
+    Examples
+    --------
+    >>> import dask
+    >>> from hht3d.execution import compute
+    >>> compute(dask.delayed(sum)([1, 2]), dask.delayed(max)(3, 4), scheduler="synchronous", progress=False)
+    (3, 4)
     """
     if address or client is not None:
         scheduler = "distributed"

@@ -51,6 +51,14 @@ def worker_count() -> int:
     -------
     int
         The workers of the default distributed client, else Dask's ``num_workers`` or the cores; at least 1.
+
+    Examples
+    --------
+    >>> import dask
+    >>> from hht3d.execution import worker_count
+    >>> with dask.config.set(num_workers=3):  # no distributed client here
+    ...     worker_count()
+    3
     """
     try:
         from distributed import default_client

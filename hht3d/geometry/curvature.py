@@ -81,6 +81,13 @@ def unreliable_vertices(surface: Surface, min_area: float = MIN_AREA_FRACTION) -
     -------
     (n,) ndarray of bool
         ``True`` at the unreliable vertices.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> from hht3d.geometry import unreliable_vertices
+    >>> int(unreliable_vertices(load(data_path("sphere_oct4098.ply"))).sum())  # a well-shaped mesh
+    0
     """
     area = surface.mass_diagonal
     bad = area < min_area * _reference_area(surface)
@@ -177,6 +184,15 @@ def mean_curvature(surface: Surface, *, min_area: float = MIN_AREA_FRACTION) -> 
     -------
     (n,) ndarray
         ``s_i`` at each vertex.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d import data_path, load
+    >>> from hht3d.geometry import mean_curvature
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> round(float(np.median(mean_curvature(sphere))), 4)  # 2H on the unit sphere
+    2.0
     """
     centred = _centred(surface)  # L 1 = 0, so L V = L (V − c) with less cancellation far from the origin
     if _fraction(min_area) == 0:
@@ -228,6 +244,15 @@ def gaussian_curvature(surface: Surface, *, min_area: float = MIN_AREA_FRACTION)
     -------
     (n,) ndarray
         ``K_i`` at each vertex.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d import data_path, load
+    >>> from hht3d.geometry import gaussian_curvature
+    >>> spot = load(data_path("spot.ply"))  # a sphere's topology: Σ K_i A_i = 2π χ = 4π
+    >>> round(float(gaussian_curvature(spot) @ spot.mass_diagonal / np.pi), 6)
+    4.0
     """
     if not surface.is_mesh:
         raise InputError(f"{surface.name}: Gaussian curvature (angle defect) needs a triangle mesh")

@@ -40,6 +40,16 @@ def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
     ------
     InputError
         The points lie on a line, or Open3D cannot orient the normals.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.geometry import estimate_point_normals
+    >>> points = np.random.default_rng(0).normal(size=(400, 3))
+    >>> points /= np.linalg.norm(points, axis=1, keepdims=True)  # on the unit sphere
+    >>> normals = estimate_point_normals(points, k=15)
+    >>> bool(np.einsum("ij,ij->i", normals, points).min() > 0.98)  # outward on the unit sphere
+    True
     """
     points = np.asarray(points, dtype=np.float64)
     centered = points - points.mean(axis=0)
@@ -78,6 +88,15 @@ def principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         The singular values, descending.
     axes : (3, 3) ndarray
         The principal axes, one per row, in the same order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.geometry import principal_axes
+    >>> points = np.random.default_rng(0).normal(size=(500, 3)) * [3.0, 1.0, 0.1]
+    >>> spread, axes = principal_axes(points - points.mean(axis=0))
+    >>> int(np.abs(axes[0]).argmax()), int(np.abs(axes[2]).argmax())  # longest along x, thinnest along z
+    (0, 2)
     """
     _, spread, axes = np.linalg.svd(centered, full_matrices=False)
     if spread[1] <= FLAT * spread[0]:

@@ -48,6 +48,15 @@ def centroid_distance(surface: Surface) -> np.ndarray:
     -------
     (n,) ndarray
         The distance of each vertex.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d import data_path, load
+    >>> from hht3d.geometry import centroid_distance
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> bool(np.allclose(centroid_distance(sphere), 1.0, atol=1e-3))  # the unit sphere about its centre
+    True
     """
     w = surface.mass_diagonal
     centroid = (w[:, None] * surface.vertices).sum(axis=0) / w.sum()
@@ -68,6 +77,14 @@ def coordinate(surface: Surface, axis: str) -> np.ndarray:
     -------
     (n,) ndarray
         A copy of that coordinate of each vertex.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.geometry import coordinate
+    >>> bool((coordinate(spot, "y") == spot.vertices[:, 1]).all())
+    True
     """
     axes = {"x": 0, "y": 1, "z": 2}
     if axis not in axes:
@@ -127,6 +144,13 @@ def check_signal_path(path: Path | str) -> Path:
     -------
     Path
         ``path`` as a :class:`~pathlib.Path`.
+
+    Examples
+    --------
+    >>> from hht3d.geometry import check_signal_path
+    >>> check_signal_path("curvature.txt")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.InputError: curvature.txt: a signal file must be a .npy file ..., not .txt
     """
     path = Path(path)
     if path.suffix.lower() != ".npy":
@@ -153,6 +177,19 @@ def load_signal(surface: Surface, path: Path | str) -> np.ndarray:
     -------
     (n,) ndarray
         The signal as float64.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from hht3d.geometry import load_signal
+    >>> path = Path(tempfile.mkdtemp()) / "height.npy"
+    >>> np.save(path, spot.vertices[:, 1])
+    >>> bool((load_signal(spot, path) == spot.vertices[:, 1]).all())
+    True
     """
     path = check_signal_path(path)
     try:

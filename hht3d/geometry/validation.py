@@ -65,6 +65,18 @@ def check_signal(surface: Surface, values: np.ndarray, what: str = "signal") -> 
     -------
     (n,) ndarray
         The values as float64.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import numpy as np
+    >>> from hht3d.geometry import check_signal
+    >>> check_signal(spot, np.arange(2930)).dtype
+    dtype('float64')
+    >>> check_signal(spot, np.zeros(10))
+    Traceback (most recent call last):
+    hht3d.errors.InputError: signal has shape (10,); spot has 2930 vertices
     """
     if np.iscomplexobj(values):
         raise InputError(
@@ -108,6 +120,16 @@ def as_signals(surface: Surface, f: np.ndarray, what: str = "signal") -> tuple[n
         The signals as float64.
     single : bool
         Whether ``f`` was one ``(n,)`` signal.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import numpy as np
+    >>> from hht3d.geometry import as_signals
+    >>> signals, single = as_signals(spot, np.ones(2930))
+    >>> signals.shape, single
+    ((1, 2930), True)
     """
     try:
         a = np.asarray(f, dtype=np.float64)
@@ -138,6 +160,15 @@ def as_imfs(surface: Surface, imfs: np.ndarray) -> np.ndarray:
     -------
     (k, n) ndarray
         The IMFs as float64, ``k >= 1``.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import numpy as np
+    >>> from hht3d.geometry import as_imfs
+    >>> as_imfs(spot, np.ones(2930)).shape  # one IMF becomes a stack of one
+    (1, 2930)
     """
     a = getattr(imfs, "imfs", imfs)
     try:

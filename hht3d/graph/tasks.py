@@ -222,6 +222,16 @@ def from_surface(surface: Surface) -> Any:
     -------
     Delayed
         The surface's key.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d import graph
+    >>> key = graph.from_surface(spot)
+    >>> (again,) = graph.compute(key, scheduler="synchronous", progress=False)
+    >>> again is spot
+    True
     """
     return delayed(surface, name=f"surface-{surface.name}-{id(surface):x}")
 
@@ -238,6 +248,14 @@ def as_key(value: Any) -> Any:
     -------
     object
         A ``Delayed`` for a surface or a large array (:data:`ARRAY_KEY_SIZE`), else ``value``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dask.delayed import Delayed
+    >>> from hht3d import graph
+    >>> graph.as_key(3), isinstance(graph.as_key(np.zeros(10_000)), Delayed)  # a large array becomes a key
+    (3, True)
     """
     if isinstance(value, Surface):
         return from_surface(value)

@@ -212,6 +212,14 @@ def confined(path: Path | str, folder: Path | str) -> Path | None:
     -------
     Path or None
         The resolved path, or ``None`` outside ``folder``.
+
+    Examples
+    --------
+    >>> from hht3d.io import confined
+    >>> confined("out/../elsewhere/x.ply", "out") is None
+    True
+    >>> confined("out/sub/x.ply", "out").name
+    'x.ply'
     """
     resolved, root = Path(os.path.realpath(path)), Path(os.path.realpath(folder))
     return resolved if resolved == root or root in resolved.parents else None

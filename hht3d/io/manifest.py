@@ -65,6 +65,13 @@ def new_run_id() -> str:
     -------
     str
         ``YYYYmmddTHHMMSSZ-xxxxxxxx``.
+
+    Examples
+    --------
+    >>> from hht3d.io import new_run_id
+    >>> run = new_run_id()
+    >>> len(run), run[8], run[15:17]
+    (25, 'T', 'Z-')
     """
     return f"{time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())}-{uuid.uuid4().hex[:8]}"
 

@@ -52,6 +52,14 @@ def check_output_location(path: Path | str, folder: Path | str, where: str) -> N
     ------
     OutputError
         Naming ``where``, the resolved path and the folder.
+
+    Examples
+    --------
+    >>> from hht3d.io import check_output_location
+    >>> check_output_location("out/x.ply", "out", "outputs.files")  # inside: nothing happens
+    >>> check_output_location("../x.ply", "out", "outputs.files")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.OutputError: outputs.files: ../x.ply resolves to ..., outside the output folder out; ...
     """
     if confined(path, folder) is None:
         raise OutputError(
@@ -73,6 +81,13 @@ def check_name(path: Path | str, where: str) -> None:
     Raises
     ------
     OutputError
+
+    Examples
+    --------
+    >>> from hht3d.io import check_name
+    >>> check_name("out/x" + chr(9) + "y.ply", "outputs.files")  # a tab  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.OutputError: outputs.files: the file name ... holds a control character; use printable characters
     """
     text = os.fspath(path)
     if any(ord(ch) < 32 or ord(ch) == 127 for ch in text):
@@ -115,6 +130,13 @@ def resolve_inputs(spec: Any) -> list[Path]:
     InputError
         A named file is missing or has an unknown extension, or a folder/glob
         matches no usable file.
+
+    Examples
+    --------
+    >>> from hht3d import data_path
+    >>> from hht3d.io import resolve_inputs
+    >>> [p.name for p in resolve_inputs(data_path("spot.ply").parent)]  # the mesh files of a folder
+    ['sphere_oct4098.ply', 'spot.ply']
     """
     specs = [spec] if isinstance(spec, (str, Path)) else list(spec)
     found: list[Path] = []

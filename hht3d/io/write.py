@@ -49,6 +49,18 @@ def write_ply(
     -------
     Path
         The path written.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import read_ply_header, write_ply
+    >>> path = write_ply(Path(tempfile.mkdtemp()) / "spot.ply", spot, {"height": spot.vertices[:, 1]})
+    >>> header = read_ply_header(path)
+    >>> header.counts, header.vertex_properties[-1]
+    ({'vertex': 2930, 'face': 5856}, 'height')
     """
     from plyfile import PlyData, PlyElement
 
@@ -92,6 +104,16 @@ def write_npz(path: Path | str, arrays: dict) -> Path:
     -------
     Path
         The path written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from hht3d.io import read_npz, write_npz
+    >>> path = write_npz(Path(tempfile.mkdtemp()) / "fields.npz", {"height": np.arange(3.0)})
+    >>> read_npz(path)["height"].tolist()
+    [0.0, 1.0, 2.0]
     """
     with atomic_path(path) as tmp, open(tmp, "wb") as handle:
         np.savez_compressed(handle, **{k: np.asarray(v) for k, v in arrays.items()})  # type: ignore[arg-type]  # numpy's stub: **kwds could reach allow_pickle
@@ -114,6 +136,14 @@ def field_colors(values: np.ndarray, *, cmap: str = "viridis", limits: tuple[flo
     -------
     (n, 3) ndarray
         RGB colours in [0, 1].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.io import field_colors
+    >>> colors = field_colors(np.array([0.0, 1.0, 2.0]), cmap="gray", limits=(0.0, 2.0))
+    >>> colors.round(2).tolist()
+    [[0.0, 0.0, 0.0], [0.5, 0.5, 0.5], [1.0, 1.0, 1.0]]
     """
     import matplotlib
 
@@ -158,6 +188,18 @@ def write_colored_ply(
     -------
     Path
         The path written.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import load, write_colored_ply
+    >>> path = write_colored_ply(Path(tempfile.mkdtemp()) / "height.ply", spot, spot.vertices[:, 1], name="height")
+    >>> again = load(path, clean=False)
+    >>> again.colors.shape, sorted(again.attributes)
+    ((2930, 3), ['height'])
     """
     values = per_vertex(surface, name, values)
     return write_ply(path, surface, {name: values}, colors=field_colors(values, cmap=cmap, limits=limits))

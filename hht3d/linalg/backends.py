@@ -166,6 +166,12 @@ def available_backends() -> list[str]:
     -------
     list of str
         The backend names.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import available_backends
+    >>> "superlu" in available_backends()  # SciPy's, always installed
+    True
     """
     return [name for name, backend in SOLVER_BACKENDS.items() if backend.available]
 
@@ -180,6 +186,12 @@ def default_backend() -> str:
     -------
     str
         The backend's name.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import available_backends, default_backend
+    >>> default_backend() in available_backends()
+    True
     """
     chosen = os.environ.get(BACKEND_VARIABLE, "").strip()
     if chosen:
@@ -246,6 +258,15 @@ def check_backend(backend: str | None, where: str = "backend") -> str:
     -------
     str
         The backend's name.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import check_backend
+    >>> check_backend("superlu")
+    'superlu'
+    >>> check_backend("magic")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.InputError: unknown sparse solver backend 'magic' (backend); choose one of (...)
     """
     if backend is None:
         return default_backend()

@@ -116,6 +116,13 @@ def estimate_hht(vertices: int, backend: str | None = None) -> Estimate | None:
     -------
     Estimate or None
         The estimate, or ``None`` for an uncalibrated backend.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import estimate_hht
+    >>> small, large = estimate_hht(10_000, "superlu"), estimate_hht(100_000, "superlu")
+    >>> large.seconds > small.seconds and large.peak_bytes > small.peak_bytes
+    True
     """
     backend = check_backend(backend)
     cost = COSTS.get(backend)

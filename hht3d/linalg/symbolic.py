@@ -80,6 +80,16 @@ def factorize(a: Any, backend: str | None = None) -> Factor:
     -------
     Factor
         The factor, which solves systems in ``a``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import scipy.sparse as sp
+    >>> from hht3d.linalg import factorize
+    >>> a = sp.csc_matrix(np.array([[4.0, 1.0], [1.0, 3.0]]))
+    >>> factor = factorize(a, "superlu")
+    >>> bool(np.allclose(a @ factor.solve(np.array([1.0, 2.0])), [1.0, 2.0]))
+    True
     """
     return SymbolicFactorization(a, backend).factorize(a)
 

@@ -165,6 +165,14 @@ def apply_overrides(document: Any, overrides: Iterable[str]) -> None:
         The pipeline document, as read from YAML; changed in place.
     overrides : iterable of str
         ``KEY.PATH=VALUE`` texts, applied in order.
+
+    Examples
+    --------
+    >>> from hht3d.pipeline import apply_overrides
+    >>> document = {"steps": [{"id": "hht", "op": "hht", "params": {"max_imfs": 6}}], "outputs": {}}
+    >>> apply_overrides(document, ["steps.hht.params.max_imfs=2", "outputs.folder=out/run1"])
+    >>> document["steps"][0]["params"], document["outputs"]
+    ({'max_imfs': 2}, {'folder': 'out/run1'})
     """
     for text in overrides:
         where = f"--set {one_line(text, MAX_SHOWN)}"

@@ -253,6 +253,16 @@ def smallest_eigenpairs(surface: Surface, count: int, *, backend: str | None = N
     -------
     values : (count,) ndarray, ascending
     vectors : (n, count) ndarray, M-orthonormal columns
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d import data_path, load
+    >>> from hht3d.spectral import smallest_eigenpairs
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> values, vectors = smallest_eigenpairs(sphere, 3)
+    >>> np.round(values, 2).tolist()  # l(l + 1) = 2, three times, on the unit sphere
+    [2.0, 2.0, 2.0]
     """
     surface = check_surface(surface)
     available = surface.n_vertices - surface.n_components

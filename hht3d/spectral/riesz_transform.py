@@ -216,6 +216,15 @@ def vertex_gradient(surface: Surface, u: np.ndarray, kind: str = RIESZ_DEFAULTS.
     -------
     ndarray
         ``(n, 3)`` for one field, ``(k, n, 3)`` for a stack.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import numpy as np
+    >>> from hht3d.spectral import vertex_gradient
+    >>> vertex_gradient(spot, spot.vertices[:, 0]).shape, vertex_gradient(spot, spot.vertices.T).shape
+    ((2930, 3), (3, 2930, 3))
     """
     grad = surface.gradient(kind)
     n = surface.n_vertices

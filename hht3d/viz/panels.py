@@ -193,6 +193,16 @@ def save_figure(fig: Any, path: Path | str) -> Path:
     -------
     Path
         The path written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import matplotlib.figure
+    >>> from hht3d.viz import save_figure
+    >>> fig = matplotlib.figure.Figure(figsize=(2, 1), dpi=50)
+    >>> save_figure(fig, Path(tempfile.mkdtemp()) / "empty.png").read_bytes()[1:4]
+    b'PNG'
     """
     path = png_path(path)
     with atomic_path(path) as tmp:
