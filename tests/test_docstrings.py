@@ -65,7 +65,6 @@ WITHOUT_EXAMPLES = frozenset(
     hht3d.apps.hks_features
     hht3d.apps.imf_enhancement
     hht3d.apps.manifold_harmonics_filter
-    hht3d.apps.merge_hits
     hht3d.apps.prominent_features
     hht3d.apps.reconstruct
     hht3d.apps.reconstruct_from_change
@@ -75,9 +74,6 @@ WITHOUT_EXAMPLES = frozenset(
     hht3d.decomposition.eemd_member
     hht3d.decomposition.envelope_interpolation
     hht3d.decomposition.envelope_operator
-    hht3d.decomposition.local_extrema
-    hht3d.geometry.luminance
-    hht3d.geometry.stored
     hht3d.graph.eemd
     hht3d.graph.emd
     hht3d.graph.filter_geometry
@@ -98,24 +94,12 @@ WITHOUT_EXAMPLES = frozenset(
     hht3d.graph.signal
     hht3d.graph.transform
     hht3d.graph.transform_file
-    hht3d.io.atomic_path
     hht3d.io.check_output_paths
-    hht3d.io.check_overwrites
-    hht3d.io.is_recorded
     hht3d.io.read_npz
     hht3d.io.read_npz_shapes
     hht3d.io.read_ply_header
-    hht3d.io.record
-    hht3d.io.remove_stale_parts
-    hht3d.io.surface_from_open3d
-    hht3d.io.surface_to_open3d
-    hht3d.linalg.available_memory
-    hht3d.linalg.backend_estimates
     hht3d.linalg.backend_report
-    hht3d.linalg.check_memory
-    hht3d.linalg.estimate_lines
     hht3d.linalg.register_backend
-    hht3d.linalg.slow_fallback
     hht3d.linalg.warn_slow_fallback
     hht3d.pipeline.builtin_models
     hht3d.pipeline.failures
@@ -123,24 +107,19 @@ WITHOUT_EXAMPLES = frozenset(
     hht3d.pipeline.parse_pipeline
     hht3d.pipeline.pipeline_graph
     hht3d.spectral.combine_quadrature_parts
-    hht3d.spectral.dense_eigenpairs
     hht3d.spectral.instantaneous_frequency
     hht3d.spectral.monogenic_from_potential
     hht3d.spectral.quadrature_nodes
     hht3d.spectral.quadrature_part
-    hht3d.spectral.quadrature_plan
     hht3d.spectral.resolution_report
-    hht3d.spectral.spectral_bounds
     hht3d.viz.field_figure
     hht3d.viz.file_html
     hht3d.viz.hht_figure
     hht3d.viz.page_html
-    hht3d.viz.read_fields
     hht3d.viz.render_png
     hht3d.viz.result_html
     hht3d.viz.result_page
     hht3d.viz.spectrum_figure
-    hht3d.viz.surface_html
     hht3d.viz.surfaces_html
     hht3d.viz.write_figures
     hht3d.viz.write_page

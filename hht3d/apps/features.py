@@ -147,6 +147,15 @@ def merge_hits(points: np.ndarray, scores: np.ndarray, radius: float) -> tuple[n
         Positions in ``points`` of the representatives, ascending.
     groups : (h,) ndarray of int
         Index into ``representatives`` of each point's group.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.apps import merge_hits
+    >>> points = np.array([[0.0, 0, 0], [0.05, 0, 0], [1, 0, 0]])
+    >>> representatives, groups = merge_hits(points, np.array([1.0, 2.0, 1.0]), radius=0.1)
+    >>> representatives.tolist(), groups.tolist()  # the first two merge; the higher score represents them
+    ([1, 2], [0, 0, 1])
     """
     h = len(points)
     if radius == 0 or h == 0:

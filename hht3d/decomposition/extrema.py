@@ -75,6 +75,15 @@ def local_extrema(
     that is flat up to solver round-off (about 1e-12 of the range after an
     envelope solve) is still one ridge; the tolerance scales with the signal
     and ignores constant offsets.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> from hht3d.decomposition import local_extrema
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> maxima, minima = local_extrema(sphere, sphere.vertices[:, 2])  # the height: one pole each
+    >>> len(maxima), len(minima)
+    (1, 1)
     """
     options = EMDOptions.of(options, **renamed_keywords(overrides, {"rule": "extrema"}, "local_extrema"))
     is_max, is_min = extrema_masks(surface, check_signal(check_surface(surface), f), options, tie_rtol)

@@ -104,6 +104,16 @@ def luminance(surface: Surface) -> np.ndarray:
     -------
     (n,) ndarray
         The luminance of each vertex, in [0, 1].
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import numpy as np
+    >>> from hht3d.geometry import Surface, luminance
+    >>> grey = Surface(spot.vertices, spot.faces, colors=np.full((2930, 3), 0.5))
+    >>> bool(np.allclose(luminance(grey), 0.5))  # the Rec. 709 weights sum to 1
+    True
     """
     if surface.colors is None:
         raise InputError(f"{surface.name}: has no vertex colours for a luminance signal")
@@ -124,6 +134,18 @@ def stored(surface: Surface, name: str) -> np.ndarray:
     -------
     (n,) ndarray
         The attribute as float64.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.geometry import Surface, stored
+    >>> scan = Surface(spot.vertices, spot.faces, attributes={"quality": spot.vertices[:, 2]}, name="scan")
+    >>> stored(scan, "quality").shape
+    (2930,)
+    >>> stored(scan, "intensity")
+    Traceback (most recent call last):
+    hht3d.errors.InputError: scan: no stored vertex attribute 'intensity'; available: ['quality']
     """
     if name not in surface.attributes:
         raise InputError(

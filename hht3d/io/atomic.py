@@ -128,6 +128,17 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
         disk, a folder in the way), or the folder was swapped since the
         temporary file was made there, or the run is stopping or has ended
         (:func:`stop_writes`, :func:`writes_end_with`); names ``path`` and the reason.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import atomic_path
+    >>> path = Path(tempfile.mkdtemp()) / "out" / "table.csv"
+    >>> with atomic_path(path) as tmp:
+    ...     _ = tmp.write_text("a,b")
+    >>> path.read_text(), sorted(p.name for p in path.parent.iterdir())
+    ('a,b', ['table.csv'])
     """
     path = Path(path)
     if (refusal := _refusal(path)) is not None:
@@ -283,6 +294,13 @@ def remove_stale_parts(folders: Iterable[Path | str], own: Collection[int] = ())
     -------
     list of Path
         The files removed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from hht3d.io import remove_stale_parts
+    >>> remove_stale_parts([tempfile.mkdtemp(), "no/such/folder"])  # nothing left behind
+    []
     """
     removed = []
     for folder in {Path(f) for f in folders}:

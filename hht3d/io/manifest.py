@@ -159,6 +159,20 @@ def is_recorded(path: Path | str, folder: Path | str, known: dict | None = None)
     -------
     bool
         Whether the file is as recorded.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import is_recorded, new_run_id, record
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> (folder / "x.npz").write_bytes(b"result")
+    6
+    >>> record([folder / "x.npz"], folder, new_run_id())
+    >>> (folder / "x.npz").write_bytes(b"edited")  # changed since: no longer as recorded
+    6
+    >>> is_recorded(folder / "x.npz", folder)
+    False
     """
     entry = (entries(folder) if known is None else known).get(_key(path, folder))
     try:
@@ -189,6 +203,18 @@ def record(
         The run id they are recorded under.
     named : sequence of Path or str, optional
         The names to record them under, one per path (default ``paths``).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import is_recorded, new_run_id, record
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> (folder / "x.npz").write_bytes(b"result")
+    6
+    >>> record([folder / "x.npz"], folder, new_run_id())
+    >>> is_recorded(folder / "x.npz", folder)
+    True
     """
     found = {_key(n, folder): _digest(p) for p, n in zip(paths, named or paths)}
     found.pop(None, None)
@@ -272,6 +298,19 @@ def check_overwrites(paths: Iterable[Path | str], folder: Path | str, overwrite:
     ------
     OutputError
         Naming the first such file.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import check_overwrites
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> (folder / "notes.txt").write_text("mine")
+    4
+    >>> check_overwrites([folder / "notes.txt"], folder, overwrite=True)  # allowed
+    >>> check_overwrites([folder / "notes.txt"], folder, overwrite=False)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.OutputError: .../notes.txt: exists and hht3d did not write it ...
     """
     if overwrite:
         return

@@ -35,6 +35,14 @@ def surface_from_open3d(geometry: Any, *, clean: bool = True, name: str | None =
     -------
     Surface
         The surface.
+
+    Examples
+    --------
+    >>> import open3d as o3d
+    >>> from hht3d.io import surface_from_open3d
+    >>> ball = surface_from_open3d(o3d.geometry.TriangleMesh.create_sphere(radius=1.0, resolution=8))
+    >>> ball.n_vertices, ball.is_mesh
+    (114, True)
     """
     import open3d as o3d
 
@@ -88,6 +96,15 @@ def surface_to_open3d(surface: Surface, attributes: dict | None = None) -> Any:
     -------
     open3d.t.geometry.TriangleMesh or open3d.t.geometry.PointCloud
         The tensor geometry.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.io import surface_to_open3d
+    >>> mesh = surface_to_open3d(spot, {"height": spot.vertices[:, 1]})
+    >>> tuple(mesh.vertex["height"].shape), tuple(mesh.triangle["indices"].shape)
+    ((2930, 1), (5856, 3))
     """
     import open3d as o3d
     import open3d.core as o3c

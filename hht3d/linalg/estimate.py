@@ -149,6 +149,13 @@ def backend_estimates(vertices: int) -> list[Estimate]:
     -------
     list of Estimate
         One estimate per installed, calibrated backend, fastest first.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import backend_estimates
+    >>> estimates = backend_estimates(50_000)
+    >>> all(e.vertices == 50_000 for e in estimates), "superlu" in [e.backend for e in estimates]
+    (True, True)
     """
     return [e for e in (estimate_hht(vertices, name) for name in available_backends()) if e is not None]
 
@@ -165,6 +172,12 @@ def estimate_lines(vertices: int) -> list[str]:
     -------
     list of str
         A heading, then one line per backend.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import estimate_lines
+    >>> estimate_lines(50_000)[0]  # doctest: +ELLIPSIS
+    'estimated whole HHT of 50,000 vertices (memory available: ...):'
     """
     available = available_memory()
     lines = [
@@ -185,6 +198,13 @@ def available_memory() -> int | None:
     -------
     int or None
         The bytes, or ``None`` when no limit can be read.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import available_memory
+    >>> free = available_memory()
+    >>> free is None or free >= 0
+    True
     """
     limits, vms = [], None
     try:
@@ -235,6 +255,15 @@ def check_memory(vertices: int, backend: str | None = None, available: int | Non
     ------
     InputError
         With the estimate, the memory available and the ways out.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import check_memory
+    >>> check_memory(1_000, "superlu", available=10**12).vertices
+    1000
+    >>> check_memory(10_000_000, "superlu", available=10**9)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.InputError: a surface of 10,000,000 vertices needs ... but only ... is available; ...
     """
     found = estimate_hht(vertices, backend)
     available = available_memory() if available is None else int(available)
@@ -264,6 +293,12 @@ def slow_fallback(vertices: int, backend: str | None = None) -> str | None:
     -------
     str or None
         The advice, or ``None``.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import slow_fallback
+    >>> slow_fallback(1_000, "superlu") is None  # a small mesh: no advice
+    True
     """
     backend = check_backend(backend)
     cost = COSTS.get(backend)

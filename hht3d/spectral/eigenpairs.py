@@ -178,6 +178,17 @@ def spectral_bounds(
     Returns
     -------
     (m, M̄) : tuple of float
+
+    Examples
+    --------
+    >>> import open3d as o3d
+    >>> from hht3d.io import surface_from_open3d
+    >>> ball = surface_from_open3d(o3d.geometry.TriangleMesh.create_sphere(radius=1.0, resolution=8))
+    >>> from hht3d.spectral import dense_eigenpairs, spectral_bounds
+    >>> low, high = spectral_bounds(ball)
+    >>> values, _ = dense_eigenpairs(ball)
+    >>> bool(0 < low <= values[0] and values[-1] <= high)
+    True
     """
     surface = check_surface(surface)
     key = "riesz:bounds"
@@ -213,6 +224,19 @@ def dense_eigenpairs(surface: Surface) -> tuple[np.ndarray, np.ndarray]:
         The non-zero eigenvalues, ascending.
     vectors : (n, m) ndarray
         The eigenvectors, M-orthonormal columns.
+
+    Examples
+    --------
+    >>> import open3d as o3d
+    >>> from hht3d.io import surface_from_open3d
+    >>> ball = surface_from_open3d(o3d.geometry.TriangleMesh.create_sphere(radius=1.0, resolution=8))
+    >>> import numpy as np
+    >>> from hht3d.spectral import dense_eigenpairs
+    >>> values, vectors = dense_eigenpairs(ball)
+    >>> values.shape, vectors.shape  # all but the constant
+    ((113,), (114, 113))
+    >>> bool(np.allclose(vectors.T @ (ball.mass_diagonal[:, None] * vectors), np.eye(113)))
+    True
     """
     n = surface.n_vertices
     if n > DENSE_MAX_VERTICES:

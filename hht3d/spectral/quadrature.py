@@ -137,6 +137,16 @@ def quadrature_plan(
     -------
     QuadraturePlan
         The spectral bounds, ``tol`` and the nodes.
+
+    Examples
+    --------
+    >>> import open3d as o3d
+    >>> from hht3d.io import surface_from_open3d
+    >>> ball = surface_from_open3d(o3d.geometry.TriangleMesh.create_sphere(radius=1.0, resolution=8))
+    >>> from hht3d.spectral import quadrature_plan
+    >>> loose, tight = quadrature_plan(ball, tol=1e-4), quadrature_plan(ball, tol=1e-10)
+    >>> len(loose.sigmas) < len(tight.sigmas)  # a tighter tolerance takes more shifts
+    True
     """
     bounds = spectral_bounds(surface, backend=backend, symbolic=symbolic)
     return QuadraturePlan(bounds, tol, *quadrature_nodes(*bounds, tol))
