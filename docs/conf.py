@@ -1,7 +1,8 @@
 """Sphinx configuration of the hht3d documentation site (``bash .ci/docs``; ``docs`` extra).
 
-The build is offline: no intersphinx, plotly.js comes from the installed package, and every
-gallery example runs on the shipped models.
+The build is offline: no intersphinx, plotly.js comes from the installed package, MathJax from
+the ``django-static-mathjax`` wheel (``_ext/local_mathjax.py``), no page loads anything from
+another host (tests/test_site.py), and every gallery example runs on the shipped models.
 """
 
 import sys
@@ -30,9 +31,12 @@ extensions = [
     "myst_parser",
     "sphinx_gallery.gen_gallery",
     "benchmark_pages",  # docs/benchmarks/*.md from benchmarks/results/*.json
+    "local_mathjax",  # MathJax copied into _static/mathjax, not loaded from a CDN
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 exclude_patterns = ["_build", "_ext", "examples", "auto_examples/*.ipynb", "auto_examples/*.py", "auto_examples/*.zip"]
+
+mathjax_path = "mathjax/tex-mml-chtml.js"  # relative to _static: local_mathjax.SCRIPT
 
 myst_enable_extensions = ["dollarmath", "amsmath"]
 myst_heading_anchors = 3
@@ -52,8 +56,11 @@ sphinx_gallery_conf = {
     "only_warn_on_example_error": False,
     "image_scrapers": ("gallery_figures.figure_scraper",),
     "capture_repr": ("_repr_html_", "__repr__"),
+    "write_computation_times": False,  # its pages load jQuery and DataTables from CDNs
 }
 
 html_theme = "pydata_sphinx_theme"
 html_title = f"hht3d {release}"
+# The theme's colour mode when the reader has chosen none; without it the theme logs a console error.
+html_context = {"default_mode": "auto"}
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}

@@ -33,6 +33,11 @@ def load_result(path: Path | str, *, storage_options: dict | None = None) -> HHT
     storage_options : dict, optional
         Options of the URL's fsspec back-end (:mod:`hht3d.io.storage`).
 
+    Returns
+    -------
+    HHTResult
+        The saved result (its ``info`` only ``{"source": path}``).
+
     Raises
     ------
     InputError

@@ -147,6 +147,15 @@ def merge_hits(points: np.ndarray, scores: np.ndarray, radius: float) -> tuple[n
         Positions in ``points`` of the representatives, ascending.
     groups : (h,) ndarray of int
         Index into ``representatives`` of each point's group.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.apps import merge_hits
+    >>> points = np.array([[0.0, 0, 0], [0.05, 0, 0], [1, 0, 0]])
+    >>> representatives, groups = merge_hits(points, np.array([1.0, 2.0, 1.0]), radius=0.1)
+    >>> representatives.tolist(), groups.tolist()  # the first two merge; the higher score represents them
+    ([1, 2], [0, 0, 1])
     """
     h = len(points)
     if radius == 0 or h == 0:
@@ -183,6 +192,11 @@ def features_from_counts(
         See :func:`merge_hits`.
     scores : (n,) array_like, optional
         Ranks hits within a merged group (default: the counts).
+
+    Returns
+    -------
+    FeatureResult
+        The merged feature vertices, their counts and positions.
     """
     r = merge_distance(merge_radius)
     n = surface.n_vertices
@@ -250,6 +264,28 @@ def repeatability(points: np.ndarray, reference: np.ndarray, radius: float) -> f
     The measure of the paper's Fig. 8 comparison: features found on a
     perturbed copy, mapped to common positions, against the original's.
     Returns ``nan`` when ``points`` is empty.
+
+    Parameters
+    ----------
+    points : (p, 3) ndarray
+        The feature positions found on the perturbed copy.
+    reference : (q, 3) ndarray
+        The feature positions of the original.
+    radius : float
+        The largest distance at which a point counts as repeated.
+
+    Returns
+    -------
+    float
+        The fraction in [0, 1]; ``nan`` for no ``points``, 0 for no ``reference``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.apps import repeatability
+    >>> reference = np.array([[0.0, 0, 0], [1, 0, 0]])
+    >>> repeatability(np.array([[0.01, 0, 0], [0.5, 0, 0]]), reference, radius=0.1)
+    0.5
     """
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     q = np.asarray(reference, dtype=np.float64).reshape(-1, 3)

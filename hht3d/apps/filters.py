@@ -268,6 +268,20 @@ GAINS = {
 def make_gain(kind: str, **parameters: Any) -> Gain:
     """Build a gain by name (one of :data:`GAINS`) from keyword parameters.
 
+    Parameters
+    ----------
+    kind : str
+        The gain's name, a key of :data:`GAINS` (e.g. ``"low_pass"``, ``"band_stop"``).
+    **parameters
+        The gain's fields (its class's parameters); a missing required or unknown one is an :class:`InputError`.
+
+    Returns
+    -------
+    Gain
+        The gain, an instance of ``GAINS[kind]``.
+
+    Examples
+    --------
     >>> make_gain("band_stop", low=8.0, high=20.0, width=2.0)
     BandStop(low=8.0, high=20.0, width=2.0, stop=0.0)
     """
@@ -312,7 +326,20 @@ def decomposition_parts(decomposition: Any) -> tuple[np.ndarray, np.ndarray, np.
 
 
 def gains_of(decomposition: Any, gain: Callable[[np.ndarray], Any]) -> np.ndarray:
-    """The gains ``μ(ω_k(v))`` (k, n) of a decomposition's instantaneous frequencies."""
+    """The gains ``μ(ω_k(v))`` (k, n) of a decomposition's instantaneous frequencies.
+
+    Parameters
+    ----------
+    decomposition : HHTResult or tuple
+        An HHT result, or a tuple ``(imfs, residue, monogenic)``.
+    gain : callable
+        ``gain(frequency)`` the gain ``μ(ω)``, e.g. a :class:`LowPass`.
+
+    Returns
+    -------
+    (k, n) ndarray
+        The gain of each IMF at each vertex.
+    """
     _, _, frequency = decomposition_parts(decomposition)
     return evaluate_gain(gain, frequency)
 

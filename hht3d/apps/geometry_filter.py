@@ -79,6 +79,18 @@ def edit_frequency(result: HHTResult, gain: Callable[[np.ndarray], Any]) -> floa
     instantaneous frequencies where ``μ(ω) ≠ 1``; ``None`` when the gain changes nothing.
 
     Each vertex and IMF weighs ``|μ(ω_k) − 1| a_k² A``, its share of the change (Eqs. 21, 26).
+
+    Parameters
+    ----------
+    result : HHTResult
+        The HHT whose instantaneous frequencies and amplitudes are weighed.
+    gain : callable
+        ``gain(frequency)`` the gain ``μ(ω)``, e.g. a :class:`LowPass`.
+
+    Returns
+    -------
+    float or None
+        The frequency, or ``None`` when the gain changes nothing.
     """
     imfs, _, frequency = decomposition_parts(result)
     change = np.abs(evaluate_gain(gain, frequency) - 1.0)
@@ -96,6 +108,26 @@ def automatic_weight(surface: Surface, frequency: float) -> float:
     With ``w_i = μ A_i / Ā²`` (module notes, "Weights") a displacement of
     frequency ``ω`` costs ``ω⁴ A_i`` in the Laplacian term, so
     ``μ = Ā² (STIFFNESS_FRACTION · frequency)⁴`` puts the crossover there.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface whose mean vertex area ``Ā`` scales the weight.
+    frequency : float
+        The lowest edited frequency (radians per unit length), e.g. :func:`edit_frequency`'s.
+
+    Returns
+    -------
+    float
+        The interior position weight ``μ``.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.apps import automatic_weight
+    >>> automatic_weight(spot, 20.0) > automatic_weight(spot, 10.0)  # grows as frequency⁴
+    True
     """
     return float(np.mean(surface.mass_diagonal)) ** 2 * (STIFFNESS_FRACTION * frequency) ** 4
 

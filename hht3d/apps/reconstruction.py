@@ -145,6 +145,29 @@ def position_weights(
 
     Both must be positive (a zero weight leaves the translation of a closed
     component undetermined).
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface whose boundary vertices get ``boundary_weight``.
+    interior_weight : float, optional
+        Weight of interior vertices, positive (default :data:`INTERIOR_WEIGHT`, 0.01).
+    boundary_weight : float, optional
+        Weight of boundary vertices, positive (default :data:`BOUNDARY_WEIGHT`, 1.0).
+
+    Returns
+    -------
+    (n,) ndarray
+        The weight of each vertex.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.apps import position_weights
+    >>> weights = position_weights(spot, interior_weight=0.05)
+    >>> weights.shape, set(weights.tolist())  # spot is closed: no boundary vertex
+    ((2930,), {0.05})
     """
     surface = check_surface(surface)
     interior = ReconstructionOptions.check("interior_weight", interior_weight)
@@ -284,7 +307,15 @@ def reconstruct(
 
 def check_mean_curvature_signal(surface: Surface, signal: np.ndarray) -> None:
     """Raise :class:`InputError` unless ``signal`` is the mean-curvature signal of ``surface``
-    (regularized, the default, or pointwise Eq. 24 with ``min_area=0``)."""
+    (regularized, the default, or pointwise Eq. 24 with ``min_area=0``).
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface the result was computed on.
+    signal : ndarray
+        The result's signal, one value per vertex.
+    """
     errors, scale = [], 0.0
     for reference in (mean_curvature(surface), mean_curvature(surface, min_area=0)):
         scale = max(scale, float(np.max(np.abs(reference))))

@@ -75,7 +75,32 @@ RESULT_SUFFIXES = (".ply", ".npz")
 def output_paths(
     source: Path | str, out_dir: Path | str, formats: Iterable[str] = RESULT_SUFFIXES, pattern: str = "{stem}_hht"
 ) -> list:
-    """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format (paths or URLs)."""
+    """Where an item's results go: ``out_dir / pattern.format(stem=...) + suffix`` per format (paths or URLs).
+
+    Parameters
+    ----------
+    source : Path or str
+        The input file (or URL) whose stem names the outputs.
+    out_dir : Path or str
+        The output folder (a path or a URL).
+    formats : iterable of str, optional
+        The suffixes to write (default ``(".ply", ".npz")``).
+    pattern : str, optional
+        The file name without suffix; ``{stem}`` is its only field (default ``"{stem}_hht"``).
+
+    Returns
+    -------
+    list
+        One path (or URL string) per format, in order.
+
+    Examples
+    --------
+    >>> from hht3d.dataset import output_paths
+    >>> [str(p) for p in output_paths("scans/bunny.ply", "out")]
+    ['out/bunny_hht.ply', 'out/bunny_hht.npz']
+    >>> output_paths("s3://lab/scans/bunny.ply", "s3://lab/out", formats=[".npz"], pattern="{stem}_v2")
+    ['s3://lab/out/bunny_v2.npz']
+    """
     try:
         base = str(pattern).format(stem=stem(source))
     except (IndexError, KeyError, ValueError, AttributeError):  # "{0}", "{name}", "{", "{stem.x}"
@@ -158,6 +183,11 @@ def dataset_graph(
         Passed to :func:`hht3d.graph.stages.transform`: the HHT's settings by name
         (``max_imfs=4``, ``potential="spectral"``, ...) and ``riesz_tasks``
         (:class:`hht3d.graph.tasks.GraphOptions`).
+
+    Returns
+    -------
+    Delayed
+        Computes to the list of :class:`ItemSummary`, one per input file.
 
     Raises
     ------

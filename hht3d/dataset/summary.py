@@ -195,6 +195,22 @@ def write_summary(
     written from it, and both recorded in the folder's manifest object.
     In the CSV, ``outputs`` are joined with ``;`` and ``warnings`` with ``" | "``.
 
+    Parameters
+    ----------
+    rows : list of ItemSummary
+        The rows of this run, one per input.
+    out_dir : Path or str
+        The output folder (a path or a URL).
+    run : str, optional
+        The run id of the manifest (default: a new one).
+    storage_options : dict, optional
+        Options of the fsspec back-end of a URL ``out_dir``.
+
+    Returns
+    -------
+    list
+        The paths (or URLs) written: ``summary.json`` and ``summary.csv``.
+
     Raises
     ------
     OutputError

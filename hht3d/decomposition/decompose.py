@@ -199,6 +199,7 @@ def emd(
         Decomposition stops when the residue's fluctuation energy
         ``∫(r − r̄)² dA`` (``r̄`` its mean per component) falls below this
         fraction of the signal's; default 1e-8.
+
     Returns
     -------
     EMDResult

@@ -105,6 +105,11 @@ def combine_eemd(surface: Surface, signal: np.ndarray, members: Sequence[Any]) -
         The noise-free signal given to :func:`eemd_member`.
     members : sequence of EMDResult
         Results of :func:`eemd_member`.
+
+    Returns
+    -------
+    EMDResult
+        The members' average IMFs and residue, with their quality figures.
     """
     f = check_signal(check_surface(surface), signal)
     members = list(members)
@@ -160,6 +165,11 @@ def eemd(
         Sparse solver of :mod:`hht3d.linalg`.
     **overrides
         Settings of either record, by name (``max_imfs=3, ensemble_size=20``).
+
+    Returns
+    -------
+    EMDResult
+        The ensemble-averaged IMFs, ``residue`` (n,), ``info`` and ``quality``.
 
     Examples
     --------

@@ -184,6 +184,11 @@ def envelope_operator(
         ``d`` of ``"tension"`` (e.g. :func:`extrema_spacing`); required for it.
     **overrides
         Settings that replace those of ``options`` (``envelope="biharmonic"``).
+
+    Returns
+    -------
+    scipy.sparse.csr_matrix
+        ``Q`` (n, n), a copy the caller may change.
     """
     options = EMDOptions.of(options, **overrides)
     start = start_tension(options.envelope, options.tension)

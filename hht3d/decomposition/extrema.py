@@ -75,6 +75,15 @@ def local_extrema(
     that is flat up to solver round-off (about 1e-12 of the range after an
     envelope solve) is still one ridge; the tolerance scales with the signal
     and ignores constant offsets.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> from hht3d.decomposition import local_extrema
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> maxima, minima = local_extrema(sphere, sphere.vertices[:, 2])  # the height: one pole each
+    >>> len(maxima), len(minima)
+    (1, 1)
     """
     options = EMDOptions.of(options, **renamed_keywords(overrides, {"rule": "extrema"}, "local_extrema"))
     is_max, is_min = extrema_masks(surface, check_signal(check_surface(surface), f), options, tie_rtol)
@@ -119,5 +128,26 @@ def active_extrema(surface: Surface, h: np.ndarray, options: EMDOptions) -> tupl
 
 
 def extrema_spacing(surface: Surface, n_extrema: int) -> float:
-    """``d = √(A / n)``: the mean spacing of ``n`` extrema spread over the surface area ``A``."""
+    """``d = √(A / n)``: the mean spacing of ``n`` extrema spread over the surface area ``A``.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface whose area ``A`` (sum of the lumped mass) is spread.
+    n_extrema : int
+        The number of extrema ``n`` (at least 1 is used).
+
+    Returns
+    -------
+    float
+        The spacing ``d``, in the surface's length unit.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> from hht3d.decomposition import extrema_spacing
+    >>> sphere = load(data_path("sphere_oct4098.ply"))  # the unit sphere, area 4π
+    >>> round(extrema_spacing(sphere, 100), 3)  # √(4π / 100)
+    0.354
+    """
     return math.sqrt(float(surface.mass_diagonal.sum()) / max(int(n_extrema), 1))

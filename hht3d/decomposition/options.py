@@ -78,7 +78,26 @@ MAX_SEED = 2**32 - 1
 
 
 def start_tension(envelope: str, tension: float) -> float:
-    """The tension ``τ`` an envelope starts from: ``tension``, 0 (thin plate) or ``inf`` (membrane)."""
+    """The tension ``τ`` an envelope starts from: ``tension``, 0 (thin plate) or ``inf`` (membrane).
+
+    Parameters
+    ----------
+    envelope : str
+        The envelope: ``"tension"``, ``"biharmonic"`` or ``"harmonic"``.
+    tension : float
+        The tension of a ``"tension"`` envelope.
+
+    Returns
+    -------
+    float
+        The starting tension ``τ``.
+
+    Examples
+    --------
+    >>> from hht3d.decomposition import start_tension
+    >>> start_tension("tension", 5.0), start_tension("biharmonic", 5.0), start_tension("harmonic", 5.0)
+    (5.0, 0.0, inf)
+    """
     return {"tension": float(tension), "biharmonic": 0.0, "harmonic": math.inf}[envelope]
 
 

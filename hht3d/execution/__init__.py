@@ -18,7 +18,13 @@ from .workers import worker_count
 
 def share_storage_options(client: Any) -> None:
     """Install this process's sealed storage options on ``client``'s workers
-    (:func:`hht3d.execution.sharing.share_storage_options`; imports ``distributed``)."""
+    (:func:`hht3d.execution.sharing.share_storage_options`; imports ``distributed``).
+
+    Parameters
+    ----------
+    client : distributed.Client
+        The client whose workers receive the options.
+    """
     from .sharing import share_storage_options as share
 
     share(client)

@@ -75,6 +75,20 @@ def open_client(workers: int | None = None, address: str | None = None, *, annou
     The local cluster has ``workers`` single-threaded worker processes
     (default: one per core); both are closed on exit.  With ``announce``, the
     dashboard link is logged (``hht3d.execution``, :mod:`hht3d.logs`).
+
+    Parameters
+    ----------
+    workers : int, optional
+        Worker processes of the local cluster (default: one per core).
+    address : str, optional
+        The address of a running Dask scheduler; when given, no local cluster is made.
+    announce : bool, optional
+        Log the dashboard link (default ``True``).
+
+    Yields
+    ------
+    distributed.Client
+        The client, closed (with its local cluster) when the ``with`` block ends.
     """
     from distributed import Client, LocalCluster
 
@@ -131,6 +145,18 @@ def compute(
         application configured logging).
     client : distributed.Client, optional
         Reuse a client instead of opening one.
+
+    Returns
+    -------
+    tuple
+        The value of each graph, in order.
+
+    Examples
+    --------
+    >>> import dask
+    >>> from hht3d.execution import compute
+    >>> compute(dask.delayed(sum)([1, 2]), dask.delayed(max)(3, 4), scheduler="synchronous", progress=False)
+    (3, 4)
     """
     if address or client is not None:
         scheduler = "distributed"

@@ -46,6 +46,19 @@ def worker_count() -> int:
     The workers of the current ``dask.distributed`` client if there is one,
     else dask's configured ``num_workers``, else one per core (the default of
     :func:`compute` for every scheduler).
+
+    Returns
+    -------
+    int
+        The workers of the default distributed client, else Dask's ``num_workers`` or the cores; at least 1.
+
+    Examples
+    --------
+    >>> import dask
+    >>> from hht3d.execution import worker_count
+    >>> with dask.config.set(num_workers=3):  # no distributed client here
+    ...     worker_count()
+    3
     """
     try:
         from distributed import default_client

@@ -24,10 +24,32 @@ def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
     Delaunay step fails) gets the plane's normal everywhere, its largest
     component positive.
 
+    Parameters
+    ----------
+    points : (n, 3) ndarray
+        The point positions.
+    k : int, optional
+        Neighbours of the PCA and of the orientation (default 30).
+
+    Returns
+    -------
+    (n, 3) ndarray
+        The unit normals.
+
     Raises
     ------
     InputError
         The points lie on a line, or Open3D cannot orient the normals.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.geometry import estimate_point_normals
+    >>> points = np.random.default_rng(0).normal(size=(400, 3))
+    >>> points /= np.linalg.norm(points, axis=1, keepdims=True)  # on the unit sphere
+    >>> normals = estimate_point_normals(points, k=15)
+    >>> bool(np.einsum("ij,ij->i", normals, points).min() > 0.98)  # outward on the unit sphere
+    True
     """
     points = np.asarray(points, dtype=np.float64)
     centered = points - points.mean(axis=0)
@@ -53,7 +75,29 @@ def estimate_point_normals(points: np.ndarray, k: int = 30) -> np.ndarray:
 
 
 def principal_axes(centered: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Singular values (descending) and principal axes of centred points; collinear points are an error."""
+    """Singular values (descending) and principal axes of centred points; collinear points are an error.
+
+    Parameters
+    ----------
+    centered : (n, 3) ndarray
+        Points with their mean subtracted.
+
+    Returns
+    -------
+    spread : (3,) ndarray
+        The singular values, descending.
+    axes : (3, 3) ndarray
+        The principal axes, one per row, in the same order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.geometry import principal_axes
+    >>> points = np.random.default_rng(0).normal(size=(500, 3)) * [3.0, 1.0, 0.1]
+    >>> spread, axes = principal_axes(points - points.mean(axis=0))
+    >>> int(np.abs(axes[0]).argmax()), int(np.abs(axes[2]).argmax())  # longest along x, thinnest along z
+    (0, 2)
+    """
     _, spread, axes = np.linalg.svd(centered, full_matrices=False)
     if spread[1] <= FLAT * spread[0]:
         raise InputError(f"the {len(centered)} points lie on a line; a surface needs points spread in two directions")

@@ -2,22 +2,19 @@
 
 Every function returns a float64 array of shape ``(n,)`` for a
 :class:`~hht3d.geometry.surface.Surface`.  :func:`signal` selects one by name, which
-is how the CLI and pipelines refer to them.
+is how the CLI and pipelines refer to them.  The curvatures are computed in
+:mod:`hht3d.geometry.curvature`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import cast
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 
 from ..errors import InputError
-from ..records import Record, option
-from . import operators as ops
+from .curvature import MIN_AREA_FRACTION, gaussian_curvature, mean_curvature, unreliable_vertices
 from .surface import Surface
 from .validation import check_signal
 
@@ -39,196 +36,56 @@ __all__ = [
 ]
 
 
-#: A vertex whose lumped area is below this fraction of its neighbours' median area is unreliable.
-MIN_AREA_FRACTION = 0.1
-
-
-@dataclass(frozen=True)
-class CurvatureOptions(Record):
-    """The setting of :func:`mean_curvature` and :func:`gaussian_curvature`."""
-
-    label = "curvature"
-
-    min_area: float = option(
-        MIN_AREA_FRACTION,
-        "vertices with less area than this fraction of the area nearby are pooled",
-        minimum=0,
-        maximum=100,
-    )
-
-
-#: ... and the reference area is at least this fraction of the median vertex area of the surface.
-CLUSTER_AREA_FRACTION = 0.3
-#: A curvature below this many ulps of the terms it is summed from is zero (see ``_round_off``).
-ROUND_OFF_ULPS = 64
-#: Triangles with an angle below this (degrees) are needles, above :data:`CAP_ANGLE` caps.
-NEEDLE_ANGLE = 2.0
-CAP_ANGLE = 160.0
-
-
-def unreliable_vertices(surface: Surface, min_area: float = MIN_AREA_FRACTION) -> np.ndarray:
-    """Vertices where a curvature density ``∫κ / A_i`` is unreliable (mask).
-
-    Those whose lumped area is below ``min_area`` × a typical area nearby
-    (their neighbours' median area, at least :data:`CLUSTER_AREA_FRACTION` of
-    the surface's median: a tiny vertex among normal ones, or a cluster of
-    tiny ones; a uniformly fine patch is not flagged), and on meshes the
-    corners of needle and cap triangles (an angle below :data:`NEEDLE_ANGLE`
-    or above :data:`CAP_ANGLE` degrees), where cotangent weights blow up and
-    angle defects split arbitrarily between close vertices.
-    """
-    area = surface.mass_diagonal
-    bad = area < min_area * _reference_area(surface)
-    if surface.is_mesh:
-        angles = np.degrees(ops.corner_angles(surface.vertices, cast(np.ndarray, surface.faces)))
-        degenerate = (angles.min(axis=1) < NEEDLE_ANGLE) | (angles.max(axis=1) > CAP_ANGLE)
-        bad[cast(np.ndarray, surface.faces)[degenerate].ravel()] = True
-    return bad
-
-
-def _reference_area(surface: Surface) -> np.ndarray:
-    """A typical area near each vertex: its neighbours' median area, at least
-    :data:`CLUSTER_AREA_FRACTION` of the median vertex area (so clusters of tiny vertices count too)."""
-    area = surface.mass_diagonal
-    return np.maximum(_neighbour_median(surface, area), CLUSTER_AREA_FRACTION * float(np.median(area)))
-
-
-def _neighbour_median(surface: Surface, values: np.ndarray) -> np.ndarray:
-    """Median of ``values`` over each vertex's 1-ring (its own value where it has no neighbour)."""
-    adj = surface.adjacency
-    degree = np.diff(adj.indptr)
-    rows = np.repeat(np.arange(len(values)), degree)
-    ranked = values[adj.indices][np.lexsort((values[adj.indices], rows))]  # sorted within each row
-    out = values.copy()
-    has = degree > 0
-    start = adj.indptr[:-1][has]
-    out[has] = 0.5 * (ranked[start + (degree[has] - 1) // 2] + ranked[start + degree[has] // 2])
-    return out
-
-
-def _regions(surface: Surface, min_area: float) -> tuple[np.ndarray, sp.csr_matrix]:
-    """Seeds (the :func:`unreliable_vertices`) and their regions: the closed 1-ring grown until it
-    holds a typical area nearby (:func:`hht3d.geometry.operators.grown_regions`)."""
-    seeds = np.flatnonzero(unreliable_vertices(surface, min_area))
-    area = surface.mass_diagonal
-    return seeds, ops.grown_regions(surface.adjacency, area, seeds, _reference_area(surface)[seeds])
-
-
-def _region_average(surface: Surface, integrated: np.ndarray, min_area: float) -> np.ndarray:
-    """Density ``integrated_i / A_i`` (rows of an (n, 3) array), summed over its region at each seed.
-
-    Bad edges inside a region cancel, and no density divides by a tiny area.
-    """
-    area = surface.mass_diagonal
-    density = integrated / area[:, None]
-    seeds, regions = _regions(surface, min_area)
-    if len(seeds):
-        density[seeds] = (regions @ integrated) / (regions @ area)[:, None]
-    return density
-
-
-def _pooled(surface: Surface, integrated: np.ndarray, min_area: float) -> np.ndarray:
-    """Density ``integrated_i / A_i`` of a scalar, pooled over clusters of overlapping regions.
-
-    Every vertex of a cluster gets the cluster's ``Σ integrated / Σ A``, so
-    ``Σ_i A_i density_i = Σ_i integrated_i`` exactly.
-    """
-    area = surface.mass_diagonal
-    density = integrated / area
-    seeds, regions = _regions(surface, min_area)
-    if len(seeds):
-        members = np.flatnonzero(np.asarray(regions.sum(axis=0)).ravel() > 0)
-        within = regions[:, members]
-        _, cluster = connected_components((within.T @ within).tocsr(), directed=False)
-        total = np.bincount(cluster, weights=integrated[members]) / np.bincount(cluster, weights=area[members])
-        density[members] = total[cluster]
-    return density
-
-
-def mean_curvature(surface: Surface, *, min_area: float = MIN_AREA_FRACTION) -> np.ndarray:
-    """Mean-curvature measure of Eq. (24): ``s_i = n_i · (M^{-1} L V)_i``.
-
-    ``M^{-1} L V`` is the mean-curvature normal ``2 H n`` (Meyer et al. 2002),
-    so ``s = 2H``: about ``2/r`` on a sphere of radius ``r`` with outward
-    normals, positive on convex and negative on concave regions.  This is the
-    paper's ``Δ(v_i) · n_i`` with the sign flipped (the paper's ``Δ`` of Eq. 9
-    points inward), which is the sign Eq. (27) needs: ``L V' ≈ diag(s') N``.
-    Works on meshes and point clouds.
+def centroid_distance(surface: Surface) -> np.ndarray:
+    """Distance of each vertex to the area-weighted centroid (the signal of Fig. 2).
 
     Parameters
     ----------
     surface : Surface
-    min_area : float
-        At :func:`unreliable_vertices` (tiny areas, needle and cap triangles)
-        ``(L V)_j`` and ``A_j`` are summed over a region holding a typical
-        neighbour's area before dividing, so the signal does not spike
-        there; a vertex counts as tiny below ``min_area`` × its neighbours'
-        median area.  On a unit sphere with 200 needles (vertex areas 3e-4 of
-        the median) the largest error against 2H = 2 falls from 2.1 (cotan,
-        pointwise) and 1,100 (robust Laplacian, pointwise) to 0.2.  0 gives
-        Eq. (24) pointwise.
+        The surface whose vertices are measured.
+
+    Returns
+    -------
+    (n,) ndarray
+        The distance of each vertex.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d import data_path, load
+    >>> from hht3d.geometry import centroid_distance
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> bool(np.allclose(centroid_distance(sphere), 1.0, atol=1e-3))  # the unit sphere about its centre
+    True
     """
-    centred = _centred(surface)  # L 1 = 0, so L V = L (V − c) with less cancellation far from the origin
-    if _fraction(min_area) == 0:
-        lv = surface.stiffness @ centred / surface.mass_diagonal[:, None]
-    else:
-        lv = _region_average(surface, surface.stiffness @ centred, min_area)
-    s = np.einsum("ij,ij->i", lv, surface.normals)
-    s[np.abs(s) <= _round_off(surface)] = 0.0
-    return s
-
-
-def _centred(surface: Surface) -> np.ndarray:
-    """Vertices relative to the centre of their bounding box."""
-    v = surface.vertices
-    return v - 0.5 * (v.min(axis=0) + v.max(axis=0))
-
-
-def _round_off(surface: Surface) -> np.ndarray:
-    """Round-off of ``(M⁻¹ L V)_i``: ``ROUND_OFF_ULPS · ε · Σ_j |L_ij| |v_j| / A_i``.
-
-    ``L V`` sums terms of size ``|L_ij| |v_j|`` that cancel on a plane, so a
-    curvature below this is zero up to rounding (a flat scan away from the
-    origin otherwise reads 1e-11 noise that EMD would decompose).
-    """
-    magnitude = abs(surface.stiffness) @ np.linalg.norm(_centred(surface), axis=1)
-    return ROUND_OFF_ULPS * np.finfo(np.float64).eps * magnitude / surface.mass_diagonal
-
-
-def gaussian_curvature(surface: Surface, *, min_area: float = MIN_AREA_FRACTION) -> np.ndarray:
-    """Gaussian curvature density from the angle defect, ``K_i = θ_i / A_i``.
-
-    ``θ_i = 2π - Σ angles`` at interior vertices and ``π - Σ angles`` at
-    boundary vertices; ``A_i`` is the lumped mass.  ``Σ K_i A_i = 2π χ`` on a
-    closed mesh (Gauss–Bonnet).  Meshes only.  With ``min_area > 0`` the
-    :func:`unreliable_vertices` pool their defects and areas over the regions
-    of :func:`mean_curvature`, merged where they overlap, so Gauss–Bonnet
-    stays exact: on the unit sphere with 200 needles the largest error
-    against K = 1 falls from 1.1 to 1e-3.  0 gives the pointwise density.
-    """
-    if not surface.is_mesh:
-        raise InputError(f"{surface.name}: Gaussian curvature (angle defect) needs a triangle mesh")
-    angles = ops.corner_angles(surface.vertices, cast(np.ndarray, surface.faces))
-    total = np.bincount(cast(np.ndarray, surface.faces).ravel(), weights=angles.ravel(), minlength=surface.n_vertices)
-    defect = np.where(surface.boundary_vertices, np.pi, 2 * np.pi) - total
-    if _fraction(min_area) == 0:
-        return defect / surface.mass_diagonal
-    return _pooled(surface, defect, min_area)
-
-
-def _fraction(min_area: object) -> float:
-    return float(CurvatureOptions.check("min_area", min_area))
-
-
-def centroid_distance(surface: Surface) -> np.ndarray:
-    """Distance of each vertex to the area-weighted centroid (the signal of Fig. 2)."""
     w = surface.mass_diagonal
     centroid = (w[:, None] * surface.vertices).sum(axis=0) / w.sum()
     return np.linalg.norm(surface.vertices - centroid, axis=1)
 
 
 def coordinate(surface: Surface, axis: str) -> np.ndarray:
-    """The ``x``, ``y`` or ``z`` coordinate."""
+    """The ``x``, ``y`` or ``z`` coordinate.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface whose vertex positions are read.
+    axis : str
+        ``"x"``, ``"y"`` or ``"z"``.
+
+    Returns
+    -------
+    (n,) ndarray
+        A copy of that coordinate of each vertex.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.geometry import coordinate
+    >>> bool((coordinate(spot, "y") == spot.vertices[:, 1]).all())
+    True
+    """
     axes = {"x": 0, "y": 1, "z": 2}
     if axis not in axes:
         raise InputError(f"unknown coordinate {axis!r}; choose x, y or z")
@@ -236,14 +93,60 @@ def coordinate(surface: Surface, axis: str) -> np.ndarray:
 
 
 def luminance(surface: Surface) -> np.ndarray:
-    """Colour luminance ``0.2126 R + 0.7152 G + 0.0722 B`` (Rec. 709), the texture signal of Fig. 1."""
+    """Colour luminance ``0.2126 R + 0.7152 G + 0.0722 B`` (Rec. 709), the texture signal of Fig. 1.
+
+    Parameters
+    ----------
+    surface : Surface
+        A surface with vertex colours.
+
+    Returns
+    -------
+    (n,) ndarray
+        The luminance of each vertex, in [0, 1].
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import numpy as np
+    >>> from hht3d.geometry import Surface, luminance
+    >>> grey = Surface(spot.vertices, spot.faces, colors=np.full((2930, 3), 0.5))
+    >>> bool(np.allclose(luminance(grey), 0.5))  # the Rec. 709 weights sum to 1
+    True
+    """
     if surface.colors is None:
         raise InputError(f"{surface.name}: has no vertex colours for a luminance signal")
     return surface.colors @ np.array([0.2126, 0.7152, 0.0722])
 
 
 def stored(surface: Surface, name: str) -> np.ndarray:
-    """A per-vertex scalar stored in the input file (e.g. a PLY vertex property)."""
+    """A per-vertex scalar stored in the input file (e.g. a PLY vertex property).
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface read from the file.
+    name : str
+        The attribute's name, a key of ``surface.attributes``.
+
+    Returns
+    -------
+    (n,) ndarray
+        The attribute as float64.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.geometry import Surface, stored
+    >>> scan = Surface(spot.vertices, spot.faces, attributes={"quality": spot.vertices[:, 2]}, name="scan")
+    >>> stored(scan, "quality").shape
+    (2930,)
+    >>> stored(scan, "intensity")
+    Traceback (most recent call last):
+    hht3d.errors.InputError: scan: no stored vertex attribute 'intensity'; available: ['quality']
+    """
     if name not in surface.attributes:
         raise InputError(
             f"{surface.name}: no stored vertex attribute {name!r}; available: {sorted(surface.attributes) or 'none'}"
@@ -252,7 +155,25 @@ def stored(surface: Surface, name: str) -> np.ndarray:
 
 
 def check_signal_path(path: Path | str) -> Path:
-    """``path`` if it names an existing ``.npy`` file; else an :class:`InputError` saying what it is."""
+    """``path`` if it names an existing ``.npy`` file; else an :class:`InputError` saying what it is.
+
+    Parameters
+    ----------
+    path : Path or str
+        The signal file.
+
+    Returns
+    -------
+    Path
+        ``path`` as a :class:`~pathlib.Path`.
+
+    Examples
+    --------
+    >>> from hht3d.geometry import check_signal_path
+    >>> check_signal_path("curvature.txt")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.InputError: curvature.txt: a signal file must be a .npy file ..., not .txt
+    """
     path = Path(path)
     if path.suffix.lower() != ".npy":
         raise InputError(
@@ -265,7 +186,33 @@ def check_signal_path(path: Path | str) -> Path:
 
 
 def load_signal(surface: Surface, path: Path | str) -> np.ndarray:
-    """A user signal from a ``.npy`` file (one value per vertex), as written by ``numpy.save``."""
+    """A user signal from a ``.npy`` file (one value per vertex), as written by ``numpy.save``.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface the signal lives on.
+    path : Path or str
+        A ``.npy`` file of one number per vertex (never unpickled).
+
+    Returns
+    -------
+    (n,) ndarray
+        The signal as float64.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from hht3d.geometry import load_signal
+    >>> path = Path(tempfile.mkdtemp()) / "height.npy"
+    >>> np.save(path, spot.vertices[:, 1])
+    >>> bool((load_signal(spot, path) == spot.vertices[:, 1]).all())
+    True
+    """
     path = check_signal_path(path)
     try:
         values = np.load(path, allow_pickle=False)
@@ -302,6 +249,24 @@ def signal(
 
     ``kind`` is one of :data:`SIGNALS`, or ``"stored"`` (with ``attribute``),
     ``"file"`` (a ``.npy`` at ``path``) or ``"array"`` (``values``).
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface to compute the signal on.
+    kind : str
+        A name of :data:`SIGNALS`, ``"stored"``, ``"file"`` or ``"array"``.
+    attribute : str, optional
+        The stored vertex attribute of ``kind="stored"``.
+    path : Path or str, optional
+        The ``.npy`` file of ``kind="file"``.
+    values : ndarray, optional
+        The per-vertex values of ``kind="array"``.
+
+    Returns
+    -------
+    (n,) ndarray
+        One value per vertex.
 
     Examples
     --------

@@ -22,6 +22,16 @@ __all__ = ["check_surface", "check_signal", "as_signals", "as_imfs"]
 def check_surface(surface: object) -> Surface:
     """``surface`` if it is an :class:`~hht3d.geometry.surface.Surface`.
 
+    Parameters
+    ----------
+    surface : object
+        The value to check.
+
+    Returns
+    -------
+    Surface
+        ``surface`` itself.
+
     Examples
     --------
     >>> from hht3d import load, data_path
@@ -41,6 +51,32 @@ def check_signal(surface: Surface, values: np.ndarray, what: str = "signal") -> 
 
     Complex values are refused rather than cut to their real part; a wrong
     length after cleaning says how to index the signal.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface the signal lives on.
+    values : array_like
+        One value per vertex.
+    what : str, optional
+        What the errors call ``values`` (default ``"signal"``).
+
+    Returns
+    -------
+    (n,) ndarray
+        The values as float64.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import numpy as np
+    >>> from hht3d.geometry import check_signal
+    >>> check_signal(spot, np.arange(2930)).dtype
+    dtype('float64')
+    >>> check_signal(spot, np.zeros(10))
+    Traceback (most recent call last):
+    hht3d.errors.InputError: signal has shape (10,); spot has 2930 vertices
     """
     if np.iscomplexobj(values):
         raise InputError(
@@ -67,7 +103,34 @@ def check_signal(surface: Surface, values: np.ndarray, what: str = "signal") -> 
 
 
 def as_signals(surface: Surface, f: np.ndarray, what: str = "signal") -> tuple[np.ndarray, bool]:
-    """``f`` as a finite ``(k, n)`` float array, and whether it was a single ``(n,)`` signal."""
+    """``f`` as a finite ``(k, n)`` float array, and whether it was a single ``(n,)`` signal.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface the signals live on.
+    f : ndarray
+        One signal ``(n,)`` or a stack ``(k, n)``.
+    what : str, optional
+        What the errors call ``f`` (default ``"signal"``).
+
+    Returns
+    -------
+    signals : (k, n) ndarray
+        The signals as float64.
+    single : bool
+        Whether ``f`` was one ``(n,)`` signal.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import numpy as np
+    >>> from hht3d.geometry import as_signals
+    >>> signals, single = as_signals(spot, np.ones(2930))
+    >>> signals.shape, single
+    ((1, 2930), True)
+    """
     try:
         a = np.asarray(f, dtype=np.float64)
     except (TypeError, ValueError):
@@ -84,7 +147,29 @@ def as_signals(surface: Surface, f: np.ndarray, what: str = "signal") -> tuple[n
 
 
 def as_imfs(surface: Surface, imfs: np.ndarray) -> np.ndarray:
-    """At least one finite IMF as a ``(k, n)`` array, from an array, an EMD or an HHT result."""
+    """At least one finite IMF as a ``(k, n)`` array, from an array, an EMD or an HHT result.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface the IMFs live on.
+    imfs : ndarray or EMDResult or HHTResult
+        The IMFs, ``(k, n)`` or one ``(n,)``, or a result with an ``imfs`` attribute.
+
+    Returns
+    -------
+    (k, n) ndarray
+        The IMFs as float64, ``k >= 1``.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import numpy as np
+    >>> from hht3d.geometry import as_imfs
+    >>> as_imfs(spot, np.ones(2930)).shape  # one IMF becomes a stack of one
+    (1, 2930)
+    """
     a = getattr(imfs, "imfs", imfs)
     try:
         a = np.asarray(a, dtype=np.float64)

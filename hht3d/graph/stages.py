@@ -1,11 +1,10 @@
 """Lazy task-graph API: every HHT stage as a ``dask.delayed`` task.
 
-This layer adds laziness only.  Each public core function has a lazy twin
-here with the same name, signature and docstring (as dask-image mirrors
-SciPy's ndimage): ``graph.emd(surface, signal, max_imfs=3)`` takes what
-:func:`hht3d.decomposition.decompose.emd` takes, Delayed values included, and returns a
-``Delayed``.  :func:`mirror` makes such a twin from any core function.
-Stages compose freely and run on any scheduler of :mod:`hht3d.execution`.
+This layer adds laziness only.  Each public core function has a lazy twin here with the same name,
+signature and docstring (as dask-image mirrors SciPy's ndimage): ``graph.emd(surface, signal, max_imfs=3)``
+takes what :func:`hht3d.decomposition.decompose.emd` takes, Delayed values included, and returns a
+``Delayed``.  :func:`mirror` makes such a twin from any core function.  Stages compose freely and run on
+any scheduler of :mod:`hht3d.execution`.
 
 Examples
 --------
@@ -21,14 +20,12 @@ Parallelism follows the method:
 
 * independent signals give independent :func:`emd` tasks; EEMD members are
   tasks of their own (:func:`eemd`);
-* the Riesz transform of all IMFs is a sum over quadrature shifts
-  (:mod:`hht3d.spectral.riesz_transform`): one task finds the spectral bounds and shifts, then
-  ``riesz_tasks`` independent *shift-group* tasks (default: one per worker,
-  :func:`hht3d.execution.workers.worker_count`) each factorize their shifts once and
-  solve all IMFs as one multi-column right-hand side; they depend only on the
-  EMD task and the surface, and factorizations never leave a task.  (One task
-  per IMF would repeat every factorization once per IMF.)  :func:`monogenic`
-  and :func:`hht` take ``riesz_tasks`` beyond the eager signature;
+* the Riesz transform of all IMFs is a sum over quadrature shifts (:mod:`hht3d.spectral.riesz_transform`):
+  one task finds the spectral bounds and shifts, then ``riesz_tasks`` independent *shift-group* tasks
+  (default: one per worker, :func:`hht3d.execution.workers.worker_count`) each factorize their shifts once
+  and solve all IMFs as one multi-column right-hand side; they depend only on the EMD task and the
+  surface, and factorizations never leave a task.  (One task per IMF would repeat every factorization
+  once per IMF.)  :func:`monogenic` and :func:`hht` take ``riesz_tasks`` beyond the eager signature;
 * the files of a dataset are independent subgraphs (:mod:`hht3d.dataset.run`).
 
 How the tasks are made, and how workers keep each surface's operators, is
@@ -40,6 +37,7 @@ from __future__ import annotations
 
 import functools
 import inspect
+import re
 from pathlib import Path
 from typing import Any, Callable, ParamSpec
 
@@ -138,7 +136,9 @@ def mirror(
     setattr(lazy, "__signature__", signature)
     lazy.__module__ = __name__
     eager = inspect.cleandoc(func.__doc__ or "").split("\nExamples\n--------")[0].rstrip()
-    lazy.__doc__ = f"Lazy :func:`{func.__module__}.{func.__name__}`: {tasks}.\n\n{eager}\n"
+    eager = re.sub(r"\nReturns\n-------\n.*?(?=\n\n\S[^\n]*\n-{3,}\n|\Z)", "", eager, flags=re.S).rstrip()
+    returns = f"Returns\n-------\nDelayed\n    Computes to what :func:`{func.__module__}.{func.__name__}` returns."
+    lazy.__doc__ = f"Lazy :func:`{func.__module__}.{func.__name__}`: {tasks}.\n\n{eager}\n\n{returns}\n"
     if examples:
         lazy.__doc__ += f"\nExamples\n--------\n{inspect.cleandoc(examples)}\n"
     return lazy
@@ -161,7 +161,18 @@ def _with_operators(surface: Surface) -> Surface:
 
 
 def operators(surface: Surface) -> Any:
-    """Lazy operator build; later tasks in the same process reuse them (:func:`resident`)."""
+    """Lazy operator build; later tasks in the same process reuse them (:func:`resident`).
+
+    Parameters
+    ----------
+    surface : Surface or Delayed
+        The surface whose Laplacian, mass and normals are built.
+
+    Returns
+    -------
+    Delayed
+        Computes to ``surface`` with its operators cached.
+    """
     return _PLAIN.task("operators", _with_operators)(surface)
 
 
@@ -205,7 +216,28 @@ def monogenic(
 ) -> Delayed:
     """Lazy :func:`hht3d.spectral.monogenic`: the shift-group tasks of :func:`riesz_potential`
     (``riesz_tasks`` of them, default one per worker), then one task of
-    :func:`hht3d.spectral.monogenic_from_potential`.  Arguments as the eager function's."""
+    :func:`hht3d.spectral.monogenic_from_potential`.  Arguments as the eager function's.
+
+    Parameters
+    ----------
+    surface : Surface or Delayed
+        The surface the IMFs live on.
+    imfs : ndarray or Delayed
+        The IMFs, ``(k, n)``.
+    options : RieszOptions or dict, optional
+        The Riesz settings, as for :func:`hht3d.spectral.monogenic`.
+    backend : str, optional
+        The sparse solver backend (default :func:`hht3d.linalg.default_backend`).
+    riesz_tasks : int, optional
+        Shift-group tasks of the quadrature (default: one per worker).
+    **overrides
+        Flat settings over ``options``.
+
+    Returns
+    -------
+    Delayed
+        Computes to the monogenic signal, as :func:`hht3d.spectral.monogenic` returns it.
+    """
     options = RieszOptions.of(options, **overrides)
     builder = Builder(riesz_tasks=riesz_tasks)
     potential = builder.potential(surface, imfs, options, backend)
@@ -227,7 +259,30 @@ def transform(
 ) -> dict:
     """The tasks of one HHT by stage name (:func:`hht3d.transform.hht_stages`): ``emd``, ``imfs``,
     ``riesz``, ``monogenic``, ``hht``.  Settings (as for :func:`hht3d.hht`) are checked now, before
-    any task runs."""
+    any task runs.
+
+    Parameters
+    ----------
+    builder : Builder
+        The builder making the tasks (its guard wraps each one).
+    surface : Surface or Delayed
+        The surface.
+    signal : ndarray or Delayed
+        One value per vertex.
+    options : HHTOptions or dict, optional
+        The settings, as for :func:`hht3d.hht`.
+    backend : str, optional
+        The sparse solver backend (default :func:`hht3d.linalg.default_backend`).
+    riesz_tasks : int, optional
+        Shift-group tasks of the Riesz quadrature (default: one per worker).
+    **overrides
+        Flat settings over ``options``.
+
+    Returns
+    -------
+    dict
+        The ``Delayed`` of each stage, by name.
+    """
     options = hht_settings(options, overrides, "transform")
     return hht_stages(Builder(builder.guard, riesz_tasks), surface, signal, options, backend=backend)
 
@@ -235,7 +290,26 @@ def transform(
 def transform_file(
     builder: Builder, path: Path | str, signal: str = "mean_curvature", load_options: dict | None = None, **options: Any
 ) -> dict:
-    """:func:`transform` of one file's signal, with its ``load`` and ``signal`` tasks."""
+    """:func:`transform` of one file's signal, with its ``load`` and ``signal`` tasks.
+
+    Parameters
+    ----------
+    builder : Builder
+        The builder making the tasks.
+    path : Path or str
+        The surface file (or URL) to load.
+    signal : str, optional
+        The signal's name, as for :func:`hht3d.geometry.signals.signal` (default ``"mean_curvature"``).
+    load_options : dict, optional
+        Keyword arguments of :func:`hht3d.load`.
+    **options
+        The arguments of :func:`transform` after ``signal``.
+
+    Returns
+    -------
+    dict
+        The ``Delayed`` of each stage, by name, with ``load`` and ``signal``.
+    """
     surface = _load_tasks(builder, path, **(load_options or {}))
     values = builder.task("signal", _signal)(surface, signal)
     return {"load": surface, "signal": values, **transform(builder, surface, values, **options)}
@@ -253,9 +327,30 @@ def hht(
     """Lazy :func:`hht3d.hht`: the tasks of :func:`transform` (``riesz_tasks`` shift groups of the
     Riesz quadrature, default one per worker).  Arguments as the eager function's.
 
-    The lazy result equals the eager one; only the order in which the shift
-    groups' parts of ``L^{-1/2}`` are summed differs:
+    The lazy result equals the eager one up to the order in which the shift groups' parts of ``L^{-1/2}`` are summed.
 
+    Parameters
+    ----------
+    surface : Surface or Delayed
+        The surface (e.g. :func:`from_surface` or :func:`load`).
+    signal : ndarray or Delayed
+        One value per vertex.
+    options : HHTOptions or dict, optional
+        The settings, as for :func:`hht3d.hht`.
+    backend : str, optional
+        The sparse solver backend (default :func:`hht3d.linalg.default_backend`).
+    riesz_tasks : int, optional
+        Shift-group tasks of the Riesz quadrature (default: one per worker).
+    **overrides
+        Flat settings (e.g. ``max_imfs=2``) over ``options``.
+
+    Returns
+    -------
+    Delayed
+        Computes to the :class:`~hht3d.transform.HHTResult`.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> import hht3d
     >>> from hht3d import data_path, graph
@@ -274,9 +369,24 @@ def hht(
 
 
 def save(result: HHTResult, path: Path | str, *, storage_options: dict | None = None) -> Any:
-    """Lazy :meth:`HHTResult.save <hht3d.transform.HHTResult.save>` (atomic PLY or npz write; ``path``
-    may be an fsspec URL, written by the worker with ``storage_options``, which the task carries
-    sealed, as a token: :mod:`hht3d.io.sealed`); returns the path."""
+    """Lazy :meth:`HHTResult.save <hht3d.transform.HHTResult.save>` (atomic PLY or npz write; ``path`` may be an
+    fsspec URL, written by the worker with ``storage_options``, which the task carries sealed, as a token:
+    :mod:`hht3d.io.sealed`); returns the path.
+
+    Parameters
+    ----------
+    result : HHTResult or Delayed
+        The result to write.
+    path : Path or str
+        A ``.ply`` or ``.npz`` path, or an fsspec URL.
+    storage_options : dict, optional
+        Options of the fsspec back-end of a URL ``path``.
+
+    Returns
+    -------
+    Delayed
+        Computes to the path written.
+    """
     return _PLAIN.task("save", HHTResult.save)(result, str(path), storage_options=seal(storage_options))
 
 

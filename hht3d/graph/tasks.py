@@ -131,6 +131,16 @@ def resident(surface: Surface) -> Surface:
     The cache is keyed by the vertices, faces, Laplacian options and given
     normals; the :data:`RESIDENT_SURFACES` most recently used ones are kept.
     Returns the same object, whose ``cache`` is now the shared one.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface whose cache is shared.
+
+    Returns
+    -------
+    Surface
+        ``surface`` itself.
     """
     key = tokenize(
         surface.vertices, surface.faces, surface.laplacian, surface.n_neighbors, surface.cache.get("normals")
@@ -201,12 +211,52 @@ def _quadrature_part(
 
 
 def from_surface(surface: Surface) -> Any:
-    """Put an in-memory surface into the graph once, as a single key."""
+    """Put an in-memory surface into the graph once, as a single key.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface to put in the graph.
+
+    Returns
+    -------
+    Delayed
+        The surface's key.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d import graph
+    >>> key = graph.from_surface(spot)
+    >>> (again,) = graph.compute(key, scheduler="synchronous", progress=False)
+    >>> again is spot
+    True
+    """
     return delayed(surface, name=f"surface-{surface.name}-{id(surface):x}")
 
 
 def as_key(value: Any) -> Any:
-    """A surface or array as one graph key (Delayed objects and small values pass through)."""
+    """A surface or array as one graph key (Delayed objects and small values pass through).
+
+    Parameters
+    ----------
+    value : object
+        A :class:`Surface`, an array, a ``Delayed`` or any small value.
+
+    Returns
+    -------
+    object
+        A ``Delayed`` for a surface or a large array (:data:`ARRAY_KEY_SIZE`), else ``value``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dask.delayed import Delayed
+    >>> from hht3d import graph
+    >>> graph.as_key(3), isinstance(graph.as_key(np.zeros(10_000)), Delayed)  # a large array becomes a key
+    (3, True)
+    """
     if isinstance(value, Surface):
         return from_surface(value)
     if isinstance(value, np.ndarray) and value.size > ARRAY_KEY_SIZE:
@@ -231,6 +281,28 @@ def riesz_potential(
     (:func:`hht3d.spectral.quadrature_part`; default one per worker of the
     scheduler, :func:`hht3d.execution.workers.worker_count`) and a summing task.
     Other potentials: one task (:func:`hht3d.spectral.riesz_transform.fractional_laplacian`).
+
+    Parameters
+    ----------
+    surface : Surface or Delayed
+        The surface the IMFs live on.
+    imfs : ndarray or Delayed
+        The IMFs, ``(k, n)``.
+    options : RieszOptions or dict, optional
+        The Riesz settings.
+    backend : str, optional
+        The sparse solver backend (default :func:`hht3d.linalg.default_backend`).
+    riesz_tasks : int, optional
+        Shift-group tasks of the quadrature (default: one per worker).
+    builder : Builder, optional
+        The builder making the tasks (default: a plain one).
+    **overrides
+        Flat settings over ``options``.
+
+    Returns
+    -------
+    Delayed
+        Computes to the ``(k, n)`` potential ``L^{-1/2}`` of the IMFs.
     """
     options = RieszOptions.of(options, **overrides)
     builder = Builder() if builder is None else builder

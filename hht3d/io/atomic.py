@@ -111,6 +111,16 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
 
     On any exception the temporary file is removed and ``path`` is untouched.
 
+    Parameters
+    ----------
+    path : Path or str
+        The file to write.
+
+    Yields
+    ------
+    Path
+        The temporary path to write to, in the ``with`` block.
+
     Raises
     ------
     OutputError
@@ -118,6 +128,17 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
         disk, a folder in the way), or the folder was swapped since the
         temporary file was made there, or the run is stopping or has ended
         (:func:`stop_writes`, :func:`writes_end_with`); names ``path`` and the reason.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import atomic_path
+    >>> path = Path(tempfile.mkdtemp()) / "out" / "table.csv"
+    >>> with atomic_path(path) as tmp:
+    ...     _ = tmp.write_text("a,b")
+    >>> path.read_text(), sorted(p.name for p in path.parent.iterdir())
+    ('a,b', ['table.csv'])
     """
     path = Path(path)
     if (refusal := _refusal(path)) is not None:
@@ -189,7 +210,28 @@ def _at(
 
 
 def confined(path: Path | str, folder: Path | str) -> Path | None:
-    """``path`` resolved (symlinks followed) if it lies inside ``folder`` resolved, else ``None``."""
+    """``path`` resolved (symlinks followed) if it lies inside ``folder`` resolved, else ``None``.
+
+    Parameters
+    ----------
+    path : Path or str
+        The path to check.
+    folder : Path or str
+        The folder it should lie in.
+
+    Returns
+    -------
+    Path or None
+        The resolved path, or ``None`` outside ``folder``.
+
+    Examples
+    --------
+    >>> from hht3d.io import confined
+    >>> confined("out/../elsewhere/x.ply", "out") is None
+    True
+    >>> confined("out/sub/x.ply", "out").name
+    'x.ply'
+    """
     resolved, root = Path(os.path.realpath(path)), Path(os.path.realpath(folder))
     return resolved if resolved == root or root in resolved.parents else None
 
@@ -239,7 +281,27 @@ def _alive(pid: int) -> bool:
 
 def remove_stale_parts(folders: Iterable[Path | str], own: Collection[int] = ()) -> list[Path]:
     """Remove the temporary files of :func:`atomic_path` in ``folders`` (not below) whose writing
-    process has ended, or is one of ``own`` (pids of this run stopping); return what was removed."""
+    process has ended, or is one of ``own`` (pids of this run stopping); return what was removed.
+
+    Parameters
+    ----------
+    folders : iterable of Path or str
+        The folders to clean (missing ones are skipped).
+    own : collection of int, optional
+        Process ids whose parts are removed even while they run (default none).
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from hht3d.io import remove_stale_parts
+    >>> remove_stale_parts([tempfile.mkdtemp(), "no/such/folder"])  # nothing left behind
+    []
+    """
     removed = []
     for folder in {Path(f) for f in folders}:
         try:
@@ -270,6 +332,11 @@ def check_output_paths(paths: Iterable[Path | str]) -> None:
     probe (a temporary folder, made and removed at once) succeeds, which
     catches read-only and pseudo file systems (``/proc``) and missing
     permissions before anything is computed.
+
+    Parameters
+    ----------
+    paths : iterable of Path or str
+        The files to be written.
 
     Raises
     ------

@@ -64,7 +64,24 @@ def check_extension(path: Path) -> None:
 
 def check_regular_file(path: Path, what: str = "a mesh or point-cloud file") -> None:
     """Raise :class:`InputError` unless ``path`` is (or links to) a regular file: missing, a folder,
-    a FIFO, a device (``/dev/urandom``) or a socket are each named as such."""
+    a FIFO, a device (``/dev/urandom``) or a socket are each named as such.
+
+    Parameters
+    ----------
+    path : Path
+        The file to check.
+    what : str, optional
+        What the error says the file should be (default ``"a mesh or point-cloud file"``).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import check_regular_file
+    >>> check_regular_file(Path(tempfile.mkdtemp()))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.InputError: ...: is a folder, not a mesh or point-cloud file; give one file (...)
+    """
     shown = one_line(path, MAX_SHOWN)
     try:
         mode = os.stat(path).st_mode

@@ -29,6 +29,16 @@ _MAX_HEADER = 1 << 20
 def read_ply_header(path: Path | str) -> PlyHeader:
     """The header of a PLY file, without reading its data (cheap for any file size).
 
+    Parameters
+    ----------
+    path : Path or str
+        The PLY file.
+
+    Returns
+    -------
+    PlyHeader
+        Element counts, vertex property names and properties per element.
+
     Raises
     ------
     InputError

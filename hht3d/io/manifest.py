@@ -59,7 +59,20 @@ _SHA256 = re.compile(r"[0-9a-f]{64}")
 
 
 def new_run_id() -> str:
-    """A run id: UTC time and a random suffix."""
+    """A run id: UTC time and a random suffix.
+
+    Returns
+    -------
+    str
+        ``YYYYmmddTHHMMSSZ-xxxxxxxx``.
+
+    Examples
+    --------
+    >>> from hht3d.io import new_run_id
+    >>> run = new_run_id()
+    >>> len(run), run[8], run[15:17]
+    (25, 'T', 'Z-')
+    """
     return f"{time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())}-{uuid.uuid4().hex[:8]}"
 
 
@@ -131,7 +144,36 @@ def _digest(path: Path | str) -> tuple[int, str]:
 
 
 def is_recorded(path: Path | str, folder: Path | str, known: dict | None = None) -> bool:
-    """Whether ``path`` is a complete file that hht3d wrote: recorded inside ``folder``, same size and checksum."""
+    """Whether ``path`` is a complete file that hht3d wrote: recorded inside ``folder``, same size and checksum.
+
+    Parameters
+    ----------
+    path : Path or str
+        The file to look up.
+    folder : Path or str
+        The folder whose manifest is read.
+    known : dict, optional
+        The manifest's entries, already read (default: read them).
+
+    Returns
+    -------
+    bool
+        Whether the file is as recorded.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import is_recorded, new_run_id, record
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> (folder / "x.npz").write_bytes(b"result")
+    6
+    >>> record([folder / "x.npz"], folder, new_run_id())
+    >>> (folder / "x.npz").write_bytes(b"edited")  # changed since: no longer as recorded
+    6
+    >>> is_recorded(folder / "x.npz", folder)
+    False
+    """
     entry = (entries(folder) if known is None else known).get(_key(path, folder))
     try:
         if not entry or os.path.getsize(path) != entry["size"]:
@@ -150,6 +192,29 @@ def record(
     temporary file is recorded under its final name just before it is
     renamed.  A file outside ``folder`` (``allow_outside``) is not recorded.
     Invalid entries of the manifest (:func:`valid_entries`) are dropped.
+
+    Parameters
+    ----------
+    paths : iterable of Path or str
+        The complete files to record.
+    folder : Path or str
+        The folder whose manifest records them.
+    run : str
+        The run id they are recorded under.
+    named : sequence of Path or str, optional
+        The names to record them under, one per path (default ``paths``).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import is_recorded, new_run_id, record
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> (folder / "x.npz").write_bytes(b"result")
+    6
+    >>> record([folder / "x.npz"], folder, new_run_id())
+    >>> is_recorded(folder / "x.npz", folder)
+    True
     """
     found = {_key(n, folder): _digest(p) for p, n in zip(paths, named or paths)}
     found.pop(None, None)
@@ -220,10 +285,32 @@ def recorded_names(folder: Path | str) -> set[str]:
 def check_overwrites(paths: Iterable[Path | str], folder: Path | str, overwrite: bool) -> None:
     """Refuse to replace an existing file that hht3d did not write (unless ``overwrite``).
 
+    Parameters
+    ----------
+    paths : iterable of Path or str
+        The files to be written.
+    folder : Path or str
+        The output folder, whose manifest records what hht3d wrote.
+    overwrite : bool
+        Replace any existing file (the check is skipped).
+
     Raises
     ------
     OutputError
         Naming the first such file.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import check_overwrites
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> (folder / "notes.txt").write_text("mine")
+    4
+    >>> check_overwrites([folder / "notes.txt"], folder, overwrite=True)  # allowed
+    >>> check_overwrites([folder / "notes.txt"], folder, overwrite=False)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.OutputError: .../notes.txt: exists and hht3d did not write it ...
     """
     if overwrite:
         return

@@ -19,6 +19,30 @@ def surface_from_open3d(geometry: Any, *, clean: bool = True, name: str | None =
 
     Colours and (tensor geometries) every other float vertex attribute are
     carried over; point-cloud normals are kept when present.
+
+    Parameters
+    ----------
+    geometry : open3d geometry
+        A legacy or tensor ``TriangleMesh`` or ``PointCloud``.
+    clean : bool, optional
+        Build with :meth:`Surface.cleaned` (default ``True``), else :class:`Surface` as given.
+    name : str, optional
+        The surface's name.
+    **options
+        Further keyword arguments of :class:`Surface` (e.g. ``laplacian``).
+
+    Returns
+    -------
+    Surface
+        The surface.
+
+    Examples
+    --------
+    >>> import open3d as o3d
+    >>> from hht3d.io import surface_from_open3d
+    >>> ball = surface_from_open3d(o3d.geometry.TriangleMesh.create_sphere(radius=1.0, resolution=8))
+    >>> ball.n_vertices, ball.is_mesh
+    (114, True)
     """
     import open3d as o3d
 
@@ -59,7 +83,29 @@ def surface_from_open3d(geometry: Any, *, clean: bool = True, name: str | None =
 
 def surface_to_open3d(surface: Surface, attributes: dict | None = None) -> Any:
     """Tensor ``TriangleMesh``/``PointCloud`` carrying the surface's attributes and ``attributes``
-    as (n, 1) float vertex attributes."""
+    as (n, 1) float vertex attributes.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface to convert.
+    attributes : dict, optional
+        More per-vertex fields, by name (they override stored ones of the same name).
+
+    Returns
+    -------
+    open3d.t.geometry.TriangleMesh or open3d.t.geometry.PointCloud
+        The tensor geometry.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.io import surface_to_open3d
+    >>> mesh = surface_to_open3d(spot, {"height": spot.vertices[:, 1]})
+    >>> tuple(mesh.vertex["height"].shape), tuple(mesh.triangle["indices"].shape)
+    ((2930, 1), (5856, 3))
+    """
     import open3d as o3d
     import open3d.core as o3c
 

@@ -39,10 +39,27 @@ __all__ = ["NAME_MAX", "PATH_MAX", "confined", "check_output_location", "check_n
 def check_output_location(path: Path | str, folder: Path | str, where: str) -> None:
     """Refuse an output that resolves outside ``folder`` (``where`` names the step or output).
 
+    Parameters
+    ----------
+    path : Path or str
+        The output path.
+    folder : Path or str
+        The output folder.
+    where : str
+        The step or output the error names.
+
     Raises
     ------
     OutputError
         Naming ``where``, the resolved path and the folder.
+
+    Examples
+    --------
+    >>> from hht3d.io import check_output_location
+    >>> check_output_location("out/x.ply", "out", "outputs.files")  # inside: nothing happens
+    >>> check_output_location("../x.ply", "out", "outputs.files")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.OutputError: outputs.files: ../x.ply resolves to ..., outside the output folder out; ...
     """
     if confined(path, folder) is None:
         raise OutputError(
@@ -54,9 +71,23 @@ def check_output_location(path: Path | str, folder: Path | str, where: str) -> N
 def check_name(path: Path | str, where: str) -> None:
     """Refuse a path that no file system takes: control characters, a component or the whole too long.
 
+    Parameters
+    ----------
+    path : Path or str
+        The output path.
+    where : str
+        The step or output the error names.
+
     Raises
     ------
     OutputError
+
+    Examples
+    --------
+    >>> from hht3d.io import check_name
+    >>> check_name("out/x" + chr(9) + "y.ply", "outputs.files")  # a tab  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.OutputError: outputs.files: the file name ... holds a control character; use printable characters
     """
     text = os.fspath(path)
     if any(ord(ch) < 32 or ord(ch) == 127 for ch in text):
@@ -84,11 +115,28 @@ def resolve_inputs(spec: Any) -> list[Path]:
     file found again through a symlink loop is listed once (by its
     shortest path).
 
+    Parameters
+    ----------
+    spec : str, Path or list
+        A file, a folder, a glob pattern, or a list of these.
+
+    Returns
+    -------
+    list of Path
+        The input files, sorted, without duplicates.
+
     Raises
     ------
     InputError
         A named file is missing or has an unknown extension, or a folder/glob
         matches no usable file.
+
+    Examples
+    --------
+    >>> from hht3d import data_path
+    >>> from hht3d.io import resolve_inputs
+    >>> [p.name for p in resolve_inputs(data_path("spot.ply").parent)]  # the mesh files of a folder
+    ['sphere_oct4098.ply', 'spot.ply']
     """
     specs = [spec] if isinstance(spec, (str, Path)) else list(spec)
     found: list[Path] = []

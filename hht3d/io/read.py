@@ -212,6 +212,11 @@ def _read_ply(path: Path) -> dict:
 def read_npz(path: Path | str) -> dict[str, np.ndarray]:
     """Every array of a ``.npz`` file (no pickled objects).
 
+    Parameters
+    ----------
+    path : Path or str
+        The ``.npz`` file.
+
     Raises
     ------
     InputError
@@ -230,6 +235,11 @@ def read_npz(path: Path | str) -> dict[str, np.ndarray]:
 
 def read_npz_shapes(path: Path | str) -> dict[str, tuple[int, ...]]:
     """The shape of every array in a ``.npz`` file, from the array headers alone (no data is read).
+
+    Parameters
+    ----------
+    path : Path or str
+        The ``.npz`` file.
 
     Raises
     ------

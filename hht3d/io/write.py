@@ -33,6 +33,34 @@ def write_ply(
     Positions (in the file's frame: ``vertices + origin``) and normals are float64; ``colors``
     (n, 3) in [0, 1] (default: the surface's own) become uchar red/green/blue.  The file's stored scalars
     (``surface.attributes``) are written too unless overridden by name.
+
+    Parameters
+    ----------
+    path : Path or str
+        The PLY file to write.
+    surface : Surface
+        The surface.
+    attributes : dict, optional
+        Per-vertex fields, by name, written as float64 properties.
+    colors : (n, 3) ndarray, optional
+        Vertex colours in [0, 1] (default: the surface's own, if any).
+
+    Returns
+    -------
+    Path
+        The path written.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import read_ply_header, write_ply
+    >>> path = write_ply(Path(tempfile.mkdtemp()) / "spot.ply", spot, {"height": spot.vertices[:, 1]})
+    >>> header = read_ply_header(path)
+    >>> header.counts, header.vertex_properties[-1]
+    ({'vertex': 2930, 'face': 5856}, 'height')
     """
     from plyfile import PlyData, PlyElement
 
@@ -64,14 +92,60 @@ def write_ply(
 
 
 def write_npz(path: Path | str, arrays: dict) -> Path:
-    """Write a compressed ``.npz`` of named arrays atomically."""
+    """Write a compressed ``.npz`` of named arrays atomically.
+
+    Parameters
+    ----------
+    path : Path or str
+        The ``.npz`` file to write.
+    arrays : dict
+        The arrays, by name.
+
+    Returns
+    -------
+    Path
+        The path written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from pathlib import Path
+    >>> from hht3d.io import read_npz, write_npz
+    >>> path = write_npz(Path(tempfile.mkdtemp()) / "fields.npz", {"height": np.arange(3.0)})
+    >>> read_npz(path)["height"].tolist()
+    [0.0, 1.0, 2.0]
+    """
     with atomic_path(path) as tmp, open(tmp, "wb") as handle:
         np.savez_compressed(handle, **{k: np.asarray(v) for k, v in arrays.items()})  # type: ignore[arg-type]  # numpy's stub: **kwds could reach allow_pickle
     return Path(path)
 
 
 def field_colors(values: np.ndarray, *, cmap: str = "viridis", limits: tuple[float, float] | None = None) -> np.ndarray:
-    """Map a scalar field to RGB in [0, 1]; default limits: 1st and 99th percentile."""
+    """Map a scalar field to RGB in [0, 1]; default limits: 1st and 99th percentile.
+
+    Parameters
+    ----------
+    values : (n,) ndarray
+        The scalar field; non-finite values take the colour of the low limit.
+    cmap : str, optional
+        A Matplotlib colormap name (default ``"viridis"``).
+    limits : tuple of float, optional
+        ``(low, high)`` of the colour scale (default: the 1st and 99th percentile).
+
+    Returns
+    -------
+    (n, 3) ndarray
+        RGB colours in [0, 1].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.io import field_colors
+    >>> colors = field_colors(np.array([0.0, 1.0, 2.0]), cmap="gray", limits=(0.0, 2.0))
+    >>> colors.round(2).tolist()
+    [[0.0, 0.0, 0.0], [0.5, 0.5, 0.5], [1.0, 1.0, 1.0]]
+    """
     import matplotlib
 
     values = np.asarray(values, dtype=np.float64)
@@ -94,6 +168,39 @@ def write_colored_ply(
     name: str = "field",
 ) -> Path:
     """Write a PLY whose vertex colours show one field (for any mesh viewer); the raw
-    values are kept as attribute ``name``."""
+    values are kept as attribute ``name``.
+
+    Parameters
+    ----------
+    path : Path or str
+        The PLY file to write.
+    surface : Surface
+        The surface.
+    values : (n,) ndarray
+        The field shown by the colours.
+    cmap : str, optional
+        A Matplotlib colormap name (default ``"viridis"``).
+    limits : tuple of float, optional
+        ``(low, high)`` of the colour scale (default: the 1st and 99th percentile).
+    name : str, optional
+        The attribute holding the raw values (default ``"field"``).
+
+    Returns
+    -------
+    Path
+        The path written.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import load, write_colored_ply
+    >>> path = write_colored_ply(Path(tempfile.mkdtemp()) / "height.ply", spot, spot.vertices[:, 1], name="height")
+    >>> again = load(path, clean=False)
+    >>> again.colors.shape, sorted(again.attributes)
+    ((2930, 3), ['height'])
+    """
     values = per_vertex(surface, name, values)
     return write_ply(path, surface, {name: values}, colors=field_colors(values, cmap=cmap, limits=limits))

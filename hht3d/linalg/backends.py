@@ -137,7 +137,20 @@ _MODULES: dict[str, object] = {}
 
 
 def register_backend(backend: Backend, *, before: str | None = None) -> Backend:
-    """Add a solver backend, after the others or ahead of ``before`` in order of preference."""
+    """Add a solver backend, after the others or ahead of ``before`` in order of preference.
+
+    Parameters
+    ----------
+    backend : Backend
+        The backend; one of the same name is replaced.
+    before : str, optional
+        The backend it goes ahead of (default: after all others).
+
+    Returns
+    -------
+    Backend
+        ``backend`` itself.
+    """
     entries = [b for b in SOLVER_BACKENDS.values() if b.name != backend.name]
     at = next((i for i, b in enumerate(entries) if b.name == before), len(entries))
     entries.insert(at, backend)
@@ -147,7 +160,19 @@ def register_backend(backend: Backend, *, before: str | None = None) -> Backend:
 
 
 def available_backends() -> list[str]:
-    """Names of the installed backends, fastest first."""
+    """Names of the installed backends, fastest first.
+
+    Returns
+    -------
+    list of str
+        The backend names.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import available_backends
+    >>> "superlu" in available_backends()  # SciPy's, always installed
+    True
+    """
     return [name for name, backend in SOLVER_BACKENDS.items() if backend.available]
 
 
@@ -156,6 +181,17 @@ def default_backend() -> str:
 
     The one named by the environment variable :data:`BACKEND_VARIABLE` if set,
     else the fastest installed one.
+
+    Returns
+    -------
+    str
+        The backend's name.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import available_backends, default_backend
+    >>> default_backend() in available_backends()
+    True
     """
     chosen = os.environ.get(BACKEND_VARIABLE, "").strip()
     if chosen:
@@ -209,7 +245,29 @@ def backend_report() -> tuple[list[BackendStatus], str]:
 
 
 def check_backend(backend: str | None, where: str = "backend") -> str:
-    """The backend to use: ``backend`` if it is registered and installed, :func:`default_backend` for ``None``."""
+    """The backend to use: ``backend`` if it is registered and installed, :func:`default_backend` for ``None``.
+
+    Parameters
+    ----------
+    backend : str or None
+        A backend name, or ``None`` for the default.
+    where : str, optional
+        The setting the error names (default ``"backend"``).
+
+    Returns
+    -------
+    str
+        The backend's name.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import check_backend
+    >>> check_backend("superlu")
+    'superlu'
+    >>> check_backend("magic")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.InputError: unknown sparse solver backend 'magic' (backend); choose one of (...)
+    """
     if backend is None:
         return default_backend()
     if backend not in SOLVER_BACKENDS:

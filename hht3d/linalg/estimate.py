@@ -111,6 +111,18 @@ def estimate_hht(vertices: int, backend: str | None = None) -> Estimate | None:
         Vertices (or points) of the surface: the order of every sparse system.
     backend : str, optional
         Default :func:`~hht3d.linalg.backends.default_backend`.
+
+    Returns
+    -------
+    Estimate or None
+        The estimate, or ``None`` for an uncalibrated backend.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import estimate_hht
+    >>> small, large = estimate_hht(10_000, "superlu"), estimate_hht(100_000, "superlu")
+    >>> large.seconds > small.seconds and large.peak_bytes > small.peak_bytes
+    True
     """
     backend = check_backend(backend)
     cost = COSTS.get(backend)
@@ -126,12 +138,47 @@ BASELINE = 100 * 2**20
 
 
 def backend_estimates(vertices: int) -> list[Estimate]:
-    """:func:`estimate_hht` for every installed, calibrated backend, fastest first."""
+    """:func:`estimate_hht` for every installed, calibrated backend, fastest first.
+
+    Parameters
+    ----------
+    vertices : int
+        The surface's vertex count.
+
+    Returns
+    -------
+    list of Estimate
+        One estimate per installed, calibrated backend, fastest first.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import backend_estimates
+    >>> estimates = backend_estimates(50_000)
+    >>> all(e.vertices == 50_000 for e in estimates), "superlu" in [e.backend for e in estimates]
+    (True, True)
+    """
     return [e for e in (estimate_hht(vertices, name) for name in available_backends()) if e is not None]
 
 
 def estimate_lines(vertices: int) -> list[str]:
-    """For ``hht3d info --backends``: each installed backend's estimate at ``vertices``, and what is available."""
+    """For ``hht3d info --backends``: each installed backend's estimate at ``vertices``, and what is available.
+
+    Parameters
+    ----------
+    vertices : int
+        The surface's vertex count.
+
+    Returns
+    -------
+    list of str
+        A heading, then one line per backend.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import estimate_lines
+    >>> estimate_lines(50_000)[0]  # doctest: +ELLIPSIS
+    'estimated whole HHT of 50,000 vertices (memory available: ...):'
+    """
     available = available_memory()
     lines = [
         f"estimated whole HHT of {vertices:,} vertices (memory available: "
@@ -145,7 +192,20 @@ def estimate_lines(vertices: int) -> list[str]:
 
 def available_memory() -> int | None:
     """Bytes this process may still allocate: the smallest of free memory, what the
-    address-space limit (``ulimit -v``) leaves and what the cgroup limit leaves; ``None`` if unknown."""
+    address-space limit (``ulimit -v``) leaves and what the cgroup limit leaves; ``None`` if unknown.
+
+    Returns
+    -------
+    int or None
+        The bytes, or ``None`` when no limit can be read.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import available_memory
+    >>> free = available_memory()
+    >>> free is None or free >= 0
+    True
+    """
     limits, vms = [], None
     try:
         import psutil
@@ -177,10 +237,33 @@ def check_memory(vertices: int, backend: str | None = None, available: int | Non
 
     ``available`` defaults to :func:`available_memory`; returns the estimate.
 
+    Parameters
+    ----------
+    vertices : int
+        The surface's vertex count.
+    backend : str, optional
+        The backend (default :func:`default_backend`).
+    available : int, optional
+        The bytes available (default :func:`available_memory`).
+
+    Returns
+    -------
+    Estimate or None
+        The estimate, or ``None`` for a backend without calibration.
+
     Raises
     ------
     InputError
         With the estimate, the memory available and the ways out.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import check_memory
+    >>> check_memory(1_000, "superlu", available=10**12).vertices
+    1000
+    >>> check_memory(10_000_000, "superlu", available=10**9)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    hht3d.errors.InputError: a surface of 10,000,000 vertices needs ... but only ... is available; ...
     """
     found = estimate_hht(vertices, backend)
     available = available_memory() if available is None else int(available)
@@ -197,7 +280,26 @@ class SlowSolverWarning(UserWarning):
 
 
 def slow_fallback(vertices: int, backend: str | None = None) -> str | None:
-    """The advice to install a faster backend, when ``backend`` is slow and the mesh is large; else ``None``."""
+    """The advice to install a faster backend, when ``backend`` is slow and the mesh is large; else ``None``.
+
+    Parameters
+    ----------
+    vertices : int
+        The surface's vertex count.
+    backend : str, optional
+        The backend (default :func:`default_backend`).
+
+    Returns
+    -------
+    str or None
+        The advice, or ``None``.
+
+    Examples
+    --------
+    >>> from hht3d.linalg import slow_fallback
+    >>> slow_fallback(1_000, "superlu") is None  # a small mesh: no advice
+    True
+    """
     backend = check_backend(backend)
     cost = COSTS.get(backend)
     if cost is None or not cost.slow or vertices <= SLOW_FALLBACK_VERTICES:
@@ -214,7 +316,15 @@ _WARNED: set[str] = set()
 
 
 def warn_slow_fallback(vertices: int, backend: str | None = None) -> None:
-    """Issue :func:`slow_fallback`'s advice as a :class:`SlowSolverWarning`, once per process and backend."""
+    """Issue :func:`slow_fallback`'s advice as a :class:`SlowSolverWarning`, once per process and backend.
+
+    Parameters
+    ----------
+    vertices : int
+        The surface's vertex count.
+    backend : str, optional
+        The backend (default :func:`default_backend`).
+    """
     advice = slow_fallback(vertices, backend)
     if advice is not None and check_backend(backend) not in _WARNED:
         _WARNED.add(check_backend(backend))

@@ -67,7 +67,30 @@ class SymbolicFactorization:
 
 
 def factorize(a: Any, backend: str | None = None) -> Factor:
-    """Factorize one SPD sparse matrix (analysis and numeric phase)."""
+    """Factorize one SPD sparse matrix (analysis and numeric phase).
+
+    Parameters
+    ----------
+    a : sparse matrix
+        A symmetric positive definite matrix.
+    backend : str, optional
+        The backend (default :func:`default_backend`).
+
+    Returns
+    -------
+    Factor
+        The factor, which solves systems in ``a``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import scipy.sparse as sp
+    >>> from hht3d.linalg import factorize
+    >>> a = sp.csc_matrix(np.array([[4.0, 1.0], [1.0, 3.0]]))
+    >>> factor = factorize(a, "superlu")
+    >>> bool(np.allclose(a @ factor.solve(np.array([1.0, 2.0])), [1.0, 2.0]))
+    True
+    """
     return SymbolicFactorization(a, backend).factorize(a)
 
 

@@ -266,7 +266,19 @@ for _kind, _formats in FORMATS.items():  # every kind's surface and fields as po
 
 
 def by_suffix() -> dict[str, str]:
-    """The format each file suffix names when none is given: the first of :data:`FORMATS` writing it."""
+    """The format each file suffix names when none is given: the first of :data:`FORMATS` writing it.
+
+    Returns
+    -------
+    dict of str to str
+        Format name by suffix.
+
+    Examples
+    --------
+    >>> from hht3d.output_formats import by_suffix
+    >>> by_suffix()[".npz"]
+    'npz'
+    """
     names: dict[str, str] = {}
     for formats in FORMATS.values():
         for fmt in formats.values():
@@ -285,6 +297,12 @@ def plain_formats(kind: str) -> dict[str, Format]:
     Returns
     -------
     dict of str to Format
+
+    Examples
+    --------
+    >>> from hht3d.output_formats import plain_formats
+    >>> ".npz" in plain_formats("hht")
+    True
     """
     plain: dict[str, Format] = {}
     for fmt in FORMATS[kind].values():

@@ -158,6 +158,21 @@ def apply_overrides(document: Any, overrides: Iterable[str]) -> None:
     A path component names a mapping key, a list index, or the ``id`` (or
     ``op``) of a step in ``steps``: ``steps.hht.params.max_imfs=4``,
     ``inputs=[a.ply, b.ply]``, ``outputs.folder=out/run1``.
+
+    Parameters
+    ----------
+    document : dict
+        The pipeline document, as read from YAML; changed in place.
+    overrides : iterable of str
+        ``KEY.PATH=VALUE`` texts, applied in order.
+
+    Examples
+    --------
+    >>> from hht3d.pipeline import apply_overrides
+    >>> document = {"steps": [{"id": "hht", "op": "hht", "params": {"max_imfs": 6}}], "outputs": {}}
+    >>> apply_overrides(document, ["steps.hht.params.max_imfs=2", "outputs.folder=out/run1"])
+    >>> document["steps"][0]["params"], document["outputs"]
+    ({'max_imfs': 2}, {'folder': 'out/run1'})
     """
     for text in overrides:
         where = f"--set {one_line(text, MAX_SHOWN)}"

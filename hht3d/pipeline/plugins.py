@@ -96,7 +96,19 @@ def _plugins() -> _Plugins:
 
 
 def operations() -> dict[str, Operation]:
-    """The built-in operations, then those of the installed plugins."""
+    """The built-in operations, then those of the installed plugins.
+
+    Returns
+    -------
+    dict of str to Operation
+        Operations by name (a plugin's never replaces a built-in one).
+
+    Examples
+    --------
+    >>> from hht3d.pipeline import operations
+    >>> "hht" in operations()
+    True
+    """
     return {**OPERATIONS, **_plugins().operations}
 
 

@@ -100,6 +100,11 @@ def pipeline_graph(plan: Pipeline, *, resume: bool = False, folder: OutputFolder
         checksum, in the folder's manifest (a URL folder's manifest object).
     folder : OutputFolder, optional
         Where the outputs go (default: :func:`output_folder` with a new run id).
+
+    Returns
+    -------
+    Delayed
+        Computes to the list of :class:`~hht3d.dataset.summary.ItemSummary`.
     """
     folder = folder or output_folder(plan)
     items = {source: plan.output_paths(source) for source in plan.inputs}
@@ -133,6 +138,32 @@ def run_pipeline(
     ``summary`` and the pipeline's ``outputs.summary``, the rows are also
     written to ``summary.json`` and ``summary.csv`` in the output folder (the
     CLI passes ``summary=False`` and writes them after printing the rows).
+
+    Parameters
+    ----------
+    plan : Pipeline
+        The validated pipeline (:func:`load_pipeline`).
+    scheduler : str, optional
+        A name of :data:`hht3d.execution.SCHEDULERS`.
+    workers : int, optional
+        Worker count of the scheduler.
+    address : str, optional
+        The address of a running Dask scheduler.
+    progress : bool, optional
+        Show a progress bar.
+    resume : bool, optional
+        Skip the items whose outputs are complete (default ``False``).
+    overwrite : bool, optional
+        Replace existing files hht3d did not write (default ``False``).
+    summary : bool, optional
+        Write the summary files, if the pipeline asks for them (default ``True``).
+    run : str, optional
+        The run id of the manifest (default: a new one).
+
+    Returns
+    -------
+    list of ItemSummary
+        One row per input file.
 
     Raises
     ------
@@ -182,5 +213,16 @@ def run_pipeline(
 
 
 def failures(rows: list[ItemSummary]) -> list[str]:
-    """One line per failed item: ``"step S failed on FILE: ERROR"``."""
+    """One line per failed item: ``"step S failed on FILE: ERROR"``.
+
+    Parameters
+    ----------
+    rows : list of ItemSummary
+        The rows of a run.
+
+    Returns
+    -------
+    list of str
+        One line per failed row, in order.
+    """
     return [f"step {r.step} failed on {r.source}: {r.error}" for r in rows if r.status == "failed"]

@@ -120,7 +120,34 @@ def quadrature_plan(
     *,
     symbolic: linalg.SymbolicFactorization | None = None,
 ) -> QuadraturePlan:
-    """Bounds and nodes of the ``L^{-1/2}`` quadrature for ``surface`` at ``tol``."""
+    """Bounds and nodes of the ``L^{-1/2}`` quadrature for ``surface`` at ``tol``.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface.
+    tol : float, optional
+        The quadrature's relative tolerance (default 1e-8).
+    backend : str, optional
+        The sparse solver backend of the bounds (default :func:`hht3d.linalg.default_backend`).
+    symbolic : SymbolicFactorization, optional
+        A symbolic factorization of the operator's pattern to reuse.
+
+    Returns
+    -------
+    QuadraturePlan
+        The spectral bounds, ``tol`` and the nodes.
+
+    Examples
+    --------
+    >>> import open3d as o3d
+    >>> from hht3d.io import surface_from_open3d
+    >>> ball = surface_from_open3d(o3d.geometry.TriangleMesh.create_sphere(radius=1.0, resolution=8))
+    >>> from hht3d.spectral import quadrature_plan
+    >>> loose, tight = quadrature_plan(ball, tol=1e-4), quadrature_plan(ball, tol=1e-10)
+    >>> len(loose.sigmas) < len(tight.sigmas)  # a tighter tolerance takes more shifts
+    True
+    """
     bounds = spectral_bounds(surface, backend=backend, symbolic=symbolic)
     return QuadraturePlan(bounds, tol, *quadrature_nodes(*bounds, tol))
 
@@ -167,7 +194,20 @@ def quadrature_part(
 
 
 def combine_quadrature_parts(surface: Surface, parts: Sequence[np.ndarray]) -> np.ndarray:
-    """``L^{-1/2} f̃`` from all :func:`quadrature_part` results (kernel removed again)."""
+    """``L^{-1/2} f̃`` from all :func:`quadrature_part` results (kernel removed again).
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface the parts were computed on.
+    parts : sequence of ndarray
+        Every :func:`quadrature_part` result, each ``(k, n)``.
+
+    Returns
+    -------
+    (k, n) ndarray
+        The potential ``L^{-1/2} f̃``.
+    """
     return fluctuation(surface, np.sum(parts, axis=0))
 
 

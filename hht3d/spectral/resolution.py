@@ -26,6 +26,26 @@ def resolvable_frequency(surface: Surface) -> np.ndarray:
     (``π/h`` on a grid of spacing ``h``).  A pattern whose wavelength is
     shorter than about two sample spacings aliases: its frequency cannot be
     read from the samples.
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface.
+
+    Returns
+    -------
+    (n,) ndarray
+        The highest resolvable frequency at each vertex.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d import data_path, load
+    >>> from hht3d.spectral import resolvable_frequency
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> nyquist = resolvable_frequency(sphere)
+    >>> bool(np.allclose(nyquist, np.pi / np.sqrt(sphere.mass_diagonal)))
+    True
     """
     check_surface(surface)
     return resolvable_from_area(surface.mass_diagonal)

@@ -201,7 +201,31 @@ def riesz(
 
 
 def vertex_gradient(surface: Surface, u: np.ndarray, kind: str = RIESZ_DEFAULTS.gradient) -> np.ndarray:
-    """Tangent gradients of (n,) or (k, n) per-vertex fields: (n, 3) or (k, n, 3)."""
+    """Tangent gradients of (n,) or (k, n) per-vertex fields: (n, 3) or (k, n, 3).
+
+    Parameters
+    ----------
+    surface : Surface
+        The surface.
+    u : ndarray
+        One field ``(n,)`` or a stack ``(k, n)``.
+    kind : str, optional
+        The gradient operator, as in :class:`~hht3d.spectral.options.RieszOptions` (default ``"lsq"``).
+
+    Returns
+    -------
+    ndarray
+        ``(n, 3)`` for one field, ``(k, n, 3)`` for a stack.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import numpy as np
+    >>> from hht3d.spectral import vertex_gradient
+    >>> vertex_gradient(spot, spot.vertices[:, 0]).shape, vertex_gradient(spot, spot.vertices.T).shape
+    ((2930, 3), (3, 2930, 3))
+    """
     grad = surface.gradient(kind)
     n = surface.n_vertices
     u2 = np.atleast_2d(u)

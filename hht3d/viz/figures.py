@@ -140,6 +140,11 @@ def hht_figure(
     percentiles : (float, float)
         Robust colour limits of every panel.
 
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+
     Raises
     ------
     InputError
@@ -220,6 +225,11 @@ def spectrum_figure(
     size : (int, int)
         Width and height in pixels.
     dpi : float
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
 
     Raises
     ------

@@ -171,6 +171,15 @@ def surface_html(surface: Surface) -> str:
     -------
     str
         One self-contained ``<div>`` (:func:`~hht3d.decomposition.display.summary_html`).
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.viz import surface_html
+    >>> html = surface_html(spot)
+    >>> html.startswith("<div"), "2,930" in html
+    (True, True)
     """
     if not isinstance(surface, Surface):
         raise InputError(f"expected an hht3d.Surface, got {type(surface).__name__}")

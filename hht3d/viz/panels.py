@@ -119,6 +119,11 @@ def field_figure(
         Dots per inch (sets the font scale; the pixel size stays ``size``).
     view, up, cmap, limits, symmetric, percentiles, backend, supersample, point_size
         See :func:`hht3d.viz.render.render`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     from matplotlib.figure import Figure
 
@@ -175,7 +180,30 @@ def check_dpi(dpi: float) -> None:
 
 
 def save_figure(fig: Any, path: Path | str) -> Path:
-    """Write a Matplotlib figure to a PNG atomically at its own size and dpi; returns the path."""
+    """Write a Matplotlib figure to a PNG atomically at its own size and dpi; returns the path.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : Path or str
+        The PNG to write.
+
+    Returns
+    -------
+    Path
+        The path written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import matplotlib.figure
+    >>> from hht3d.viz import save_figure
+    >>> fig = matplotlib.figure.Figure(figsize=(2, 1), dpi=50)
+    >>> save_figure(fig, Path(tempfile.mkdtemp()) / "empty.png").read_bytes()[1:4]
+    b'PNG'
+    """
     path = png_path(path)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=fig.dpi, facecolor="white")
@@ -187,6 +215,22 @@ def render_png(path: Path | str, surface: Surface, values: np.ndarray | None = N
 
     ``options`` are those of :func:`field_figure` (``title``, ``label``,
     ``size`` in pixels, ``dpi``, ``view``, ``up``, ``cmap``, ``limits``, ...).
+
+    Parameters
+    ----------
+    path : Path or str
+        The PNG to write.
+    surface : Surface
+        The surface.
+    values : ndarray, optional
+        The field (default ``None``: the shaded model without a colour bar).
+    **options
+        Keyword arguments of :func:`field_figure`.
+
+    Returns
+    -------
+    Path
+        The path written.
     """
     path = png_path(path)
     return save_figure(field_figure(surface, values, **options), path)

@@ -31,10 +31,28 @@ def read_fields(path: Path | str) -> tuple[Surface, dict, np.ndarray | None]:
     file of :func:`hht3d.io.read.load` (read without cleaning, so vertices keep
     their order): its numeric vertex properties are the fields.
 
+    Parameters
+    ----------
+    path : Path or str
+        A saved ``.npz`` result or a surface file.
+
     Returns
     -------
     surface, fields, area
         ``area`` is the stored ``area`` array of an ``.npz``, else ``None``.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> from hht3d.io import write_ply
+    >>> from hht3d.viz import read_fields
+    >>> path = write_ply(Path(tempfile.mkdtemp()) / "spot.ply", spot, {"height": spot.vertices[:, 1]})
+    >>> surface, fields, area = read_fields(path)
+    >>> surface.n_vertices, sorted(fields), area
+    (2930, ['height'], None)
     """
     path = Path(path)
     if path.suffix.lower() != ".npz":

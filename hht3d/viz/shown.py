@@ -64,10 +64,31 @@ def shown_copy(surface: Surface, max_vertices: int = VERTEX_BUDGET) -> Shown:
     keeps a random subset of its points (:data:`SUBSET_SEED`), which carry their own
     values.
 
+    Parameters
+    ----------
+    surface : Surface
+        The surface to draw.
+    max_vertices : int, optional
+        The vertex budget, at least 4 (default :data:`VERTEX_BUDGET`, 150 000).
+
+    Returns
+    -------
+    Shown
+        The drawn geometry and, per drawn vertex, its source vertex.
+
     Raises
     ------
     InputError
         ``max_vertices`` below 4.
+
+    Examples
+    --------
+    >>> from hht3d import data_path, load
+    >>> spot = load(data_path("spot.ply"))
+    >>> from hht3d.viz import shown_copy
+    >>> shown = shown_copy(spot, max_vertices=1000)
+    >>> len(shown.vertices) <= 1000, bool(shown.source.max() < 2930)
+    (True, True)
     """
     if int(max_vertices) != max_vertices or max_vertices < 4:
         raise InputError(f"max_vertices must be an integer >= 4, got {max_vertices!r}")
@@ -98,6 +119,13 @@ def shown_copy(surface: Surface, max_vertices: int = VERTEX_BUDGET) -> Shown:
 def color_limits(values: np.ndarray, percentiles: tuple[float, float] = PERCENTILES) -> dict:
     """Colour limits of a field in both scales and the one chosen by default.
 
+    Parameters
+    ----------
+    values : ndarray
+        The field.
+    percentiles : tuple of float, optional
+        The robust range's low and high percentiles (default ``(1, 99)``).
+
     Returns
     -------
     dict
@@ -105,6 +133,14 @@ def color_limits(values: np.ndarray, percentiles: tuple[float, float] = PERCENTI
         ``"sequential"``: ``[p_low, p_high]``; ``"auto"``: the name of the
         default (symmetric when the robust range holds both signs in earnest,
         :func:`hht3d.viz.render.color_scale`).  Degenerate ranges are widened.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d.viz import color_limits
+    >>> limits = color_limits(np.linspace(0.5, 3.0, 101), percentiles=(0, 100))
+    >>> limits["auto"], limits["sequential"], limits["symmetric"]
+    ('sequential', [0.5, 3.0], [-3.0, 3.0])
     """
     auto = color_scale(values, percentiles=percentiles)
     symmetric = auto.cmap == SYMMETRIC_CMAP

@@ -89,8 +89,24 @@ SHAPE_COLOR = "#c9c7c0"
 
 
 def write_page(path: Path | str, surfaces: Sequence[Surface], fields: dict, **options: Any) -> Path:
-    """Write :func:`page_html` (with these ``options``) to the ``.html`` file ``path``, atomically;
-    its errors name the file."""
+    """Write :func:`page_html` (with these ``options``) to the ``.html`` file ``path``, atomically (errors name it).
+
+    Parameters
+    ----------
+    path : Path or str
+        The ``.html`` file to write.
+    surfaces : sequence of Surface
+        The surfaces shown side by side.
+    fields : dict
+        The per-vertex fields, by name.
+    **options
+        Keyword arguments of :func:`page_html`.
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     path = Path(path)
     page = page_html(surfaces, fields, page_name=path.name, **options)
     with atomic_path(path) as tmp:
@@ -238,7 +254,22 @@ def page_html(
 
 # -- entry points ------------------------------------------------------------------------------
 def result_html(result: HHTResult, path: Path | str, **options: Any) -> Path:
-    """Write :func:`result_page` (with these ``options``) to the ``.html`` file ``path``, atomically."""
+    """Write :func:`result_page` (with these ``options``) to the ``.html`` file ``path``, atomically.
+
+    Parameters
+    ----------
+    result : HHTResult
+        The result to show.
+    path : Path or str
+        The ``.html`` file to write.
+    **options
+        Keyword arguments of :func:`result_page`.
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
     path = Path(path)
     page = result_page(result, page_name=path.name, **options)
     with atomic_path(path) as tmp:
@@ -287,6 +318,24 @@ def surfaces_html(
     With the same vertex count, the selector offers ``displacement``: the
     signed move of each vertex along the original normal, on both surfaces;
     the page opens on the plain shapes, as the paper's Figs. 5–6 show them.
+
+    Parameters
+    ----------
+    path : Path or str
+        The ``.html`` file to write.
+    original, changed : Surface
+        The surface before, and after filtering or reconstruction.
+    max_vertices : int, optional
+        The vertex budget of each drawn surface (default 150 000).
+    percentiles : tuple of float, optional
+        The colour range's percentiles (default ``(1, 99)``).
+    view, up : str or sequence of float, optional
+        The camera's direction and up axis, names or vectors (default ``"front"`` and ``"y"``).
+
+    Returns
+    -------
+    Path
+        The path written.
     """
     fields = {}
     if changed.n_vertices == original.n_vertices:

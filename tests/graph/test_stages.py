@@ -85,7 +85,9 @@ def test_lazy_twins_have_the_eager_signatures_and_docstrings():
         twin = getattr(graph, func.__name__)
         assert inspect.signature(twin).parameters == inspect.signature(func).parameters, func.__name__
         assert twin.__doc__.startswith(f"Lazy :func:`{func.__module__}.{func.__name__}`")
-        assert inspect.cleandoc(func.__doc__).split("\nExamples\n")[0].rstrip() in twin.__doc__
+        eager = inspect.cleandoc(func.__doc__).split("\nExamples\n")[0]
+        assert eager.partition("\nReturns\n-------\n")[0].rstrip() in twin.__doc__  # the eager Returns...
+        assert twin.__doc__.count("\nReturns\n") == 1 and "\nReturns\n-------\nDelayed\n" in twin.__doc__  # ...is lazy
     for func in (monogenic, eager_hht):  # plus the scheduling parameter riesz_tasks, keyword-only
         lazy, core = inspect.signature(getattr(graph, func.__name__)).parameters, inspect.signature(func).parameters
         assert {k: v for k, v in lazy.items() if k != "riesz_tasks"} == dict(core), func.__name__

@@ -7,15 +7,14 @@ skip only where chromium is not installed and this is not CI.
 from __future__ import annotations
 
 import io
-import os
 import re
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import hht3d
+from helpers.browser import headless_chromium
 from helpers.meshes import icosphere
 from helpers.pages import cloud_with_spectrum, field_values, page_data
 from hht3d import Surface
@@ -25,31 +24,11 @@ from hht3d.cli import main
 from hht3d.errors import InputError
 from hht3d.viz.viewer import SHAPE, file_html, read_fields, surfaces_html, write_page
 
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
-
 
 # -- fixtures ------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def browser():
-    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright (the dev extra) drives chromium")
-    executable = shutil.which("chromium")
-    if executable is None:
-        message = "Debian's chromium is not installed; `bash .ci/setup` installs it (as root)"
-        if os.environ.get("CI"):
-            pytest.fail(message)
-        pytest.skip(message)
-    with sync_api.sync_playwright() as playwright:
-        chromium = playwright.chromium.launch(executable_path=executable, args=CHROMIUM_ARGS, headless=True)
-        yield chromium
-        chromium.close()
+    yield from headless_chromium()
 
 
 class Opened:
