@@ -93,7 +93,7 @@ def test_check_memory_refuses_with_one_line_before_computing():
 
 
 def test_estimates_grow_with_the_mesh_and_superlu_costs_most():
-    for name in linalg.available_backends():
+    for name in _calibrated():
         small, large = linalg.estimate_hht(50_000, name), linalg.estimate_hht(134_000, name)
         assert large.peak_bytes > small.peak_bytes > 0 and large.seconds > small.seconds > 0
     fastest = linalg.estimate_hht(50_000, linalg.available_backends()[0])
@@ -105,7 +105,7 @@ def test_info_backends_prints_each_installed_backends_estimate(capsys):
     out = capsys.readouterr().out
     assert "estimated whole HHT of 134,345 vertices" in out
     rows = [line.split() for line in out.splitlines() if line.startswith("    ") and "peak" in line]
-    assert [row[0] for row in rows] == linalg.available_backends()
+    assert [row[0] for row in rows] == _calibrated()
 
 
 def test_slow_fallback_warns_once_and_only_on_large_meshes(monkeypatch):
@@ -148,3 +148,8 @@ def test_pipeline_summary_and_cli_carry_the_advice_once(tmp_path, monkeypatch, c
     assert err.count("warning: superlu is a slow sparse solver for 2,930 vertices") == 1
     rows = json.loads((out / "summary.json").read_text())
     assert "hht3d[fast]" in rows[0]["solver_advice"]
+
+
+def _calibrated() -> list[str]:
+    """The installed backends with a fitted whole-HHT cost (not ``cg``: the default EMD refuses it)."""
+    return [name for name in linalg.available_backends() if name in estimates.COSTS]

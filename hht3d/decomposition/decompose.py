@@ -37,6 +37,8 @@ from typing import Any
 
 import numpy as np
 
+from .. import linalg
+from ..errors import InputError
 from ..geometry.signals import fluctuation, fluctuation_energy
 from ..geometry.surface import Surface
 from ..geometry.validation import check_signal, check_surface
@@ -242,6 +244,7 @@ def emd(
     options = EMDOptions.of(options, **overrides)
     f = check_signal(check_surface(surface), signal)
     start = time.perf_counter()
+    _check_second_order(options, backend)
     method = METHOD_CLASSES[options.method](surface, options, backend)
     magnitude = float(np.max(np.abs(f)))
     unit = f / magnitude if magnitude > 0 else f
@@ -286,3 +289,15 @@ def result_with_quality(surface: Surface, f: np.ndarray, imfs: np.ndarray, info:
     for message in quality.warnings:
         warn_quality(f"{surface.name}: {message}", stacklevel=3)
     return EMDResult(imfs, residue, info, quality)
+
+
+def _check_second_order(options: EMDOptions, backend: str | None) -> None:
+    """Refuse an iterative backend for the fourth-order systems of sifting and the bilaplacian filter."""
+    name = linalg.check_backend(backend)
+    if linalg.SOLVER_BACKENDS[name].iterative and (options.method, options.filter) != ("filtering", "membrane"):
+        raise InputError(
+            f"backend {name!r} solves second-order systems only; EMD with method={options.method!r}"
+            + (f", filter={options.filter!r}" if options.method == "filtering" else "")
+            + " factorizes fourth-order (bilaplacian) ones: use method='filtering', filter='membrane' "
+            "or a direct backend"
+        )

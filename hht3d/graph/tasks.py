@@ -177,7 +177,8 @@ class _SharedAnalysis:
     """A surface's shift analysis (:func:`hht3d.spectral.shifts.shift_analysis`), one task at a time.
 
     PARDISO and CHOLMOD keep one numeric factor per analysis, so tasks sharing
-    it in one process (threads) take turns.
+    it in one process (threads) take turns.  One per backend and ``tol`` (the
+    accuracy an iterative backend's solves keep).
     """
 
     def __init__(self) -> None:
@@ -186,19 +187,19 @@ class _SharedAnalysis:
 
     @classmethod
     @contextlib.contextmanager
-    def of(cls, surface: Surface, backend: str | None) -> Iterator[Any]:
+    def of(cls, surface: Surface, backend: str | None, tol: float) -> Iterator[Any]:
         backend = default_backend() if backend is None else backend
         with _RESIDENT_LOCK:
-            shared = surface.cache.setdefault(f"graph:shift_analysis:{backend}", cls())
+            shared = surface.cache.setdefault(f"graph:shift_analysis:{backend}:{tol!r}", cls())
         with shared._lock:
             if shared._symbolic is None:
-                shared._symbolic = shift_analysis(surface, backend)
+                shared._symbolic = shift_analysis(surface, backend, tol)
             yield shared._symbolic
 
 
 def _quadrature_plan(surface: Surface, tol: float, backend: str | None) -> QuadraturePlan:
     """:func:`hht3d.spectral.quadrature_plan` with this process's shared shift analysis."""
-    with _SharedAnalysis.of(surface, backend) as symbolic:
+    with _SharedAnalysis.of(surface, backend, tol) as symbolic:
         return quadrature_plan(surface, tol, symbolic=symbolic)
 
 
@@ -206,7 +207,7 @@ def _quadrature_part(
     surface: Surface, f: np.ndarray, plan: QuadraturePlan, group: int, groups: int, backend: str | None
 ) -> np.ndarray:
     """:func:`hht3d.spectral.quadrature_part` with this process's shared shift analysis."""
-    with _SharedAnalysis.of(surface, backend) as symbolic:
+    with _SharedAnalysis.of(surface, backend, plan.tol) as symbolic:
         return quadrature_part(surface, f, plan, group, groups, symbolic=symbolic)
 
 

@@ -3,7 +3,8 @@
 * :mod:`~hht3d.linalg.backends` — the registry: which backends exist, which one runs and why;
 * :mod:`~hht3d.linalg.symbolic` — :class:`SymbolicFactorization` (one analysis, many factorizations);
 * :mod:`~hht3d.linalg.estimate` — time and memory known before factorizing, and the advice that follows;
-* :mod:`~hht3d.linalg.pardiso`, :mod:`~hht3d.linalg.cholmod`, :mod:`~hht3d.linalg.superlu` — the backends.
+* :mod:`~hht3d.linalg.pardiso`, :mod:`~hht3d.linalg.cholmod`, :mod:`~hht3d.linalg.superlu` — the direct backends;
+* :mod:`~hht3d.linalg.cg` — the iterative one (CG with a multigrid preconditioner).
 """
 
 from typing import Any

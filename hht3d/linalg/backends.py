@@ -28,6 +28,12 @@ Backends, in order of preference
     the first matrix of a pattern and reused (:mod:`hht3d.linalg.superlu`).
     Thread-safe: SuperLU 5 keeps no global state, and SciPy releases the GIL
     around it.
+``"cg"``
+    Iterative, never the default: conjugate gradients preconditioned by
+    pyamg's smoothed aggregation (:mod:`hht3d.linalg.cg`), for the
+    second-order systems only (``M + tL`` of membrane filtering, the Riesz
+    quadrature's ``L + σM``), to the caller's ``tol``.  Thread-safe: the
+    solves only read the multigrid hierarchy.
 
 The default is the first installed backend of :data:`SOLVER_BACKENDS`,
 unless the environment variable :data:`BACKEND_VARIABLE` names another; a
@@ -58,6 +64,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..errors import HHT3DDeprecationWarning, InputError
+from .cg import CGPattern
 from .cholmod import CHOLMOD_LOCK, CholmodPattern
 from .pardiso import PARDISO_LOCK, PardisoPattern
 from .superlu import SuperLUPattern
@@ -106,6 +113,9 @@ class Backend:
         holds it over every analysis, factorization and solve, so the threads
         scheduler's tasks take turns in it.  ``None`` declares the backend
         thread-safe.
+    iterative : bool
+        Solves to a relative residual instead of round-off: ``pattern`` then also takes
+        the caller's accuracy as ``pattern(csr, module, tol)``.
     """
 
     name: str
@@ -115,6 +125,7 @@ class Backend:
     missing: str
     pattern: Callable = field(repr=False)
     lock: threading.RLock | None = field(default=None, repr=False, compare=False)
+    iterative: bool = False
 
     def module(self) -> Any:
         """The first of :attr:`modules`, all imported on first use; ``None`` if one is absent."""
@@ -310,6 +321,17 @@ register_backend(
         "SciPy SuperLU without pivoting, MMD ordering once per pattern, then reused",
         "scipy is always installed",
         SuperLUPattern,
+    )
+)
+register_backend(
+    Backend(
+        "cg",
+        "pyamg",
+        ("pyamg",),
+        "iterative: CG preconditioned by smoothed-aggregation AMG, second-order systems only",
+        "pyamg is not installed: pip install pyamg",
+        CGPattern,
+        iterative=True,
     )
 )
 

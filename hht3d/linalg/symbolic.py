@@ -30,8 +30,11 @@ class SymbolicFactorization:
     pattern : sparse matrix
         Symmetric matrix whose stored entries (explicit zeros included)
         define the pattern.
-    backend : {"pardiso", "cholmod", "superlu"}, optional
+    backend : {"pardiso", "cholmod", "superlu", "cg"}, optional
         Defaults to :func:`~hht3d.linalg.backends.default_backend`.
+    tol : float, optional
+        The relative accuracy the caller needs, for an iterative backend
+        (``cg``: :func:`~hht3d.linalg.cg.rtol_for`); direct ones solve to round-off.
 
     Notes
     -----
@@ -46,7 +49,7 @@ class SymbolicFactorization:
     lock, so tasks of the threads scheduler may share the process safely.
     """
 
-    def __init__(self, pattern: Any, backend: str | None = None) -> None:
+    def __init__(self, pattern: Any, backend: str | None = None, tol: float | None = None) -> None:
         pattern = _as_square_csr(pattern)
         self.backend = backends.check_backend(backend)
         check_memory(pattern.shape[0], self.backend)
@@ -54,7 +57,8 @@ class SymbolicFactorization:
         entry = backends.SOLVER_BACKENDS[self.backend]
         self._lock = entry.lock or contextlib.nullcontext()
         with self._lock:
-            self._impl = entry.pattern(pattern, entry.module())
+            accuracy = (tol,) if entry.iterative else ()
+            self._impl = entry.pattern(pattern, entry.module(), *accuracy)
         self.n_factorizations = 0
 
     def factorize(self, a: Any) -> Factor:

@@ -187,7 +187,7 @@ def quadrature_part(
     total = np.zeros_like(rhs)
     mine = slice(int(group), None, int(groups))
     if rhs.size and len(plan.sigmas[mine]):
-        symbolic = symbolic or shift_analysis(surface, backend)
+        symbolic = symbolic or shift_analysis(surface, backend, plan.tol)
         for sigma, weight in zip(plan.sigmas[mine], plan.weights[mine]):
             total += weight * shifted_solve(surface, sigma, rhs, symbolic=symbolic)
     return total.T.reshape(g.shape)
@@ -212,6 +212,6 @@ def combine_quadrature_parts(surface: Surface, parts: Sequence[np.ndarray]) -> n
 
 
 def quadrature_sum(surface: Surface, g: np.ndarray, tol: float, backend: str | None) -> np.ndarray:
-    symbolic = shift_analysis(surface, backend)
+    symbolic = shift_analysis(surface, backend, tol)
     plan = quadrature_plan(surface, tol, symbolic=symbolic)
     return combine_quadrature_parts(surface, [quadrature_part(surface, g, plan, symbolic=symbolic)])

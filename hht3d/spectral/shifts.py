@@ -99,10 +99,21 @@ def shifted_solve(
     return symbolic.factorize(shifted_matrix(surface, sigma)).solve(rhs)
 
 
-def shift_analysis(surface: Surface, backend: str | None = None) -> linalg.SymbolicFactorization:
+def shift_analysis(
+    surface: Surface, backend: str | None = None, tol: float | None = None
+) -> linalg.SymbolicFactorization:
     """Symbolic analysis of the pattern of every ``L + σM`` (:func:`shifted_matrix`).
 
     Pass it as ``symbolic=`` to :func:`shifted_solve` and
     :func:`spectral_bounds` to order and analyse the pattern only once.
+
+    Parameters
+    ----------
+    surface : Surface
+    backend : str, optional
+        Sparse solver (:func:`hht3d.linalg.backends.available_backends`).
+    tol : float, optional
+        The quadrature's relative accuracy, which an iterative backend's solves keep
+        (:class:`~hht3d.linalg.symbolic.SymbolicFactorization`).
     """
-    return linalg.SymbolicFactorization(shifted_matrix(surface, 1.0), backend)
+    return linalg.SymbolicFactorization(shifted_matrix(surface, 1.0), backend, tol)

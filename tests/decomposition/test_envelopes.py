@@ -12,7 +12,8 @@ import scipy.sparse.linalg as spla
 from scipy.interpolate import CubicSpline
 
 from helpers.meshes import icosphere, open_cylinder
-from hht3d import InputError, Surface, linalg
+from helpers.systems import BACKENDS
+from hht3d import InputError, Surface
 from hht3d.decomposition import emd, envelope_interpolation, envelope_operator
 from hht3d.decomposition.envelopes import EnvelopeSolver, envelope_energies
 
@@ -106,7 +107,7 @@ def test_harmonic_envelope_is_linear_interpolation():
     np.testing.assert_allclose(g[:, 0], np.interp(z, z[rings], values), atol=1e-12)
 
 
-@pytest.mark.parametrize("backend", linalg.available_backends())
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_envelope_matches_eliminated_system(small_sphere, backend):
     s = small_sphere
     rng = np.random.default_rng(1)
