@@ -329,7 +329,7 @@ register_backend(
         "pyamg",
         ("pyamg",),
         "iterative: CG preconditioned by smoothed-aggregation AMG, second-order systems only",
-        "pyamg is not installed: pip install pyamg",
+        'pyamg is not installed: pip install "hht3d[iterative]"',
         CGPattern,
         iterative=True,
     )
