@@ -23,8 +23,10 @@ PRELUDE = textwrap.dedent("""
     import errno, os, signal, sys, threading, types
 
     # The dependencies first: each picks its own platform's backend (psutil's Linux one needs
-    # resource; on Windows it takes its Windows one).  What is checked is hht3d's own code.
-    import dask, fsspec, matplotlib, numpy, open3d, plotly, plyfile, psutil, robust_laplacian, scipy.sparse.linalg, yaml
+    # resource, distributed's locket fcntl; on Windows they take their Windows ones).
+    # What is checked is hht3d's own code.
+    import dask, distributed, fsspec, matplotlib, numpy, open3d, plotly, plyfile, psutil, robust_laplacian
+    import scipy.sparse.linalg, yaml
 
     sys.modules["fcntl"] = None      # import fcntl -> ImportError, as on Windows
     sys.modules["resource"] = None

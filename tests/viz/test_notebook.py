@@ -138,6 +138,7 @@ def test_a_notebook_gets_the_distributed_progress_widget(monkeypatch):
     monkeypatch.setattr("distributed.progress", lambda futures, notebook: f"widget of {futures}, notebook={notebook}")
     monkeypatch.setitem(sys.modules, "IPython.display", types.SimpleNamespace(display=shown.append))
     monkeypatch.setattr(schedulers, "gather_bounded", lambda client, futures, where: futures)
+    monkeypatch.setattr("hht3d.io.sealed._REGISTRY", {})  # no storage options of earlier tests to share
     client = types.SimpleNamespace(compute=lambda graphs: graphs)
     assert schedulers._compute_distributed(client, [1, 2], progress=True) == (1, 2)
     assert shown == ["widget of [1, 2], notebook=True"]  # displayed: distributed returns the widget
