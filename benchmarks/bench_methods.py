@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -42,8 +43,12 @@ CONFIGS = {
 }
 
 
+def _decompose(surface, signal, options):
+    return emd(surface, signal, options)
+
+
 def part_recovery() -> list[dict]:
-    methods = {name: (lambda options: lambda s, f: emd(s, f, options))(c[0]) for name, c in CONFIGS.items()}
+    methods = {name: functools.partial(_decompose, options=c[0]) for name, c in CONFIGS.items()}
     references = {"PyEMD EMD": recovery.pyemd_methods()["PyEMD EMD"]}
     return recovery.part_recovery(SPOT, DATA / "spacetime_face_neutral.ply", methods, references)
 
@@ -134,8 +139,9 @@ def main() -> None:
     parser.add_argument("--models", nargs="*", default=bench_quality.MODELS)
     args = parser.parse_args()
     records = {"machine": machine()}
-    for options, _, _ in CONFIGS.values():  # warm-up: the first run loads the solver and its libraries
-        bench_quality.decompose(hht3d.load(SPOT), np.sin(hht3d.load(SPOT).vertices[:, 0] * 9), "x", {"x": (options,)})
+    spot = hht3d.load(SPOT)
+    for config in CONFIGS:  # warm-up: the first run loads the solver and its libraries
+        bench_quality.decompose(spot, np.sin(9 * spot.vertices[:, 0]), config, CONFIGS)
     parts = {
         "models": lambda: bench_quality.part_models(args.models, CONFIGS),
         "bumps": lambda: bench_quality.part_bumps(CONFIGS),
