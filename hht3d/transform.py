@@ -38,7 +38,8 @@ from .geometry.surface import Surface
 from .geometry.validation import check_signal
 from .hht_options import HHTOptions, hht_settings
 from .io.sealed import Sealed, unsealed
-from .spectral.monogenic_signal import MonogenicSignal, monogenic_from_potential
+from .spectral.monogenic_signal import MonogenicSignal, monogenic_from_potential, monogenic_from_riesz
+from .spectral.multilevel import combine_riesz_parts, riesz_part
 from .spectral.options import RieszOptions
 from .spectral.riesz_transform import fractional_laplacian
 from .spectral.spectrum import HilbertSpectrum
@@ -250,6 +251,10 @@ class Stages(Protocol):
     def potential(self, surface: Surface, imfs: np.ndarray, riesz: RieszOptions, backend: str | None) -> Any:
         """``L^{-1/2}`` of the IMFs (Eq. 16): one call, or the quadrature's shift-group tasks."""
 
+    def riesz_vectors(self, surface: Surface, decomposition: Any, riesz: RieszOptions, backend: str | None) -> Any:
+        """The Riesz vectors of each IMF on its level (:mod:`hht3d.spectral.multilevel`): one call, or
+        one task per group of IMFs."""
+
 
 class _Eager:
     """Runs every stage at once and adds up its wall time by step."""
@@ -269,6 +274,9 @@ class _Eager:
 
     def potential(self, surface: Surface, imfs: np.ndarray, riesz: RieszOptions, backend: str | None) -> Any:
         return self.task("riesz", fractional_laplacian)(surface, imfs, -0.5, riesz, backend=backend)
+
+    def riesz_vectors(self, surface: Surface, decomposition: Any, riesz: RieszOptions, backend: str | None) -> Any:
+        return combine_riesz_parts(surface, [self.task("riesz", riesz_part)(surface, decomposition, riesz, backend)])
 
 
 def _imfs(decomposition: Any) -> np.ndarray:
@@ -291,6 +299,18 @@ def decomposition_stage(
     return stages.task("eemd_combine", combine_eemd)(surface, signal, members)
 
 
+def _may_use_levels(options: HHTOptions) -> bool:
+    """Whether the decomposition may carry IMFs on levels, whose Riesz vectors are then taken there
+    (:mod:`hht3d.spectral.multilevel`; the stage also takes a decomposition without levels)."""
+    emd = options.emd
+    return (
+        options.ensemble is None
+        and emd.method == "filtering"
+        and emd.multiresolution != "off"
+        and options.riesz.potential == "quadrature"
+    )
+
+
 def hht_stages(
     stages: Stages,
     surface: Surface,
@@ -302,6 +322,9 @@ def hht_stages(
 ) -> dict:
     """The HHT's stages in order (Alg. 2), by name: ``emd``, ``imfs``, ``riesz``, ``monogenic``, ``hht``.
 
+    ``riesz`` is ``L^{-1/2}`` of the IMFs, or, when iterative filtering may use levels, their
+    Riesz vectors ``(k, n, 3)`` (:mod:`hht3d.spectral.multilevel`).
+
     The one list of the stages: :func:`hht` runs it at once, :func:`hht3d.graph.transform`
     as lazy tasks, and the pipeline's ``hht`` step through the graph.  The settings
     (as for :func:`hht`) are checked here, before the first stage.
@@ -310,8 +333,12 @@ def hht_stages(
     riesz = options.riesz
     decomposition = decomposition_stage(stages, surface, signal, options.emd, options.ensemble, backend)
     imfs = stages.task("imfs", _imfs)(decomposition)
-    potential = stages.potential(surface, imfs, riesz, backend)
-    mono = stages.task("monogenic", monogenic_from_potential)(surface, imfs, potential, riesz)
+    if _may_use_levels(options):
+        potential = stages.riesz_vectors(surface, decomposition, riesz, backend)
+        mono = stages.task("monogenic", monogenic_from_riesz)(surface, imfs, potential, riesz)
+    else:
+        potential = stages.potential(surface, imfs, riesz, backend)
+        mono = stages.task("monogenic", monogenic_from_potential)(surface, imfs, potential, riesz)
     result = stages.task("hht", HHTResult.from_parts)(surface, signal, decomposition, mono, riesz.as_dict())
     return {"emd": decomposition, "imfs": imfs, "riesz": potential, "monogenic": mono, "hht": result}
 

@@ -43,6 +43,7 @@ from ..geometry.signals import fluctuation, fluctuation_energy
 from ..geometry.surface import Surface
 from ..geometry.validation import check_signal, check_surface
 from .filtering import Filterer
+from .multiresolution import MultilevelFilterer, uses_levels
 from .options import EMDOptions
 from .quality import Quality, decomposition_html, decomposition_quality, decomposition_repr, warn_quality
 from .sifting import Sifter
@@ -82,12 +83,16 @@ class EMDResult:
     quality : Quality, optional
         Energy ratio, index of orthogonality and warnings
         (:func:`hht3d.decomposition.quality.decomposition_quality`).
+    levels : tuple of (int, ndarray)
+        With the hierarchy (:mod:`.multiresolution`): each IMF on the level it was filtered on, as
+        ``(level, values)``; empty otherwise.
     """
 
     imfs: np.ndarray
     residue: np.ndarray
     info: dict
     quality: Quality | None = None
+    levels: tuple = ()
 
     @property
     def n_imfs(self) -> int:
@@ -245,7 +250,9 @@ def emd(
     f = check_signal(check_surface(surface), signal)
     start = time.perf_counter()
     _check_second_order(options, backend)
-    method = METHOD_CLASSES[options.method](surface, options, backend)
+    method = (MultilevelFilterer if uses_levels(options, len(f)) else METHOD_CLASSES[options.method])(
+        surface, options, backend
+    )
     magnitude = float(np.max(np.abs(f)))
     unit = f / magnitude if magnitude > 0 else f
     imfs: list[np.ndarray] = []
@@ -267,28 +274,28 @@ def emd(
             imfs.append(extracted[0])
             per_imf.append(extracted[1])
             residue = unit - np.sum(imfs, axis=0)
-    stacked = np.array(imfs).reshape(len(imfs), len(f)) * (magnitude if magnitude > 0 else 1.0)
+    scale = magnitude if magnitude > 0 else 1.0
+    stacked = np.array(imfs).reshape(len(imfs), len(f)) * scale
     info = {
         "imfs": per_imf,
         "n_imfs": len(per_imf),
         "method": options.method,
         **method.totals(),
-        "factorizations": method.solver.n_factorizations,
         "seconds": time.perf_counter() - start,
-        "backend": method.solver.backend,
         "stop_reason": reason,
         "options": options.as_dict(),
     }
-    return result_with_quality(surface, f, stacked, info)
+    levels = tuple((level, imf * scale) for level, imf in getattr(method, "levels", ()))
+    return result_with_quality(surface, f, stacked, info, levels)
 
 
-def result_with_quality(surface: Surface, f: np.ndarray, imfs: np.ndarray, info: dict) -> EMDResult:
+def result_with_quality(surface: Surface, f: np.ndarray, imfs: np.ndarray, info: dict, levels: tuple = ()) -> EMDResult:
     """The result with its quality figures; each warning is also issued as a QualityWarning."""
     residue = f - imfs.sum(axis=0)
     quality = decomposition_quality(surface, f, imfs, residue)
     for message in quality.warnings:
         warn_quality(f"{surface.name}: {message}", stacklevel=3)
-    return EMDResult(imfs, residue, info, quality)
+    return EMDResult(imfs, residue, info, quality, levels)
 
 
 def _check_second_order(options: EMDOptions, backend: str | None) -> None:

@@ -147,9 +147,21 @@ class Filterer:
         self.counts = (math.inf, math.inf)
 
     def imf(self, residue: np.ndarray) -> tuple[np.ndarray, dict] | None:
-        """``P(W_k) r_{k−1}`` and its diagnostics; ``None`` when the residue has < 2 maxima or minima,
-        or no fewer of either than the residue before the last IMF (the cut took nothing: a trend)."""
+        """``P(W_k) r_{k−1}`` and its diagnostics; ``None`` when :meth:`cut` finds no oscillation."""
         start, factorizations = time.perf_counter(), self.solver.n_factorizations
+        cut = self.cut(residue)
+        if cut is None:
+            return None
+        t, passive, info = cut
+        imf = self.filtered(t, residue)
+        imf[passive] = 0.0
+        info.update(factorizations=self.solver.n_factorizations - factorizations, seconds=time.perf_counter() - start)
+        return imf, info
+
+    def cut(self, residue: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict] | None:
+        """The filter width ``t`` per vertex (module notes, "The cut"), the passive vertices (components
+        without both kinds of extrema) and the diagnostics; ``None`` when the residue has < 2 maxima or
+        minima, or no fewer of either than the residue before the last IMF (the cut took nothing: a trend)."""
         is_max, is_min, passive = active_extrema(self.surface, residue, self.options)
         counts = (int(is_max.sum()), int(is_min.sum()))
         if min(counts) < 2 or (counts[0] >= self.counts[0] and counts[1] >= self.counts[1]):
@@ -161,21 +173,25 @@ class Filterer:
         t = np.full(len(residue), 1.0 / cut**2)
         if self.options.cut == "local":
             t = t * (self._local_spacing(is_max | is_min, distances) / spacing) ** 2
-        imf = self._apply(self._system(t), residue)
-        imf[passive] = 0.0
-        return imf, {
-            "n_maxima": counts[0],
-            "n_minima": counts[1],
-            "spacing": spacing,
-            "cut_frequency": cut,
-            "stop": "filter",
-            "factorizations": self.solver.n_factorizations - factorizations,
-            "seconds": time.perf_counter() - start,
-        }
+        info = {"n_maxima": counts[0], "n_minima": counts[1], "spacing": spacing, "cut_frequency": cut}
+        return t, passive, {**info, "stop": "filter"}
+
+    def filtered(self, t: np.ndarray, residue: np.ndarray) -> np.ndarray:
+        """``P(W) r`` with the filter of width ``t`` (per vertex) on the shared pattern."""
+        factor = self.solver.factorize(self._system(t))
+        self.n_solves += 2 * self.options.order - 1
+        return apply_passband(factor.solve, self.mass, residue, self.options.order)
 
     def totals(self) -> dict:
-        """Run totals for ``EMDResult.info``: ``solves``; no sifts, no envelope constraints."""
-        return {"sifts": 0, "solves": self.n_solves, "max_constraint_error": 0.0}
+        """Run totals for ``EMDResult.info``: ``solves``, ``factorizations``, ``backend``; no sifts, no
+        envelope constraints."""
+        return {
+            "sifts": 0,
+            "solves": self.n_solves,
+            "max_constraint_error": 0.0,
+            "factorizations": self.solver.n_factorizations,
+            "backend": self.solver.backend,
+        }
 
     def _local_spacing(self, extrema: np.ndarray, distances: np.ndarray) -> np.ndarray:
         """``d(x)``: the extrema's :func:`opposite_distances` spread over the surface by a membrane
@@ -206,9 +222,3 @@ class Filterer:
             data = e.local_smoothing(t)
         data[e.diagonal] += self.mass
         return e.matrix(data)
-
-    def _apply(self, system: sp.csr_matrix, r: np.ndarray) -> np.ndarray:
-        """``P(W) r`` with ``W = system⁻¹ M``."""
-        factor = self.solver.factorize(system)
-        self.n_solves += 2 * self.options.order - 1
-        return apply_passband(factor.solve, self.mass, r, self.options.order)

@@ -38,6 +38,7 @@ __all__ = [
     "METHODS",
     "FILTERS",
     "CUTS",
+    "MULTIRESOLUTION",
     "ENVELOPES",
     "EXTREMA_RULES",
     "GUARD_TENSIONS",
@@ -50,6 +51,8 @@ METHODS = ("sifting", "filtering")
 FILTERS = ("bilaplacian", "membrane")
 #: Cuts of iterative filtering: one frequency for the surface, or one per vertex from the local extrema spacing.
 CUTS = ("global", "local")
+#: When iterative filtering carries its residues on coarser levels (:mod:`.multiresolution`).
+MULTIRESOLUTION = ("auto", "on", "off")
 #: Sifting stopping rules.
 STOPPING_RULES = ("sd", "rfg", "s_number", "fixed")
 #: Envelope interpolants: thin plate in tension (default), the paper's thin plate (Eq. 11), membrane.
@@ -169,6 +172,11 @@ class EMDOptions(Record):
     cut: str = option("global", "method filtering: one cut for the surface or one per vertex", choices=CUTS)
     cut_ratio: float = option(
         1.5, "method filtering: the cut lies this many times below the extrema frequency", minimum=0.25, maximum=16
+    )
+    multiresolution: str = option(
+        "auto",
+        "method filtering: carry each residue on the coarsest level that resolves it (auto: from 200,000 vertices)",
+        choices=MULTIRESOLUTION,
     )
 
     @property

@@ -165,8 +165,14 @@ class Sifter:
         return self.corrected(*sifted), sifted[1]
 
     def totals(self) -> dict:
-        """Run totals for ``EMDResult.info``: ``sifts`` and ``max_constraint_error``."""
-        return {"sifts": self.n_sifts, "max_constraint_error": self.max_constraint_error}
+        """Run totals for ``EMDResult.info``: ``sifts``, ``max_constraint_error``, ``factorizations``,
+        ``backend``."""
+        return {
+            "sifts": self.n_sifts,
+            "max_constraint_error": self.max_constraint_error,
+            "factorizations": self.solver.n_factorizations,
+            "backend": self.solver.backend,
+        }
 
     def sifted(self, residue: np.ndarray) -> tuple[np.ndarray, dict] | None:
         """Sift one IMF out of ``residue``; ``None`` when it has < 2 maxima or minima.

@@ -33,6 +33,7 @@ from ..execution.workers import worker_count
 from ..geometry.surface import Surface
 from ..linalg.backends import default_backend
 from ..records import Record, option
+from ..spectral.multilevel import combine_riesz_parts, riesz_part
 from ..spectral.options import RieszOptions
 from ..spectral.quadrature import combine_quadrature_parts, quadrature_part, quadrature_plan
 from ..spectral.riesz_transform import fractional_laplacian
@@ -117,6 +118,14 @@ class Builder:
         """``L^{-1/2}`` of the IMFs as :func:`riesz_potential`'s tasks (the ``Stages`` of
         :func:`hht3d.transform.hht_stages`)."""
         return riesz_potential(surface, imfs, riesz, backend=backend, riesz_tasks=self.riesz_tasks, builder=self)
+
+    def riesz_vectors(self, surface: Surface, decomposition: Any, riesz: RieszOptions, backend: str | None) -> Any:
+        """The Riesz vectors of the IMFs on their levels: one task per group of IMFs (``riesz_tasks``,
+        default one per worker), then a combining task."""
+        groups = self.riesz_tasks or worker_count()
+        part = self.task("riesz_imfs", riesz_part)
+        parts = [part(surface, decomposition, riesz, backend, group, groups) for group in range(groups)]
+        return self.task("riesz_sum", combine_riesz_parts)(surface, parts)
 
 
 #: Geometries whose caches a process keeps across tasks (the least recently used is dropped).

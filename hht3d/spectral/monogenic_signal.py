@@ -34,7 +34,7 @@ from .options import RieszOptions
 from .resolution import ResolutionReport, resolution_report, resolvable_from_area
 from .riesz_transform import fractional_laplacian, vertex_gradient
 
-__all__ = ["MonogenicSignal", "monogenic", "monogenic_from_potential"]
+__all__ = ["MonogenicSignal", "monogenic", "monogenic_from_potential", "monogenic_from_riesz"]
 
 
 @dataclass(frozen=True)
@@ -192,7 +192,32 @@ def monogenic_from_potential(
     u = as_signals(surface, potential, "potential")[0]
     if u.shape != f.shape:
         raise InputError(f"potential has shape {u.shape}; the imfs have {f.shape}")
-    rf = vertex_gradient(surface, u, options.gradient)
+    return monogenic_from_riesz(surface, f, vertex_gradient(surface, u, options.gradient), options)
+
+
+def monogenic_from_riesz(
+    surface: Surface, imfs: np.ndarray, rf: np.ndarray, options: RieszOptions | dict | None = None
+) -> MonogenicSignal:
+    """Monogenic signal from the IMFs and their Riesz vectors (Eqs. 20–23).
+
+    Parameters
+    ----------
+    surface : Surface
+    imfs : (k, n) or (n,) array_like
+    rf : (k, n, 3) array_like
+        Tangent Riesz vectors of the IMFs (:func:`hht3d.spectral.multilevel.riesz_part`).
+    options : RieszOptions or dict, optional
+        ``frequency`` (the estimator of Eq. 23) is used.
+
+    Returns
+    -------
+    MonogenicSignal
+    """
+    options = RieszOptions.of(options)
+    f = _signals(surface, imfs)
+    rf = np.asarray(rf, dtype=np.float64)
+    if rf.shape != (*f.shape, 3):
+        raise InputError(f"riesz vectors have shape {rf.shape}; the imfs need {(*f.shape, 3)}")
     q = np.hypot(np.hypot(rf[..., 0], rf[..., 1]), rf[..., 2])  # no overflow at 1e200, no underflow at 1e-200
     omega = instantaneous_frequency(surface, f, rf, options)
     return MonogenicSignal(

@@ -1,0 +1,128 @@
+"""Iterative filtering on a coarsening hierarchy: each residue moves to the coarsest level that resolves it.
+
+After the IMF cut at ``ω_c`` the residue ``r_k = (I − P(W_k)) r_{k−1}`` of
+:mod:`.filtering` is a low-pass: its response ``I_G(m, m)`` is below 1e-6 from
+``1.5 ω_c`` on (bilaplacian filter, ``m = 16``).  So it is carried on the coarsest level
+``ℓ_k`` of :func:`~hht3d.geometry.hierarchy.hierarchy` whose spacing ``h`` has
+``ω_c h ≤`` :data:`SPACING_LIMIT` (at least ``2π /`` :data:`SPACING_LIMIT` vertices per
+wavelength at the cut), and the next IMF is filtered there, on a system
+:data:`~hht3d.geometry.hierarchy.COARSENING` times smaller per level.
+
+With ``P_ℓ`` the prolongation from level ``ℓ`` to the input's vertices and ``R`` the
+restriction (sampling) between levels, IMF ``k`` on the input is
+
+    f_k = P_{ℓ_{k−1}} r_{k−1} − P_{ℓ_k} R r_k,
+
+so the IMFs and ``P_{ℓ_K} r_K`` add up to the signal exactly (the sum telescopes), and what
+the coarse level cannot represent of ``r_k`` stays in IMF ``k``, the finer band it belongs
+to.  That share is measured: ``transfer_error`` of each IMF is
+``‖r_k − P R r_k‖_M / ‖r_k‖_M`` on level ``ℓ_{k−1}``.
+
+Each level has its own :class:`~hht3d.decomposition.filtering.Filterer` (its own
+factorizations), and the cut comes from the extrema of the residue on its level.  On a coarse
+level an extremum must exceed its whole :data:`COARSE_RING`-ring: vertex clustering leaves
+vertices of degree 2 and 3 whose 1-ring misses a side, and the 1-ring rule found 31 maxima
+where the input has 14 (nefertiti, IMF 6's residue); the 2-ring finds 10-12, and the median
+opposite distance within 8% of the input's.  The trend stop compares residues on one level.
+Prolonging a residue back to the input to find its extrema there does not work: the
+interpolation's kinks are extrema too (the cut of IMF 7 rose threefold).  The
+IMFs on their levels are kept in ``EMDResult.levels`` for the Riesz transform of each IMF
+on its level (:func:`hht3d.spectral.multilevel.riesz_on_levels`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+import numpy as np
+
+from ..geometry.hierarchy import Hierarchy, hierarchy
+from ..geometry.surface import Surface
+from .filtering import Filterer
+from .options import EMDOptions
+
+__all__ = ["MultilevelFilterer", "COARSE_RING", "SPACING_LIMIT", "MULTIRESOLUTION_VERTICES", "uses_levels"]
+
+#: Largest ``ω_c h`` (radians) of the level a residue with cut ``ω_c`` moves to.
+SPACING_LIMIT = 0.5
+#: Extrema on a coarse level exceed all of their ``COARSE_RING``-ring (module notes).
+COARSE_RING = 2
+#: ``multiresolution="auto"`` uses the hierarchy from this many vertices on.
+MULTIRESOLUTION_VERTICES = 200_000
+
+
+def uses_levels(options: EMDOptions, n_vertices: int) -> bool:
+    """Whether :func:`~hht3d.decomposition.emd` decomposes on levels with these settings."""
+    if options.method != "filtering" or options.multiresolution == "off":
+        return False
+    return options.multiresolution == "on" or n_vertices >= MULTIRESOLUTION_VERTICES
+
+
+class MultilevelFilterer:
+    """Iterative filtering with each residue on its level (module notes); the interface of :class:`Filterer`."""
+
+    def __init__(self, surface: Surface, options: EMDOptions, backend: str | None):
+        self.hierarchy: Hierarchy = hierarchy(surface)
+        self.options, self.backend = options, backend
+        self.filterers: dict[int, Filterer] = {}
+        self.level = 0
+        self.residue: np.ndarray | None = None
+        self.levels: list[tuple[int, np.ndarray]] = []
+
+    def filterer(self, index: int) -> Filterer:
+        """The filterer of level ``index`` (made once)."""
+        if index not in self.filterers:
+            surface = self.hierarchy.levels[index].surface
+            options = self.options
+            if index > 0:
+                options = dataclasses.replace(options, extrema="relaxed", ring=COARSE_RING, ratio=1.0)
+            self.filterers[index] = Filterer(surface, options, self.backend)
+        return self.filterers[index]
+
+    def imf(self, residue: np.ndarray) -> tuple[np.ndarray, dict] | None:
+        """IMF ``k`` on the input's vertices and its diagnostics (``level``, ``level_vertices``,
+        ``residue_level``, ``transfer_error``); ``None`` as :meth:`Filterer.cut`.
+
+        ``residue`` is the input's signal on the first call; later calls continue from the residue
+        kept on its level."""
+        start = time.perf_counter()
+        here = self.level
+        r = residue if self.residue is None else self.residue
+        filterer = self.filterer(here)
+        factorizations = filterer.solver.n_factorizations
+        cut = filterer.cut(r)
+        if cut is None:
+            return None
+        t, _, info = cut
+        low = r - filterer.filtered(t, r)
+        target = self.hierarchy.coarsest_resolving(info["cut_frequency"], SPACING_LIMIT, here)
+        carried = self.hierarchy.restrict(low, here, target)
+        back = self.hierarchy.prolong(carried, target, here)
+        level_imf = r - back
+        mass = filterer.mass
+        norm = math.sqrt(float(mass @ low**2))
+        info.update(
+            level=here,
+            level_vertices=len(r),
+            residue_level=target,
+            transfer_error=math.sqrt(float(mass @ (low - back) ** 2)) / norm if norm > 0 else 0.0,
+            factorizations=filterer.solver.n_factorizations - factorizations,
+            seconds=time.perf_counter() - start,
+        )
+        self.levels.append((here, level_imf))
+        self.residue, self.level = carried, target
+        return self.hierarchy.to_finest(level_imf, here), info
+
+    def totals(self) -> dict:
+        """Run totals over the levels for ``EMDResult.info``, with ``levels``: the vertices of each level used."""
+        used = [self.filterer(i) for i in sorted(self.filterers)] or [self.filterer(0)]
+        return {
+            "sifts": 0,
+            "solves": sum(f.n_solves for f in used),
+            "max_constraint_error": 0.0,
+            "factorizations": sum(f.solver.n_factorizations for f in used),
+            "backend": used[0].solver.backend,
+            "levels": [self.hierarchy.levels[i].surface.n_vertices for i in sorted(self.filterers)],
+        }

@@ -1,0 +1,123 @@
+"""The Riesz transform of each IMF on the level and in the band it was filtered in (issue 39).
+
+An IMF of iterative filtering on levels (:mod:`hht3d.decomposition.multiresolution`) lives
+on level ``ℓ`` and, above its own cut ``ω_c``, holds what the filter passed: its response
+``P(G)`` is below 1e-10 under ``ω_c / 2`` (bilaplacian, ``m = 16``).  So its potential
+``L^{-1/2} f̃`` needs the quadrature of :func:`~hht3d.spectral.quadrature.quadrature_nodes`
+only on ``[λ_lo, M̄]`` with ``λ_lo = (`` :data:`BAND_FLOOR` ``· ω_c)²``, on level ``ℓ``:
+fewer shifts (the condition number is ``M̄ / λ_lo``, not ``M̄ / λ_1``) on a smaller system.
+The IMFs of one level share the shifts of the lowest cut among them, each shift factorized
+once for all of them.
+The Riesz vectors ``∇ L^{-1/2} f̃`` are taken on level ``ℓ`` (Eq. 17), prolonged to the input's
+vertices (:class:`~hht3d.geometry.hierarchy.Hierarchy`) and projected on its tangent planes.
+
+Without levels (a decomposition that did not use them) each IMF takes the full quadrature on
+the input (:func:`~hht3d.spectral.riesz_transform.riesz`).  The IMFs split into groups,
+``k ≡ group (mod groups)``, one task each (:func:`riesz_part`, :func:`combine_riesz_parts`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..geometry.hierarchy import hierarchy
+from ..geometry.signals import fluctuation
+from ..geometry.surface import Surface
+from .eigenpairs import upper_bound
+from .options import RieszOptions
+from .quadrature import quadrature_nodes
+from .riesz_transform import riesz, vertex_gradient
+from .shifts import shift_analysis, shifted_solve
+
+__all__ = ["BAND_FLOOR", "riesz_part", "combine_riesz_parts", "band_potential"]
+
+#: The band of an IMF with cut ``ω_c`` starts at ``BAND_FLOOR · ω_c``.
+BAND_FLOOR = 0.5
+
+
+def band_potential(surface: Surface, f: np.ndarray, floor: float, tol: float, backend: str | None) -> np.ndarray:
+    """``L^{-1/2} f̃`` for signals whose spectra lie above ``floor`` (an eigenvalue), to ``tol`` there.
+
+    Parameters
+    ----------
+    surface : Surface
+    f : (k, n) ndarray
+        Signals, solved together (one factorization per shift).
+    floor : float
+        ``λ_lo``: components below it are not resolved.
+    tol : float
+        Relative accuracy of the quadrature on ``[λ_lo, M̄]``.
+    backend : str, optional
+        Sparse solver.
+
+    Returns
+    -------
+    (k, n) ndarray
+    """
+    mbar = upper_bound(surface)
+    sigmas, weights = quadrature_nodes(min(floor, 0.5 * mbar), mbar, tol)
+    rhs = (surface.mass_diagonal * fluctuation(surface, f)).T
+    symbolic = shift_analysis(surface, backend, tol)
+    total = np.zeros_like(rhs)
+    for sigma, weight in zip(sigmas, weights):
+        total += weight * shifted_solve(surface, sigma, rhs, symbolic=symbolic)
+    return fluctuation(surface, total.T)
+
+
+def riesz_part(
+    surface: Surface,
+    decomposition: Any,
+    options: RieszOptions,
+    backend: str | None = None,
+    group: int = 0,
+    groups: int = 1,
+) -> list[tuple[int, np.ndarray]]:
+    """The Riesz vectors ``(n, 3)`` of the IMFs ``k ≡ group (mod groups)`` of ``decomposition``.
+
+    Parameters
+    ----------
+    surface : Surface
+        The input surface.
+    decomposition : EMDResult
+        Its ``levels`` (empty without the hierarchy) and ``info["imfs"][k]["cut_frequency"]``.
+    options : RieszOptions
+        ``tol`` and ``gradient`` are used.
+    backend : str, optional
+    group, groups : int
+        This part's IMFs.
+
+    Returns
+    -------
+    list of (int, (n, 3) ndarray)
+        ``(k, riesz vectors)``; add the parts with :func:`combine_riesz_parts`.
+    """
+    if not (int(groups) == groups >= 1 and int(group) == group and 0 <= group < groups):
+        raise InputError(f"need 0 <= group < groups with integers, got group={group!r}, groups={groups!r}")
+    mine = range(int(group), decomposition.n_imfs, int(groups))
+    if not decomposition.levels:
+        return [(k, riesz(surface, decomposition.imfs[k], options, backend=backend)) for k in mine]
+    levels = hierarchy(surface)
+    normals = surface.normals
+    out = []
+    for index in sorted({decomposition.levels[k][0] for k in mine}):
+        level = levels.level(index)
+        if level is None:
+            raise InputError(f"{surface.name}: an IMF lies on level {index}, which this surface does not have")
+        here = [k for k in mine if decomposition.levels[k][0] == index]
+        cut = min(decomposition.info["imfs"][k]["cut_frequency"] for k in here)
+        values = np.array([decomposition.levels[k][1] for k in here])
+        u = band_potential(level.surface, values, (BAND_FLOOR * cut) ** 2, options.tol, backend)
+        for k, field in zip(here, vertex_gradient(level.surface, u, options.gradient).reshape(len(here), -1, 3)):
+            vectors = levels.to_finest(field.T, index).T
+            out.append((k, vectors - np.sum(vectors * normals, axis=1, keepdims=True) * normals))
+    return out
+
+
+def combine_riesz_parts(surface: Surface, parts: Sequence[list[tuple[int, np.ndarray]]]) -> np.ndarray:
+    """The ``(k, n, 3)`` Riesz vectors of all IMFs from every :func:`riesz_part`."""
+    found = sorted(((k, v) for part in parts for k, v in part), key=lambda item: item[0])
+    return np.array([v for _, v in found]).reshape(len(found), surface.n_vertices, 3)
