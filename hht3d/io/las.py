@@ -7,8 +7,9 @@ keeps every digit of its scale.  Writing turns them back into the same integers.
 
 Every scalar per-point dimension becomes a stored attribute (:func:`~hht3d.io.formats.usable_name`
 of its name): ``intensity``, ``classification``, ``return_number``, ``gps_time``, ..., every
-extra-bytes dimension, and ``luminance`` (Rec. 709) beside the colours of RGB formats.  Array-valued
-extra-bytes dimensions are not read.
+extra-bytes dimension, and ``luminance`` (Rec. 709) beside the colours of RGB formats; the load option
+``dimensions`` keeps only those it names (``luminance`` for the colours), for less memory per point
+(:func:`bytes_per_point`).  Array-valued extra-bytes dimensions are not read.
 """
 
 from __future__ import annotations
@@ -75,27 +76,95 @@ def _attribute_dimensions(point_format: Any) -> list[str]:
     return [d.name for d in point_format.dimensions if d.name not in _GEOMETRY and d.num_elements == 1]
 
 
-def bytes_per_point(point_format: Any) -> int:
-    """Memory one kept point takes once read: float64 coordinates, attributes, colours and luminance."""
-    has_rgb = "red" in point_format.dimension_names
-    return 8 * (3 + len(_attribute_dimensions(point_format)) + (4 if has_rgb else 0))
+@dataclass(frozen=True)
+class _Kept:
+    """What a read keeps: the LAS dimensions read as attributes, and whether the colours are."""
+
+    dimensions: list[str]
+    colours: bool
+
+    @property
+    def bytes_per_point(self) -> int:
+        """8 bytes for each coordinate and dimension, 32 for the colours and their luminance."""
+        return 8 * (3 + len(self.dimensions) + (4 if self.colours else 0))
 
 
-def read_las(path: Path, classes: Sequence[int] | None = None) -> dict:
-    """The arrays of a :class:`~hht3d.geometry.surface.Surface` from a LAS or LAZ file, read in chunks
-    of :data:`CHUNK_POINTS`.
-
-    Memory: :func:`bytes_per_point` per point the header declares (8 bytes × (3 + the scalar
-    dimensions + 4 with RGB): 160 bytes for point format 3, 168 for format 7), plus about 60 bytes
-    per point of one chunk (its decoded records and temporaries; measured peak 219 bytes per point
-    for a 10⁶-point format-3 file, one chunk); with ``classes``, the kept points are copied out.
-    ``classes`` keeps only points of these classification codes.
+def _kept(point_format: Any, dimensions: Sequence[str] | None) -> _Kept:
+    """The dimensions ``dimensions`` names (LAS or attribute names; ``luminance`` for the colours), all
+    by default.
 
     Raises
     ------
     InputError
-        laspy (or lazrs for LAZ) missing, not a LAS file, a header declaring more points than the file
-        holds or memory can take, no points, or fewer than 4 left by ``classes``.
+        A name the point format does not have, in one line listing those it has.
+    """
+    names = _attribute_dimensions(point_format)
+    has_rgb = "red" in point_format.dimension_names
+    if dimensions is None:
+        return _Kept(names, has_rgb)
+    known = {usable_name(name): name for name in names} | {name: name for name in names}
+    colours = "luminance" in dimensions and has_rgb
+    unknown = [name for name in dimensions if name not in known and not (name == "luminance" and has_rgb)]
+    if unknown:
+        offered = [usable_name(name) for name in names] + (["luminance"] if has_rgb else [])
+        raise InputError(
+            f"no dimension {', '.join(map(repr, unknown))} in point format {point_format.id}; "
+            f"its dimensions: {', '.join(offered)}"
+        )
+    wanted = {known[name] for name in dimensions if name in known}
+    return _Kept([name for name in names if name in wanted], colours)
+
+
+def bytes_per_point(point_format: Any, dimensions: Sequence[str] | None = None) -> int:
+    """Memory one kept point takes once read: float64 coordinates, the kept dimensions, and the colours
+    and luminance when kept (``dimensions`` as for :func:`read_las`).
+
+    Parameters
+    ----------
+    point_format : laspy.PointFormat
+    dimensions : sequence of str, optional
+        The dimensions kept; default all.
+
+    Returns
+    -------
+    int
+        Bytes per point.
+    """
+    return _kept(point_format, dimensions).bytes_per_point
+
+
+def read_las(path: Path, classes: Sequence[int] | None = None, dimensions: Sequence[str] | None = None) -> dict:
+    """The arrays of a :class:`~hht3d.geometry.surface.Surface` from a LAS or LAZ file, read in chunks
+    of :data:`CHUNK_POINTS`.
+
+    Memory: :func:`bytes_per_point` per point, 8 bytes for each coordinate and kept dimension and 32
+    for the colours with their luminance: 160 bytes for point format 3 in full, 40 with
+    ``dimensions=["intensity", "classification"]``; plus one chunk's records and temporaries (about 60
+    bytes per point of a chunk of 10⁶ points).  The arrays are allocated for the points the header
+    declares; those ``classes`` leaves out are never touched and are given back.
+
+    Parameters
+    ----------
+    path : Path
+        A ``.las`` or ``.laz`` file.
+    classes : sequence of int, optional
+        Keep only the points of these classification codes.
+    dimensions : sequence of str, optional
+        Keep only these dimensions as attributes, by their LAS or attribute names (``echo width`` or
+        ``echo_width``); ``luminance`` keeps the colours.  Default: every scalar dimension and the colours.
+
+    Returns
+    -------
+    dict
+        ``vertices``, ``faces`` (None), ``attributes``, ``origin``, ``header`` (a :class:`LasSource`) and
+        ``colors`` when kept: the keyword arguments of a point-cloud surface.
+
+    Raises
+    ------
+    InputError
+        laspy (or lazrs for LAZ) missing, not a LAS file, a dimension the file does not have, a header
+        declaring more points than the file holds or memory can take, no points, or fewer than 4 left
+        by ``classes``.
     """
     from ..linalg.estimate import available_memory
 
@@ -107,6 +176,10 @@ def read_las(path: Path, classes: Sequence[int] | None = None) -> dict:
     with reader:
         header = reader.header
         count, point_format = int(header.point_count), header.point_format
+        try:
+            selection = _kept(point_format, dimensions)
+        except InputError as exc:
+            raise InputError(f"{short(path)}: {exc}") from None
         if count == 0:
             raise InputError(f"{short(path)}: the file holds no points")
         size = path.stat().st_size
@@ -115,14 +188,14 @@ def read_las(path: Path, classes: Sequence[int] | None = None) -> dict:
                 f"{short(path)}: the header declares {count:,} points of {point_format.size} bytes, more than "
                 f"its {size:,} bytes hold: the file is truncated or its header is wrong"
             )
-        need, memory = count * bytes_per_point(point_format), available_memory()
+        need, memory = count * selection.bytes_per_point, available_memory()
         if memory is not None and need > memory:
             raise InputError(
                 f"{short(path)}: {count:,} points need {need / 2**30:.1f} GiB to read; "
                 f"{memory / 2**30:.1f} GiB are available"
             )
         try:
-            data = _read_points(reader, count, classes)
+            data = _read_points(reader, count, classes, selection)
         except InputError:
             raise
         except Exception as exc:  # lazrs and laspy raise their own types on corrupt point data
@@ -136,14 +209,12 @@ def read_las(path: Path, classes: Sequence[int] | None = None) -> dict:
     return data
 
 
-def _read_points(reader: Any, count: int, classes: Sequence[int] | None) -> dict:
+def _read_points(reader: Any, count: int, classes: Sequence[int] | None, kept: _Kept) -> dict:
     """Decode the points chunk by chunk straight into the kept arrays (each written once, in place)."""
     header = reader.header
-    names = _attribute_dimensions(header.point_format)
-    has_rgb = "red" in header.point_format.dimension_names
     xyz = np.empty((count, 3))
-    columns = {name: np.empty(count) for name in names}
-    rgb = np.empty((count, 3)) if has_rgb else None
+    columns = {name: np.empty(count) for name in kept.dimensions}
+    rgb = np.empty((count, 3)) if kept.colours else None
     reference: np.ndarray | None = None
     seen = np.zeros(256, dtype=bool)
     filled = read = 0
@@ -161,7 +232,7 @@ def _read_points(reader: Any, count: int, classes: Sequence[int] | None) -> dict
             end = filled + (len(chunk) if classes is None else int(np.count_nonzero(keep)))
             part = slice(filled, end)
             jobs = [partial(_coordinates, xyz[part], ints[keep], reference, header.scales)]
-            jobs += [partial(_copy, columns[name][part], chunk[name], keep) for name in names]
+            jobs += [partial(_copy, columns[name][part], chunk[name], keep) for name in columns]
             if rgb is not None:
                 jobs.append(partial(_copy, rgb[part], structured_to_unstructured(chunk.array[_RGB]), keep))
             for _ in pool.map(lambda job: job(), jobs):  # numpy releases the GIL: the columns fill in parallel
