@@ -195,6 +195,25 @@ def test_a_pipeline_keeps_the_dimensions_it_names(tmp_path):
         )
 
 
+def test_a_result_saved_as_npz_keeps_the_scan_origin(tmp_path):
+    """A LAS scan 10⁶ m from its datum: its .npz result read back (load_result, and the viewer's
+    read_fields) lies where laspy reads the scan, and is written back there."""
+    from hht3d.results import load_result
+    from hht3d.viz.saved import read_fields
+
+    original = scan(tmp_path / "scan.las", n=400)
+    surface = load(tmp_path / "scan.las", clean=False)
+    result = hht(surface, signal(surface, "stored", attribute="intensity"), max_imfs=1)
+    path = result.save(tmp_path / "scan_hht.npz")
+    again = load_result(path)
+    np.testing.assert_array_equal(again.surface.origin, surface.origin)
+    written = laspy.read(str(write_las(tmp_path / "again.las", again.surface)))  # a new header: its own scale
+    np.testing.assert_allclose(written.xyz, original.xyz, rtol=0, atol=0.001)
+    shown, fields, _ = read_fields(path)
+    np.testing.assert_allclose(shown.vertices + shown.origin, original.xyz, rtol=0, atol=1e-6)
+    assert "origin" not in fields
+
+
 def test_a_pipeline_filters_classes_reads_intensity_and_writes_imfs_as_extra_bytes(tmp_path):
     original = scan(tmp_path / "scan.laz", n=700)
     text = textwrap.dedent(f"""\
