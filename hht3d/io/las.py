@@ -9,7 +9,8 @@ Every scalar per-point dimension becomes a stored attribute (:func:`~hht3d.io.fo
 of its name): ``intensity``, ``classification``, ``return_number``, ``gps_time``, ..., every
 extra-bytes dimension, and ``luminance`` (Rec. 709) beside the colours of RGB formats; the load option
 ``dimensions`` keeps only those it names (``luminance`` for the colours), for less memory per point
-(:func:`bytes_per_point`).  Array-valued extra-bytes dimensions are not read.
+(:func:`bytes_per_point`) and, in a LAZ of point format 6-10, only their layers decoded.  Array-valued
+extra-bytes dimensions are not read.
 
 Speed: LAZ is decoded by lazrs's parallel decompressor, and each decoded chunk converted to the columns
 by one thread per CPU.  No reader outruns its decoder: on the shared 2-core machine laspy and lazrs
@@ -47,6 +48,27 @@ CHUNK_POINTS = 1_000_000
 _RGB = ["red", "green", "blue"]
 _GEOMETRY = ("X", "Y", "Z", *_RGB)
 _LUMA = np.array([0.2126, 0.7152, 0.0722])
+#: The layer of each dimension of a LAZ of point format 6-10, which lazrs can leave undecoded (laspy's
+#: ``DecompressionSelection``); x, y, the returns and the scanner channel are always decoded.
+_LAYERS = {
+    "Z": "Z",
+    "intensity": "INTENSITY",
+    "classification": "CLASSIFICATION",
+    **dict.fromkeys(
+        ("synthetic", "key_point", "withheld", "overlap", "scan_direction_flag", "edge_of_flight_line"), "FLAGS"
+    ),
+    "user_data": "USER_DATA",
+    "scan_angle": "SCAN_ANGLE",
+    "point_source_id": "POINT_SOURCE_ID",
+    "gps_time": "GPS_TIME",
+    "red": "RGB",
+    "nir": "NIR",
+    **dict.fromkeys(
+        ("wavepacket_index", "wavepacket_offset", "wavepacket_size", "return_point_wave_location", "x_t", "y_t", "z_t"),
+        "WAVEPACKET",
+    ),
+}
+_ALWAYS_DECODED = ("X", "Y", "return_number", "number_of_returns", "scanner_channel")
 #: Extra-bytes names hold at most 32 bytes.
 _MAX_EXTRA_NAME = 32
 
@@ -121,6 +143,20 @@ def _kept(point_format: Any, dimensions: Sequence[str] | None) -> _Kept:
     return _Kept([name for name in names if name in wanted], colours)
 
 
+def _layers(laspy: ModuleType, point_format: Any, decoded: Sequence[str]) -> Any:
+    """The LAZ layers that hold the dimensions ``decoded`` (laspy ignores them below point format 6)."""
+    selection = laspy.DecompressionSelection.base()
+    extra = set(point_format.extra_dimension_names)
+    for name in decoded:
+        if name in extra:
+            selection |= laspy.DecompressionSelection.ALL_EXTRA_BYTES
+        elif name in _LAYERS:
+            selection |= laspy.DecompressionSelection[_LAYERS[name]]
+        elif name not in _ALWAYS_DECODED:  # a dimension of a later LAS version: decode everything
+            return laspy.DecompressionSelection.all()
+    return selection
+
+
 def bytes_per_point(point_format: Any, dimensions: Sequence[str] | None = None) -> int:
     """Memory one kept point takes once read: float64 coordinates, the kept dimensions, and the colours
     and luminance when kept (``dimensions`` as for :func:`read_las`).
@@ -183,7 +219,7 @@ def read_las(path: Path, classes: Sequence[int] | None = None, dimensions: Seque
         header = reader.header
         count, point_format = int(header.point_count), header.point_format
         try:
-            selection = _kept(point_format, dimensions)
+            wanted = _kept(point_format, dimensions)
         except InputError as exc:
             raise InputError(f"{short(path)}: {exc}") from None
         if count == 0:
@@ -194,14 +230,22 @@ def read_las(path: Path, classes: Sequence[int] | None = None, dimensions: Seque
                 f"{short(path)}: the header declares {count:,} points of {point_format.size} bytes, more than "
                 f"its {size:,} bytes hold: the file is truncated or its header is wrong"
             )
-        need, memory = count * selection.bytes_per_point, available_memory()
+        need, memory = count * wanted.bytes_per_point, available_memory()
         if memory is not None and need > memory:
             raise InputError(
                 f"{short(path)}: {count:,} points need {need / 2**30:.1f} GiB to read; "
                 f"{memory / 2**30:.1f} GiB are available"
             )
+        decoded = [
+            "Z",
+            *wanted.dimensions,
+            *(["red"] if wanted.colours else []),
+            *([] if classes is None else ["classification"]),
+        ]
+        # the layers to decode, set before the first read makes the decompressor
+        reader.decompression_selection = _layers(laspy, point_format, decoded)
         try:
-            data = _read_points(reader, count, classes, selection)
+            data = _read_points(reader, count, classes, wanted)
         except InputError:
             raise
         except Exception as exc:  # lazrs and laspy raise their own types on corrupt point data
@@ -274,6 +318,7 @@ def _coordinates(out: np.ndarray, ints: np.ndarray, reference: np.ndarray, scale
 
 
 def _copy(out: np.ndarray, values: Any, keep: Any) -> None:
+    """A chunk's ``values`` at ``keep`` into ``out`` (converted to its type)."""
     out[...] = np.asarray(values)[keep]
 
 

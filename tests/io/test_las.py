@@ -147,6 +147,47 @@ def test_a_subset_of_dimensions_with_the_classes_filter_keeps_what_laspy_reads(t
     assert not np.any(written.gps_time) and not np.any(written.red)
 
 
+def test_a_subset_of_a_las_1_4_laz_decodes_only_its_layers_and_reads_what_laspy_reads(tmp_path, monkeypatch):
+    """Point format 8 (RGB and NIR) and an extra-bytes dimension, every dimension random: each one read
+    alone, lazrs decoding only its layer (and x, y, z), equals laspy's full read; so do a subset with the
+    classes filter (which decodes the classification too)."""
+    rng = np.random.default_rng(2)
+    n = 600
+    header = laspy.LasHeader(point_format=8, version="1.4")
+    header.offsets, header.scales = OFFSETS, np.full(3, 0.001)
+    header.add_extra_dims([laspy.ExtraBytesParams("echo width", type=np.float32)])
+    data = laspy.LasData(header)
+    data.x, data.y, data.z = (OFFSETS[:, None] + rng.uniform(0, 10, (3, n))).astype(np.float64)
+    for dimension in data.point_format.dimensions:
+        if dimension.name not in ("X", "Y", "Z"):
+            kind = np.dtype(dimension.dtype or np.uint8)  # bit fields: small unsigned integers
+            values = rng.uniform(0, 1, n) if kind.kind == "f" else rng.integers(1, 2 ** min(dimension.num_bits, 15), n)
+            data[dimension.name] = values.astype(kind)
+    data.classification = rng.choice([2, 6], n).astype(np.uint8)
+    data.write(str(tmp_path / "scan.laz"))
+    original = laspy.read(str(tmp_path / "scan.laz"))
+    opened = _spy_on_open(monkeypatch)
+    selection = laspy.DecompressionSelection
+    full = load(tmp_path / "scan.laz", clean=False)
+    assert opened[-1][0].decompression_selection == selection.all() & ~selection.WAVEPACKET  # format 8's layers
+    for name in full.attributes:
+        surface = load(tmp_path / "scan.laz", clean=False, dimensions=[name])
+        if name == "luminance":
+            np.testing.assert_array_equal(surface.colors, full.colors)
+        else:
+            dimension = "echo width" if name == "echo_width" else name
+            np.testing.assert_array_equal(surface.attributes[name], np.asarray(original[dimension]), err_msg=name)
+        np.testing.assert_array_equal(_local_integers(surface), np.column_stack([original.X, original.Y, original.Z]))
+    assert opened[-1][0].decompression_selection == selection.base() | selection.Z | selection.RGB  # luminance
+    ground = np.asarray(original.classification) == 2
+    surface = load(tmp_path / "scan.laz", clean=False, classes=[2], dimensions=["gps_time", "echo width"])
+    assert opened[-1][0].decompression_selection == (
+        selection.base() | selection.Z | selection.GPS_TIME | selection.ALL_EXTRA_BYTES | selection.CLASSIFICATION
+    )
+    np.testing.assert_array_equal(surface.attributes["gps_time"], np.asarray(original.gps_time)[ground])
+    np.testing.assert_array_equal(surface.attributes["echo_width"], np.asarray(original["echo width"])[ground])
+
+
 def test_bytes_per_point_is_the_memory_of_the_kept_arrays(tmp_path):
     original = scan(tmp_path / "scan.las")
     point_format = original.point_format  # format 3 and one extra-bytes dimension: 14 scalars and RGB
