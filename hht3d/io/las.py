@@ -93,8 +93,8 @@ def _laspy(compressed: bool = False) -> ModuleType:
 
 
 def _laz_backends(laspy: ModuleType) -> tuple:
-    """The LAZ decompressors available, fastest first: lazrs's parallel one decoded 2.0x as fast as its
-    single-threaded one on 2 cores and 1.2x on one (``benchmarks/bench_las.py``)."""
+    """The LAZ decompressors available, fastest first: lazrs's parallel one decoded 1.9-2.0x as fast as
+    its single-threaded one on 2 cores and 1.2x on one (``benchmarks/bench_las.py``)."""
     order = (laspy.LazBackend.LazrsParallel, laspy.LazBackend.Lazrs, laspy.LazBackend.Laszip)
     return tuple(backend for backend in order if backend.is_available())
 
@@ -260,7 +260,7 @@ def read_las(path: Path, classes: Sequence[int] | None = None, dimensions: Seque
 
 
 def _read_points(reader: Any, count: int, classes: Sequence[int] | None, kept: _Kept) -> dict:
-    """Decode the points chunk by chunk straight into the kept arrays (each written once, in place)."""
+    """Decode the points chunk by chunk straight into the kept arrays, a chunk's columns filled in parallel."""
     header = reader.header
     xyz = np.empty((count, 3))
     columns = {name: np.empty(count) for name in kept.dimensions}
