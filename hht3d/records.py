@@ -43,8 +43,8 @@ R = TypeVar("R", bound="Record")
 
 __all__ = ["Spec", "Record", "option", "route", "renamed_keywords"]
 
-#: Kinds of settings (``ints``: a list of integers, each in the range).
-KINDS = ("int", "float", "bool", "str", "choice", "ints")
+#: Kinds of settings (``ints``: a list of integers, each in the range; ``strs``: a list of names).
+KINDS = ("int", "float", "bool", "str", "choice", "ints", "strs")
 
 
 @dataclass(frozen=True)
@@ -90,6 +90,7 @@ class Spec:
                 "bool": "true or false",
                 "str": "a string",
                 "ints": "a list of integers",
+                "strs": "a list of names",
             }[self.kind] + self.range_text()
         return text + (f" or {null}" if self.nullable and null else "")
 
@@ -103,6 +104,8 @@ class Spec:
             return isinstance(value, bool)
         if self.kind == "str":
             return isinstance(value, str)
+        if self.kind == "strs":
+            return isinstance(value, (list, tuple)) and bool(value) and all(isinstance(v, str) and v for v in value)
         if self.kind == "ints":
             return (
                 isinstance(value, (list, tuple)) and bool(value) and all(_is_int(v) and self.in_range(v) for v in value)
@@ -188,9 +191,11 @@ def _is_int(value: Any) -> bool:
 
 
 def _converted(spec: Spec, value: Any) -> Any:
-    """A valid value with ints as ``int``, numbers as ``float`` and lists of integers as tuples."""
+    """A valid value with ints as ``int``, numbers as ``float`` and lists as tuples."""
     if spec.kind == "ints" and value is not None:
         return tuple(int(v) for v in value)
+    if spec.kind == "strs" and value is not None:
+        return tuple(value)
     if value is None or spec.kind not in ("int", "float"):
         return value
     return int(value) if spec.kind == "int" else float(value)

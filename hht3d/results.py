@@ -1,7 +1,7 @@
 """Reading back an HHT result saved by :meth:`HHTResult.save <hht3d.transform.HHTResult.save>`.
 
 The partner of ``result.save("x.npz")``: :func:`load_result` rebuilds the
-surface (vertices, faces, normals and Laplacian choice as saved), the IMFs,
+surface (vertices, faces, normals, Laplacian choice and origin as saved), the IMFs,
 the residue and the monogenic signal, so that its spectrum, quality figures,
 figures and pages equal those of the result that was saved.
 """
@@ -76,6 +76,7 @@ def load_result(path: Path | str, *, storage_options: dict | None = None) -> HHT
         laplacian=str(arrays["laplacian"]),
         n_neighbors=int(arrays["n_neighbors"]),
         name=storage.stem(path),
+        origin=arrays.get("origin"),  # absent from files saved before it was stored: the origin 0
     )
     mono = MonogenicSignal(
         imfs=arrays["imfs"],

@@ -6,6 +6,7 @@ import pytest
 
 from hht3d import InputError, emd
 from hht3d.decomposition import PAPER_OPTIONS, EMDOptions, EnsembleOptions
+from hht3d.io import LoadOptions
 from hht3d.spectral import RieszOptions
 
 
@@ -28,6 +29,11 @@ from hht3d.spectral import RieszOptions
         (RieszOptions, "tol", 1e-13, True),
         (RieszOptions, "tol", 1e-14, False),
         (EnsembleOptions, "ensemble_size", 0, False),
+        (LoadOptions, "dimensions", ("intensity", "echo width"), True),  # a non-empty list of names
+        (LoadOptions, "dimensions", (), False),
+        (LoadOptions, "dimensions", "intensity", False),
+        (LoadOptions, "dimensions", ("intensity", 2), False),
+        (LoadOptions, "dimensions", ("",), False),
     ],
 )
 def test_ranges_hold_at_their_ends(record, name, value, valid):
@@ -42,6 +48,7 @@ def test_record_dict_and_overrides_give_one_record():
     from_dict = EMDOptions.of({"max_imfs": 3, "tension": 1.0})
     assert from_dict == EMDOptions(max_imfs=3, tension=1.0)
     assert EMDOptions.of(from_dict, max_imfs=4) == EMDOptions(max_imfs=4, tension=1.0)
+    assert LoadOptions.of({"dimensions": ["intensity"]}) == LoadOptions(dimensions=("intensity",))  # lists: tuples
     assert dataclasses.replace(PAPER_OPTIONS, max_imfs=2).envelope == "biharmonic"
     with pytest.raises(InputError, match="did you mean 'max_imfs'"):
         EMDOptions.of(max_imf=3)

@@ -33,3 +33,17 @@ def test_load_result_names_the_arrays_a_file_lacks(tmp_path):
     np.savez(tmp_path / "x.npz", vertices=np.zeros((3, 3)), signal=np.zeros(3))
     with pytest.raises(InputError, match="no normals, laplacian, n_neighbors, imfs, .*, area; expected a file"):
         load_result(tmp_path / "x.npz")
+
+
+def test_a_result_saved_without_its_origin_reads_back_at_the_origin(tmp_path):
+    """Files of HHTResult.save from before the origin was stored read back with the origin 0."""
+    from hht3d import data_path, hht, load, load_result
+    from hht3d.geometry.signals import mean_curvature
+
+    spot = load(data_path("spot.ply"))
+    spot.origin = np.array([5e5, 5.4e6, 0.0])
+    arrays = dict(np.load(hht(spot, mean_curvature(spot), max_imfs=1).save(tmp_path / "new.npz")))
+    np.testing.assert_array_equal(load_result(tmp_path / "new.npz").surface.origin, spot.origin)
+    del arrays["origin"]
+    np.savez(tmp_path / "old.npz", **arrays)
+    np.testing.assert_array_equal(load_result(tmp_path / "old.npz").surface.origin, np.zeros(3))

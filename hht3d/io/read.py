@@ -91,6 +91,11 @@ class LoadOptions(SurfaceOptions):
         minimum=0,
         maximum=255,
     )
+    dimensions: tuple[str, ...] | None = option(
+        None,
+        "LAS/LAZ: keep only these dimensions as attributes (default all; luminance keeps the colours)",
+        kind="strs",
+    )
     scan: int | None = option(
         None,
         "E57: read this scan (0-based); default all, merged with their poses",
@@ -121,7 +126,8 @@ def load(
         unreferenced vertices (:mod:`hht3d.geometry.cleaning`; the report is in
         ``surface.clean_report``); ``laplacian`` and ``n_neighbors``: passed to
         :class:`~hht3d.geometry.surface.Surface`; ``classes``: the classification codes of the
-        LAS/LAZ points kept; ``scan``: the E57 scan read (default all).
+        LAS/LAZ points kept; ``dimensions``: the LAS/LAZ dimensions kept as attributes (default all);
+        ``scan``: the E57 scan read (default all).
     name : str, optional
         Defaults to the file stem.
     storage_options : dict, optional
@@ -153,11 +159,11 @@ def load(
     check_extension(path)
     check_declared(path)
     ext = path.suffix.lower()
-    for setting, suffixes in (("classes", LAS_EXTENSIONS), ("scan", (".e57",))):
+    for setting, suffixes in (("classes", LAS_EXTENSIONS), ("dimensions", LAS_EXTENSIONS), ("scan", (".e57",))):
         if getattr(options, setting) is not None and ext not in suffixes:
             raise InputError(f"{short(path)}: load option {setting} is for {', '.join(suffixes)} files; this is {ext}")
     if ext in LAS_EXTENSIONS:
-        data = read_las(path, options.classes)
+        data = read_las(path, options.classes, options.dimensions)
     elif ext == ".e57":
         data = read_e57(path, options.scan)
     elif ext == ".ply":

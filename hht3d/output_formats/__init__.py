@@ -3,16 +3,17 @@
 ==========  ==========================================================================
 kind        formats
 ==========  ==========================================================================
-hht         ``ply`` (mesh + every field as a vertex property), ``npz`` (every array),
-            ``colored_ply`` (one field as vertex colours), ``png`` (figure: the
-            paper's Fig. 4 layout, the Hilbert spectrum, or one field), ``html``
-            (interactive page of every field, the spectrum and the quality figures)
+hht         ``ply`` (mesh + every field as a vertex property), ``npz`` (every array
+            and the origin), ``colored_ply`` (one field as vertex colours), ``png``
+            (figure: the paper's Fig. 4 layout, the Hilbert spectrum, or one field),
+            ``html`` (interactive page of every field, the spectrum and the quality
+            figures)
 emd         ``npz`` (imfs, residue), ``ply`` (imf_K and residue as vertex properties)
 signal      ``npz``, ``colored_ply``, ``png``
 surface     ``ply``, ``png`` (shaded), ``html`` (interactive page; a filtered or
             reconstructed surface beside the one it was made from)
 features    ``ply`` (the surface with ``feature_count`` and ``feature``, features red),
-            ``npz`` (vertices, counts, points, vertex_counts, min_count)
+            ``npz`` (vertices, counts, points, vertex_counts, min_count, origin)
 every kind  ``las``, ``laz`` (the points, a LAS input's dimensions, the fields as
             extra bytes; ``lidar`` extra), ``vtu`` (``meshio`` extra), ``vtp``: the
             surface with every field (:mod:`hht3d.output_formats.points`)
@@ -91,7 +92,8 @@ def _hht_ply(result: HHTResult, surface: Surface, path: Path | str) -> Path:
 
 
 def _hht_npz(result: HHTResult, surface: Surface, path: Path | str) -> Path:
-    return write_npz(path, result.arrays())
+    # the vertices are local: the origin puts them back in the file's frame (a LAS scan's datum)
+    return write_npz(path, {**result.arrays(), "origin": result.surface.origin})
 
 
 def _hht_colored(result: HHTResult, surface: Surface, path: Path | str, *, field: str, cmap: str) -> Path:
@@ -193,6 +195,7 @@ def _features_npz(features: Any, surface: Surface, path: Path | str) -> Path:
             "vertices": features.vertices,
             "counts": features.counts,
             "points": features.points,
+            "origin": surface.origin,
             "vertex_counts": features.vertex_counts,
             "min_count": features.min_count,
         },
@@ -256,7 +259,7 @@ FORMATS: dict[str, dict[str, Format]] = {
             Format(
                 "ply", ".ply", "the surface with feature_count and feature properties, features in red", _features_ply
             ),
-            Format("npz", ".npz", "feature vertices, counts, points and per-vertex counts", _features_npz),
+            Format("npz", ".npz", "feature vertices, counts, points, per-vertex counts and the origin", _features_npz),
         )
     },
 }

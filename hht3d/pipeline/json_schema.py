@@ -41,7 +41,7 @@ from .validation import EXECUTION, MAX_ID, VERSION, builtin_models
 
 __all__ = ["pipeline_schema", "schema_text", "param_schema"]
 
-_TYPES = {"int": "integer", "float": "number", "bool": "boolean", "str": "string", "ints": "array"}
+_TYPES = {"int": "integer", "float": "number", "bool": "boolean", "str": "string", "ints": "array", "strs": "array"}
 
 
 def param_schema(param: Param) -> dict:
@@ -59,6 +59,9 @@ def param_schema(param: Param) -> dict:
     numbers = schema
     if param.kind == "ints":  # the range holds for each item
         numbers = schema["items"] = {"type": "integer"}
+        schema["minItems"] = 1
+    elif param.kind == "strs":
+        schema["items"] = {"type": "string", "minLength": 1}
         schema["minItems"] = 1
     for bound, key in ((param.minimum, "minimum"), (param.maximum, "maximum")):
         if bound is not None:

@@ -62,7 +62,9 @@ def read_fields(path: Path | str) -> tuple[Surface, dict, np.ndarray | None]:
     if "vertices" not in arrays:
         raise InputError(f"{path}: no 'vertices' array; expected a file written by HHTResult.save")
     try:
-        surface = Surface(arrays.pop("vertices"), arrays.pop("faces", None), name=path.stem)
+        surface = Surface(
+            arrays.pop("vertices"), arrays.pop("faces", None), name=path.stem, origin=arrays.pop("origin", None)
+        )
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
     n = surface.n_vertices

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from hht3d import hht, load
-from hht3d.errors import InputError
+from hht3d.errors import InputError, PipelineError
 from hht3d.geometry.signals import signal
 from hht3d.io import las as las_module
 from hht3d.io import write_las
@@ -84,6 +84,175 @@ def test_chunks_and_the_classes_filter_read_what_laspy_reads(tmp_path, monkeypat
         np.column_stack([original.X, original.Y, original.Z])[ground],
     )
     assert load(tmp_path / "scan.laz", clean=False, classes=[2, 6]).n_vertices == len(original.points)
+
+
+def _spy_on_open(monkeypatch):
+    """The readers laspy.open gives hht3d, and the LAZ backends it was asked for."""
+    opened = []
+    real = laspy.open
+
+    def spy(*args, **kwargs):
+        reader = real(*args, **kwargs)
+        opened.append((reader, kwargs.get("laz_backend")))
+        return reader
+
+    monkeypatch.setattr(laspy, "open", spy)
+    return opened
+
+
+def _local_integers(surface):
+    return np.round((surface.vertices + surface.origin - OFFSETS) / 0.001)
+
+
+def test_the_parallel_decompressor_reads_in_chunks_what_laspy_reads(tmp_path, monkeypatch):
+    """120,000 points: three of lazrs's 50,000-point chunks, read in 7,001-point pieces (none aligned)
+    by the parallel decompressor; the oracle is laspy's single-threaded read."""
+    scan(tmp_path / "scan.laz", n=120_000)
+    original = laspy.read(str(tmp_path / "scan.laz"), laz_backend=laspy.LazBackend.Lazrs)
+    monkeypatch.setattr(las_module, "CHUNK_POINTS", 7_001)
+    opened = _spy_on_open(monkeypatch)
+    surface = load(tmp_path / "scan.laz", clean=False)
+    ((reader, backends),) = opened
+    assert backends[0] == laspy.LazBackend.LazrsParallel
+    assert type(reader.point_source.decompressor).__name__ == "ParLasZipDecompressor"
+    np.testing.assert_array_equal(_local_integers(surface), np.column_stack([original.X, original.Y, original.Z]))
+    for name in las_module._attribute_dimensions(original.point_format):
+        values = surface.attributes[name.replace(" ", "_")]
+        np.testing.assert_array_equal(values, np.asarray(original[name]), err_msg=name)
+    rgb = np.column_stack([original.red, original.green, original.blue])
+    np.testing.assert_array_equal(surface.colors, rgb / 65535)
+
+
+def test_a_subset_of_dimensions_with_the_classes_filter_keeps_what_laspy_reads(tmp_path, monkeypatch):
+    monkeypatch.setattr(las_module, "CHUNK_POINTS", 128)  # 900 points: 8 chunks, each with both classes
+    original = scan(tmp_path / "scan.laz")
+    building = np.asarray(original.classification) == 6
+    surface = load(tmp_path / "scan.laz", clean=False, classes=[6], dimensions=["echo width", "gps_time", "luminance"])
+    assert sorted(surface.attributes) == ["echo_width", "gps_time", "luminance"]
+    assert surface.n_vertices == building.sum() > 0
+    integers = np.column_stack([original.X, original.Y, original.Z])[building]
+    np.testing.assert_array_equal(_local_integers(surface), integers)
+    np.testing.assert_array_equal(surface.attributes["echo_width"], np.asarray(original["echo width"])[building])
+    np.testing.assert_array_equal(surface.attributes["gps_time"], np.asarray(original.gps_time)[building])
+    rgb = np.column_stack([original.red, original.green, original.blue])[building] / 65535
+    np.testing.assert_array_equal(surface.colors, rgb)
+    np.testing.assert_allclose(surface.attributes["luminance"], rgb @ [0.2126, 0.7152, 0.0722], rtol=1e-12)
+
+    # without luminance the colours are not read; written back, the dimensions not kept are 0
+    surface = load(tmp_path / "scan.laz", clean=False, classes=[6], dimensions=["intensity"])
+    assert list(surface.attributes) == ["intensity"] and surface.colors is None
+    written = laspy.read(str(write_las(tmp_path / "back.laz", surface)))
+    np.testing.assert_array_equal(written.X, np.asarray(original.X)[building])
+    np.testing.assert_array_equal(written.intensity, np.asarray(original.intensity)[building])
+    assert not np.any(written.gps_time) and not np.any(written.red)
+
+
+def test_a_subset_of_a_las_1_4_laz_decodes_only_its_layers_and_reads_what_laspy_reads(tmp_path, monkeypatch):
+    """Point format 8 (RGB and NIR) and an extra-bytes dimension, every dimension random: each one read
+    alone, lazrs decoding only its layer (and x, y, z), equals laspy's full read; so do a subset with the
+    classes filter (which decodes the classification too)."""
+    rng = np.random.default_rng(2)
+    n = 600
+    header = laspy.LasHeader(point_format=8, version="1.4")
+    header.offsets, header.scales = OFFSETS, np.full(3, 0.001)
+    header.add_extra_dims([laspy.ExtraBytesParams("echo width", type=np.float32)])
+    data = laspy.LasData(header)
+    data.x, data.y, data.z = (OFFSETS[:, None] + rng.uniform(0, 10, (3, n))).astype(np.float64)
+    for dimension in data.point_format.dimensions:
+        if dimension.name not in ("X", "Y", "Z"):
+            kind = np.dtype(dimension.dtype or np.uint8)  # bit fields: small unsigned integers
+            values = rng.uniform(0, 1, n) if kind.kind == "f" else rng.integers(1, 2 ** min(dimension.num_bits, 15), n)
+            data[dimension.name] = values.astype(kind)
+    data.classification = rng.choice([2, 6], n).astype(np.uint8)
+    data.write(str(tmp_path / "scan.laz"))
+    original = laspy.read(str(tmp_path / "scan.laz"))
+    opened = _spy_on_open(monkeypatch)
+    selection = laspy.DecompressionSelection
+    full = load(tmp_path / "scan.laz", clean=False)
+    assert opened[-1][0].decompression_selection == selection.all() & ~selection.WAVEPACKET  # format 8's layers
+    for name in full.attributes:
+        surface = load(tmp_path / "scan.laz", clean=False, dimensions=[name])
+        if name == "luminance":
+            np.testing.assert_array_equal(surface.colors, full.colors)
+        else:
+            dimension = "echo width" if name == "echo_width" else name
+            np.testing.assert_array_equal(surface.attributes[name], np.asarray(original[dimension]), err_msg=name)
+        np.testing.assert_array_equal(_local_integers(surface), np.column_stack([original.X, original.Y, original.Z]))
+    assert opened[-1][0].decompression_selection == selection.base() | selection.Z | selection.RGB  # luminance
+    ground = np.asarray(original.classification) == 2
+    surface = load(tmp_path / "scan.laz", clean=False, classes=[2], dimensions=["gps_time", "echo width"])
+    assert opened[-1][0].decompression_selection == (
+        selection.base() | selection.Z | selection.GPS_TIME | selection.ALL_EXTRA_BYTES | selection.CLASSIFICATION
+    )
+    np.testing.assert_array_equal(surface.attributes["gps_time"], np.asarray(original.gps_time)[ground])
+    np.testing.assert_array_equal(surface.attributes["echo_width"], np.asarray(original["echo width"])[ground])
+
+
+def test_bytes_per_point_is_the_memory_of_the_kept_arrays(tmp_path):
+    original = scan(tmp_path / "scan.las")
+    point_format = original.point_format  # format 3 and one extra-bytes dimension: 14 scalars and RGB
+    for dimensions, expected in ((None, 8 * (3 + 14 + 4)), (["intensity", "classification"], 8 * 5)):
+        data = las_module.read_las(tmp_path / "scan.las", dimensions=dimensions)
+        kept = [data["vertices"], *data["attributes"].values(), *([data["colors"]] if "colors" in data else [])]
+        assert sum(a.nbytes for a in kept) / 900 == las_module.bytes_per_point(point_format, dimensions) == expected
+
+
+def test_a_pipeline_keeps_the_dimensions_it_names(tmp_path):
+    scan(tmp_path / "scan.laz", n=300)
+
+    def run(dimensions):
+        text = textwrap.dedent(f"""\
+            version: 1
+            execution: {{scheduler: synchronous, progress: false}}
+            inputs: {tmp_path / "scan.laz"}
+            steps:
+              - {{id: load, op: load, params: {{dimensions: {dimensions}, clean: false}}}}
+              - {{id: intensity, op: signal, params: {{kind: stored, attribute: intensity}}}}
+            outputs:
+              folder: {tmp_path / "out"}
+              files:
+                - {{from: load, path: "{{stem}}.ply"}}
+            """)
+        (row,) = run_pipeline(parse_pipeline(text))
+        return row
+
+    row = run("[intensity, classification]")
+    assert row.status == "ok", row.error
+    assert sorted(load(tmp_path / "out" / "scan.ply", clean=False).attributes) == ["classification", "intensity"]
+    row = run("[intensity, nir]")
+    assert row.status == "failed" and "\n" not in row.error
+    assert row.error.endswith(
+        "scan.laz: no dimension 'nir' in point format 3; its dimensions: intensity, return_number, "
+        "number_of_returns, scan_direction_flag, edge_of_flight_line, classification, synthetic, key_point, "
+        "withheld, scan_angle_rank, user_data, point_source_id, gps_time, echo_width, luminance"
+    )
+    with pytest.raises(PipelineError, match="parameter dimensions must be a list of names; got 'intensity'"):
+        parse_pipeline(
+            textwrap.dedent(f"""\
+            version: 1
+            inputs: {tmp_path / "scan.laz"}
+            steps: [{{id: load, op: load, params: {{dimensions: intensity}}}}]
+            """)
+        )
+
+
+def test_a_result_saved_as_npz_keeps_the_scan_origin(tmp_path):
+    """A LAS scan 10⁶ m from its datum: its .npz result read back (load_result, and the viewer's
+    read_fields) lies where laspy reads the scan, and is written back there."""
+    from hht3d.results import load_result
+    from hht3d.viz.saved import read_fields
+
+    original = scan(tmp_path / "scan.las", n=400)
+    surface = load(tmp_path / "scan.las", clean=False)
+    result = hht(surface, signal(surface, "stored", attribute="intensity"), max_imfs=1)
+    path = result.save(tmp_path / "scan_hht.npz")
+    again = load_result(path)
+    np.testing.assert_array_equal(again.surface.origin, surface.origin)
+    written = laspy.read(str(write_las(tmp_path / "again.las", again.surface)))  # a new header: its own scale
+    np.testing.assert_allclose(written.xyz, original.xyz, rtol=0, atol=0.001)
+    shown, fields, _ = read_fields(path)
+    np.testing.assert_allclose(shown.vertices + shown.origin, original.xyz, rtol=0, atol=1e-6)
+    assert "origin" not in fields
 
 
 def test_a_pipeline_filters_classes_reads_intensity_and_writes_imfs_as_extra_bytes(tmp_path):
@@ -160,10 +329,16 @@ def test_clear_errors(tmp_path, monkeypatch, sphere):
         load(tmp_path / "scan.las", classes=[9])
     with pytest.raises(InputError, match="classification codes"):
         load(tmp_path / "scan.las", classes=[256])
-    with pytest.raises(InputError, match="load option classes is for .las, .laz files; this is .ply"):
-        from hht3d.io import write_ply
+    from hht3d.io import write_ply
 
-        load(write_ply(tmp_path / "sphere.ply", sphere), classes=[2])
+    for setting, value in (("classes", [2]), ("dimensions", ["intensity"])):
+        with pytest.raises(InputError, match=f"load option {setting} is for .las, .laz files; this is .ply"):
+            load(write_ply(tmp_path / "sphere.ply", sphere), **{setting: value})
+    plain = laspy.LasData(laspy.LasHeader(point_format=1, version="1.4"))  # no RGB: no luminance
+    plain.x, plain.y, plain.z = np.random.default_rng(1).uniform(0, 1, (3, 10))
+    plain.write(str(tmp_path / "plain.las"))
+    with pytest.raises(InputError, match=r"plain.las: no dimension 'luminance' in point format 1; .*gps_time$"):
+        load(tmp_path / "plain.las", dimensions=["intensity", "luminance"])
 
     empty = laspy.LasData(laspy.LasHeader(point_format=0, version="1.4"))
     empty.write(str(tmp_path / "empty.las"))
