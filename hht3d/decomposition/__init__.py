@@ -20,6 +20,7 @@ from .options import (
     FILTERS,
     GUARD_TENSIONS,
     METHODS,
+    MULTIRESOLUTION,
     PAPER_OPTIONS,
     STOPPING_RULES,
     EMDOptions,

@@ -3,12 +3,13 @@
 Data flow: :mod:`.shifts` and :mod:`.eigenpairs` → :mod:`.quadrature` →
 :mod:`.riesz_transform` (:func:`fractional_laplacian`, :func:`riesz`) →
 :mod:`.frequency` → :mod:`.monogenic_signal` (:func:`monogenic`) →
-:mod:`.spectrum`, with the settings in :mod:`.options`.
+:mod:`.spectrum`, with the settings in :mod:`.options`; :mod:`.multilevel` takes the Riesz
+transform of each IMF of iterative filtering on its level of the hierarchy.
 """
 
 from .eigenpairs import DENSE_MAX_VERTICES, dense_eigenpairs, smallest_eigenpairs, spectral_bounds
 from .frequency import instantaneous_frequency
-from .monogenic_signal import MonogenicSignal, monogenic, monogenic_from_potential
+from .monogenic_signal import MonogenicSignal, monogenic, monogenic_from_potential, monogenic_from_riesz
 from .options import (
     FREQUENCY_METHODS,
     GRADIENTS,
@@ -28,6 +29,7 @@ __all__ = [
     "vertex_gradient",
     "monogenic",
     "monogenic_from_potential",
+    "monogenic_from_riesz",
     "MonogenicSignal",
     "HilbertSpectrum",
     "RieszOptions",
