@@ -136,11 +136,15 @@ def apply_passband(
 
 
 class Filterer:
-    """Extracts IMFs one at a time from a residue by the filter of the module notes."""
+    """Extracts IMFs one at a time from a residue by the filter of the module notes; ``eligible``, if
+    given, masks the vertices that may be extrema (all by default)."""
 
-    def __init__(self, surface: Surface, options: EMDOptions, backend: str | None):
+    def __init__(
+        self, surface: Surface, options: EMDOptions, backend: str | None, eligible: np.ndarray | None = None
+    ):
         self.surface = surface
         self.options = options
+        self.eligible = eligible
         self.solver = EnvelopeSolver(surface, backend)
         self.mass = surface.mass_diagonal
         self.n_solves = 0
@@ -163,6 +167,8 @@ class Filterer:
         without both kinds of extrema) and the diagnostics; ``None`` when the residue has < 2 maxima or
         minima, or no fewer of either than the residue before the last IMF (the cut took nothing: a trend)."""
         is_max, is_min, passive = active_extrema(self.surface, residue, self.options)
+        if self.eligible is not None:
+            is_max, is_min = is_max & self.eligible, is_min & self.eligible
         counts = (int(is_max.sum()), int(is_min.sum()))
         if min(counts) < 2 or (counts[0] >= self.counts[0] and counts[1] >= self.counts[1]):
             return None

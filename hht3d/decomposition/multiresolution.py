@@ -20,19 +20,20 @@ to.  That share is measured: ``transfer_error`` of each IMF is
 
 Each level has its own :class:`~hht3d.decomposition.filtering.Filterer` (its own
 factorizations), and the cut comes from the extrema of the residue on its level.  On a coarse
-level an extremum must exceed its whole :data:`COARSE_RING`-ring: vertex clustering leaves
-vertices of degree 2 and 3 whose 1-ring misses a side, and the 1-ring rule found 31 maxima
-where the input has 14 (nefertiti, IMF 6's residue); the 2-ring finds 10-12, and the median
-opposite distance within 8% of the input's.  The trend stop compares residues on one level.
+level only vertices of degree :data:`COARSE_MIN_DEGREE` or more may be extrema: vertex
+clustering leaves vertices of degree 2 to 4 whose 1-ring misses a side, and with them the
+1-ring rule found 31 maxima where the input has 14 (nefertiti, IMF 6's residue).  Without
+them the median opposite distance of the direct residues on levels 1 and 2 is within 5% of the
+input's (IMFs 3-7 of nefertiti; a strict 2-ring gave 4-8% more, and 50-70% more on level 2's
+finer residues).  The trend stop compares residues on one level.
 Prolonging a residue back to the input to find its extrema there does not work: the
 interpolation's kinks are extrema too (the cut of IMF 7 rose threefold).  The
 IMFs on their levels are kept in ``EMDResult.levels`` for the Riesz transform of each IMF
-on its level (:func:`hht3d.spectral.multilevel.riesz_on_levels`).
+on its level (:func:`hht3d.spectral.multilevel.riesz_part`).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 
@@ -43,12 +44,12 @@ from ..geometry.surface import Surface
 from .filtering import Filterer
 from .options import EMDOptions
 
-__all__ = ["MultilevelFilterer", "COARSE_RING", "SPACING_LIMIT", "MULTIRESOLUTION_VERTICES", "uses_levels"]
+__all__ = ["MultilevelFilterer", "COARSE_MIN_DEGREE", "SPACING_LIMIT", "MULTIRESOLUTION_VERTICES", "uses_levels"]
 
 #: Largest ``ω_c h`` (radians) of the level a residue with cut ``ω_c`` moves to.
 SPACING_LIMIT = 0.5
-#: Extrema on a coarse level exceed all of their ``COARSE_RING``-ring (module notes).
-COARSE_RING = 2
+#: Extrema on a coarse level are vertices of at least this many neighbours (module notes).
+COARSE_MIN_DEGREE = 5
 #: ``multiresolution="auto"`` uses the hierarchy from this many vertices on.
 MULTIRESOLUTION_VERTICES = 200_000
 
@@ -75,10 +76,8 @@ class MultilevelFilterer:
         """The filterer of level ``index`` (made once)."""
         if index not in self.filterers:
             surface = self.hierarchy.levels[index].surface
-            options = self.options
-            if index > 0:
-                options = dataclasses.replace(options, extrema="relaxed", ring=COARSE_RING, ratio=1.0)
-            self.filterers[index] = Filterer(surface, options, self.backend)
+            eligible = np.diff(surface.adjacency.indptr) >= COARSE_MIN_DEGREE if index > 0 else None
+            self.filterers[index] = Filterer(surface, self.options, self.backend, eligible)
         return self.filterers[index]
 
     def imf(self, residue: np.ndarray) -> tuple[np.ndarray, dict] | None:
