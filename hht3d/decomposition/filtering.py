@@ -139,9 +139,7 @@ class Filterer:
     """Extracts IMFs one at a time from a residue by the filter of the module notes; ``eligible``, if
     given, masks the vertices that may be extrema (all by default)."""
 
-    def __init__(
-        self, surface: Surface, options: EMDOptions, backend: str | None, eligible: np.ndarray | None = None
-    ):
+    def __init__(self, surface: Surface, options: EMDOptions, backend: str | None, eligible: np.ndarray | None = None):
         self.surface = surface
         self.options = options
         self.eligible = eligible
