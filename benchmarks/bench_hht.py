@@ -104,14 +104,17 @@ BACKEND_MODELS = ["nefertiti", "igea"]
 
 def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper") -> dict:
     """The whole HHT of one mesh, stage by stage (runs in a fresh subprocess); ``preset`` names
-    the EMD settings: ``"paper"`` (``PAPER_OPTIONS``), ``"defaults"`` or ``"filtering"``
-    (``FILTERING_OPTIONS``)."""
+    the EMD settings: ``"paper"`` (``PAPER_OPTIONS``), ``"defaults"``, ``"filtering"``
+    (``FILTERING_OPTIONS`` at full resolution) or ``"filtering-levels"`` (the same on the hierarchy of
+    :mod:`hht3d.decomposition.multiresolution`, each IMF's Riesz transform on its level)."""
     import hht3d
     from hht3d import linalg
     from hht3d.decomposition import EMD_DEFAULTS, FILTERING_OPTIONS, PAPER_OPTIONS, emd
     from hht3d.geometry.signals import mean_curvature
     from hht3d.spectral import quadrature_nodes
-    from hht3d.spectral.monogenic_signal import monogenic
+    from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_riesz
+    from hht3d.spectral.multilevel import combine_riesz_parts, riesz_part
+    from hht3d.spectral.options import RIESZ_DEFAULTS
 
     rec = Recorder()
     rec.instrument()
@@ -134,12 +137,17 @@ def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper")
             rec.peaks[f"operators:{key}"] = rec.checkpoint()
     with rec.stage("signal"):
         signal = mean_curvature(surface)
-    chosen = {"paper": PAPER_OPTIONS, "defaults": EMD_DEFAULTS, "filtering": FILTERING_OPTIONS}[preset]
-    options = chosen.as_dict() | ({} if max_imfs is None else {"max_imfs": max_imfs})
+    chosen = {"paper": PAPER_OPTIONS, "defaults": EMD_DEFAULTS, "filtering": FILTERING_OPTIONS}[preset.split("-")[0]]
+    levels = "on" if preset == "filtering-levels" else "off"
+    options = chosen.as_dict() | {"multiresolution": levels} | ({} if max_imfs is None else {"max_imfs": max_imfs})
     with rec.stage("emd"):
         decomposition = emd(surface, signal, **options)
     with rec.stage("rt"):
-        mono = monogenic(surface, decomposition.imfs)
+        if levels == "on":  # each IMF's Riesz vectors on its level and band (hht3d.spectral.multilevel)
+            vectors = combine_riesz_parts(surface, [riesz_part(surface, decomposition, RIESZ_DEFAULTS)])
+            mono = monogenic_from_riesz(surface, decomposition.imfs, vectors)
+        else:
+            mono = monogenic(surface, decomposition.imfs)
     info = decomposition.info
     m, mbar = surface.cache.get("riesz:bounds", (np.nan, np.nan))
     shifts = len(quadrature_nodes(m, mbar, 1e-8)[0]) if np.isfinite(m) else 0
@@ -256,10 +264,11 @@ def main(argv=None) -> int:
     parser.add_argument("--with-superlu", action="store_true", help="add SciPy SuperLU to the backends part")
     parser.add_argument(
         "--emd",
-        choices=["paper", "defaults", "filtering"],
+        choices=["paper", "defaults", "filtering", "filtering-levels"],
         default="paper",
         help="EMD settings: the paper's (PAPER_OPTIONS, as Table 1), hht3d's defaults or iterative filtering "
-        "(FILTERING_OPTIONS); cases run with the others are named '<case> (defaults)' or '<case> (filtering)'",
+        "(FILTERING_OPTIONS), at full resolution or on levels; cases run with the others are named "
+        "'<case> (defaults)', '<case> (filtering)' or '<case> (filtering-levels)'",
     )
     parser.add_argument("--max-imfs", type=int, default=None, help="cap on IMFs for the ladder (default: emd's 10)")
     parser.add_argument(

@@ -393,3 +393,22 @@ def test_a_real_scan_round_trips(tmp_path, shared_model, suffix):
     written = laspy.read(str(write_las(tmp_path / f"back{suffix}", surface)))
     for name in original.point_format.dimension_names:
         np.testing.assert_array_equal(np.asarray(written[name]), np.asarray(original[name]), err_msg=name)
+
+
+def test_the_fig4_panel_and_the_viewer_take_a_las_scan(tmp_path):
+    """Issue 36's target: a LAS input gives the composite figure (model, signal, each IMF and the
+    residue, then frequency and amplitude under each IMF) and a viewer page whose IMF fields are the
+    result's, with the scan's origin kept."""
+    from helpers.pages import field_values, page_data
+    from hht3d.viz.figures import hht_figure
+
+    scan(tmp_path / "scan.las")
+    surface = load(tmp_path / "scan.las")
+    result = hht(surface, surface.attributes["intensity"], max_imfs=2)
+    images = [ax for ax in hht_figure(result, panel_width=80).axes if ax.get_images()]
+    assert len(images) == 2 + result.n_imfs + 1 + 2 * result.n_imfs
+    page = page_data(result.to_html(tmp_path / "scan.html"))
+    for k in range(result.n_imfs):
+        np.testing.assert_allclose(field_values(page, f"imf_{k + 1}"), result.imfs[k], rtol=1e-6, atol=1e-6)
+    np.testing.assert_array_equal(result.surface.origin, surface.origin)
+    assert np.abs(surface.origin).max() > 1e5  # the scan lies 10⁶ m out, read near 0
