@@ -71,6 +71,7 @@ class MultilevelFilterer:
         self.level = 0
         self.residue: np.ndarray | None = None
         self.levels: list[tuple[int, np.ndarray]] = []
+        self.retired: dict[int, tuple[int, int, str]] = {}
 
     def filterer(self, index: int) -> Filterer:
         """The filterer of level ``index`` (made once)."""
@@ -112,16 +113,27 @@ class MultilevelFilterer:
         )
         self.levels.append((here, level_imf))
         self.residue, self.level = carried, target
+        if target > here:  # residues never come back: free the level's factorization now
+            self._retire(here)
         return self.hierarchy.to_finest(level_imf, here), info
+
+    def _retire(self, index: int) -> None:
+        """Drop the filterer of level ``index`` (its factorizations), keeping its counts for :meth:`totals`."""
+        filterer = self.filterers.pop(index)
+        self.retired[index] = (filterer.n_solves, filterer.solver.n_factorizations, filterer.solver.backend)
 
     def totals(self) -> dict:
         """Run totals over the levels for ``EMDResult.info``, with ``levels``: the vertices of each level used."""
-        used = [self.filterer(i) for i in sorted(self.filterers)] or [self.filterer(0)]
+        if not self.filterers and not self.retired:
+            self.filterer(0)
+        counts = dict(self.retired)
+        counts.update({i: (f.n_solves, f.solver.n_factorizations, f.solver.backend) for i, f in self.filterers.items()})
+        used = sorted(counts)
         return {
             "sifts": 0,
-            "solves": sum(f.n_solves for f in used),
+            "solves": sum(counts[i][0] for i in used),
             "max_constraint_error": 0.0,
-            "factorizations": sum(f.solver.n_factorizations for f in used),
-            "backend": used[0].solver.backend,
-            "levels": [self.hierarchy.levels[i].surface.n_vertices for i in sorted(self.filterers)],
+            "factorizations": sum(counts[i][1] for i in used),
+            "backend": counts[used[0]][2],
+            "levels": [self.hierarchy.levels[i].surface.n_vertices for i in used],
         }
