@@ -421,6 +421,7 @@ def markdown(results: dict) -> str:
         largest = max(family, key=lambda r: r["vertices"])
         out += ["Memory at the largest case (what dominates its peak):", "", _memory(largest), ""]
     out += _defaults_section(results)
+    out += _filtering_section(results)
     backend_runs = [r for r in results.get("backends", []) if "error" not in r]
     if backend_runs:
         out += _backends_section(backend_runs)
@@ -504,6 +505,55 @@ def _defaults_section(results: dict) -> list[str]:
     return out + _million_targets(
         runs, f"{SCALING_SOURCE}_1m (defaults)", "Targets at 1M vertices with the defaults", DEFAULTS_MILLION_TARGET_S
     )
+
+
+def _filtering_section(results: dict) -> list[str]:
+    """The scaling family with iterative filtering at full resolution and on levels (``--emd filtering``,
+    ``--emd filtering-levels``), with growth exponents and the cases that did not run."""
+    presets = ("filtering", "filtering-levels")
+    runs = [r for r in results["scaling"] if r.get("emd_options") in presets and "error" not in r]
+    if not runs:
+        return []
+    rows = [
+        [
+            r["case"],
+            f"{r['vertices']:,}",
+            r["imfs"],
+            short(r["seconds"]["emd"]),
+            short(r["seconds"]["rt"]),
+            short(r["seconds"]["emd_rt"]),
+            short(r["seconds"]["total"]),
+            _mb(r["peak_rss_mb"]),
+            "/".join(f"{v:.1f}" for v in r["load_average_1min"]),
+        ]
+        for r in sorted(runs, key=lambda r: (r["emd_options"], r["vertices"]))
+    ]
+    out = [
+        "## Iterative filtering, at full resolution and on levels",
+        "",
+        (
+            '`--emd filtering` (`FILTERING_OPTIONS`, `multiresolution="off"`) and `--emd filtering-levels` '
+            '(`multiresolution="on"`, each IMF\'s Riesz transform on its level: hht3d.spectral.multilevel); '
+            "each row is its own run."
+        ),
+        "",
+        table(["case", "#V", "#IMFs", "EMD s", "RT s", "EMD+RT s", "total s", "peak RSS MB", "load avg"], rows),
+        "",
+        "Growth exponents p in value ~ #V^p:",
+        "",
+    ]
+    for preset in presets:
+        family = sorted((r for r in runs if r["emd_options"] == preset), key=lambda r: r["vertices"])
+        if len(family) > 1:
+            vertices = [r["vertices"] for r in family]
+            out.append(
+                f"- {preset}: total s {short(fit_exponent(vertices, [r['seconds']['total'] for r in family]))}, "
+                f"peak MB {short(fit_exponent(vertices, [r['peak_rss_mb'] for r in family]))}"
+            )
+    failed = [r for r in results["scaling"] if "error" in r and any(f"({p})" in r["case"] for p in presets)]
+    for r in failed:
+        out.append(f"- {r['case']}: not run: {r['error'].strip().splitlines()[-1][:300]}")
+    return out + [""]
 
 
 def _million_targets(runs: list, case: str, label: str, target_s: float) -> list[str]:
