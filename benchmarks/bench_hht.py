@@ -138,12 +138,12 @@ def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper")
     with rec.stage("signal"):
         signal = mean_curvature(surface)
     chosen = {"paper": PAPER_OPTIONS, "defaults": EMD_DEFAULTS, "filtering": FILTERING_OPTIONS}[preset.split("-")[0]]
-    levels = "on" if preset == "filtering-levels" else "off"
+    levels = "always" if preset == "filtering-levels" else "never"
     options = chosen.as_dict() | {"multiresolution": levels} | ({} if max_imfs is None else {"max_imfs": max_imfs})
     with rec.stage("emd"):
         decomposition = emd(surface, signal, **options)
     with rec.stage("rt"):
-        if levels == "on":  # each IMF's Riesz vectors on its level and band (hht3d.spectral.multilevel)
+        if levels == "always":  # each IMF's Riesz vectors on its level and band (hht3d.spectral.multilevel)
             vectors = combine_riesz_parts(surface, [riesz_part(surface, decomposition, RIESZ_DEFAULTS)])
             mono = monogenic_from_riesz(surface, decomposition.imfs, vectors)
         else:

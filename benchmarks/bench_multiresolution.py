@@ -3,9 +3,9 @@
 Per model, the whole HHT of the mean-curvature signal with ``method="filtering"`` twice, each in
 its own subprocess (so its peak resident memory, ``VmHWM``, is its own):
 
-``direct``    ``multiresolution="off"``: every IMF filtered on the input's vertices and its Riesz
+``direct``    ``multiresolution="never"``: every IMF filtered on the input's vertices and its Riesz
               transform by the full quadrature there (the baseline, same run);
-``multires``  ``multiresolution="on"``: each residue carried on the coarsest level of
+``multires``  ``multiresolution="always"``: each residue carried on the coarsest level of
               :func:`hht3d.geometry.hierarchy.hierarchy` that resolves it
               (:mod:`hht3d.decomposition.multiresolution`), and the Riesz transform of each IMF
               on its level and in its band (:mod:`hht3d.spectral.multilevel`).
@@ -63,7 +63,7 @@ from benchmarks.meshes import SCALING
 
 MODELS = ["nefertiti", "igea", "1m"]
 #: name -> the ``multiresolution`` setting of the run; ``direct`` is the baseline.
-MODES = {"direct": "off", "multires": "on"}
+MODES = {"direct": "never", "multires": "always"}
 FOLDER = Path("/tmp/hht3d-bench")
 #: A run still going after this many seconds is stopped and reported as such.
 CASE_TIMEOUT = 3600
@@ -259,8 +259,8 @@ def markdown(data: dict) -> str:
         f"Machine: {meta['platform']}, {meta['cpus']} CPUs, backend {meta['backend']}, load "
         f"{meta['load_average']} at the start and {meta.get('load_average_end')} at the end ({meta['date']}). "
         '`hht3d.hht(surface, mean_curvature(surface), method="filtering", multiresolution=...)`, '
-        'each run in its own process after a warm-up on spot; *direct* is `"off"` (the baseline), '
-        '*multires* `"on"`. Seconds are the whole `hht` call; ratios are multires / direct. '
+        'each run in its own process after a warm-up on spot; *direct* is `"never"` (the baseline), '
+        '*multires* `"always"`. Seconds are the whole `hht` call; ratios are multires / direct. '
         "ΔER and ΔIO are multires − direct.",
         "",
         "## Per model",

@@ -532,8 +532,8 @@ def _filtering_section(results: dict) -> list[str]:
         "## Iterative filtering, at full resolution and on levels",
         "",
         (
-            '`--emd filtering` (`FILTERING_OPTIONS`, `multiresolution="off"`) and `--emd filtering-levels` '
-            '(`multiresolution="on"`, each IMF\'s Riesz transform on its level: hht3d.spectral.multilevel); '
+            '`--emd filtering` (`FILTERING_OPTIONS`, `multiresolution="never"`) and `--emd filtering-levels` '
+            '(`multiresolution="always"`, each IMF\'s Riesz transform on its level: hht3d.spectral.multilevel); '
             "each row is its own run."
         ),
         "",

@@ -308,7 +308,7 @@ def _may_use_levels(options: HHTOptions) -> bool:
     return (
         options.ensemble is None
         and emd.method == "filtering"
-        and emd.multiresolution != "off"
+        and emd.multiresolution != "never"
         and options.riesz.potential == "quadrature"
     )
 

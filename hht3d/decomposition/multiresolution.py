@@ -56,9 +56,9 @@ MULTIRESOLUTION_VERTICES = 200_000
 
 def uses_levels(options: EMDOptions, n_vertices: int) -> bool:
     """Whether :func:`~hht3d.decomposition.emd` decomposes on levels with these settings."""
-    if options.method != "filtering" or options.multiresolution == "off":
+    if options.method != "filtering" or options.multiresolution == "never":
         return False
-    return options.multiresolution == "on" or n_vertices >= MULTIRESOLUTION_VERTICES
+    return options.multiresolution == "always" or n_vertices >= MULTIRESOLUTION_VERTICES
 
 
 class MultilevelFilterer:

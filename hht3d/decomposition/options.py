@@ -52,7 +52,7 @@ FILTERS = ("bilaplacian", "membrane")
 #: Cuts of iterative filtering: one frequency for the surface, or one per vertex from the local extrema spacing.
 CUTS = ("global", "local")
 #: When iterative filtering carries its residues on coarser levels (:mod:`.multiresolution`).
-MULTIRESOLUTION = ("auto", "on", "off")
+MULTIRESOLUTION = ("auto", "always", "never")
 #: Sifting stopping rules.
 STOPPING_RULES = ("sd", "rfg", "s_number", "fixed")
 #: Envelope interpolants: thin plate in tension (default), the paper's thin plate (Eq. 11), membrane.

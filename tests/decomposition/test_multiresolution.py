@@ -29,11 +29,11 @@ def signal(sphere):
 
 @pytest.fixture(scope="module")
 def runs(sphere, signal):
-    return {mode: emd(sphere, signal, method="filtering", multiresolution=mode) for mode in ("on", "off")}
+    return {mode: emd(sphere, signal, method="filtering", multiresolution=mode) for mode in ("always", "never")}
 
 
 def test_the_imfs_telescope_back_to_the_signal(runs, signal):
-    levels = runs["on"]
+    levels = runs["always"]
     total = levels.imfs.sum(axis=0) + levels.residue
     np.testing.assert_allclose(total, signal, atol=1e-12 * np.abs(signal).max())
     used = [imf["level"] for imf in levels.info["imfs"]]
@@ -46,7 +46,7 @@ def test_each_residue_moves_to_the_coarsest_level_resolving_its_cut(sphere, runs
     from hht3d.geometry.hierarchy import hierarchy
 
     levels = hierarchy(sphere)
-    for imf in runs["on"].info["imfs"]:
+    for imf in runs["always"].info["imfs"]:
         target = imf["residue_level"]
         assert levels.levels[target].spacing * imf["cut_frequency"] <= SPACING_LIMIT or target == imf["level"]
         coarser = levels.level(target + 1)
@@ -57,7 +57,7 @@ def test_each_residue_moves_to_the_coarsest_level_resolving_its_cut(sphere, runs
 def test_the_direct_imfs_up_to_the_first_move_which_differs_by_its_transfer_error(runs, signal, sphere):
     """Until a residue moves, both paths compute the same filter on the same residue; the IMF whose residue
     moves differs from the direct one by exactly ``r_k − P R r_k``, whose norm ``transfer_error`` reports."""
-    on, off = runs["on"], runs["off"]
+    on, off = runs["always"], runs["never"]
     moved = next(k for k, imf in enumerate(on.info["imfs"]) if imf["residue_level"] > imf["level"])
     np.testing.assert_allclose(on.imfs[:moved], off.imfs[:moved], atol=1e-10 * np.abs(signal).max())
     mass = sphere.mass_diagonal
@@ -68,7 +68,7 @@ def test_the_direct_imfs_up_to_the_first_move_which_differs_by_its_transfer_erro
 
 
 def test_quality_within_a_hundredth_of_the_direct_path(runs):
-    on, off = runs["on"].quality, runs["off"].quality
+    on, off = runs["always"].quality, runs["never"].quality
     assert abs(on.energy_ratio - off.energy_ratio) <= 0.01
     assert abs(on.orthogonality_index - off.orthogonality_index) <= 0.01
 
@@ -79,4 +79,4 @@ def test_auto_keeps_the_direct_path_below_the_crossover(sphere, signal):
     assert auto.levels == () and "levels" not in auto.info
     options = EMDOptions(method="filtering")
     assert not uses_levels(options, MULTIRESOLUTION_VERTICES - 1) and uses_levels(options, MULTIRESOLUTION_VERTICES)
-    assert not uses_levels(EMDOptions(multiresolution="on"), 10**8)  # sifting never uses levels
+    assert not uses_levels(EMDOptions(multiresolution="always"), 10**8)  # sifting never uses levels

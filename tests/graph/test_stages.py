@@ -145,7 +145,7 @@ def test_filtering_on_levels_takes_each_imf_group_riesz_as_a_task():
     sphere = Surface(*icosphere(5), name="icosphere")
     x, _, z = sphere.vertices.T
     signal = eval_legendre(40, z) + 3 * eval_legendre(6, (x + z) / 2**0.5)
-    settings = {"method": "filtering", "multiresolution": "on", "max_imfs": 3}
+    settings = {"method": "filtering", "multiresolution": "always", "max_imfs": 3}
     s = graph.from_surface(sphere)
     lazy = graph.hht(s, signal, riesz_tasks=2, **settings)
     tasks = dict(lazy.__dask_graph__())

@@ -35,7 +35,7 @@ def test_band_quadrature_matches_the_eigenbasis_above_its_floor():
 def test_without_levels_each_imf_takes_the_full_quadrature():
     surface = Surface(*icosphere(4))
     x, _, z = surface.vertices.T
-    decomposition = emd(surface, eval_legendre(12, z) + x, method="filtering", multiresolution="off", max_imfs=2)
+    decomposition = emd(surface, eval_legendre(12, z) + x, method="filtering", multiresolution="never", max_imfs=2)
     options = RieszOptions()
     parts = [riesz_part(surface, decomposition, options, None, group, 2) for group in range(2)]
     np.testing.assert_allclose(
@@ -49,7 +49,7 @@ def sphere():
 
 
 def _both_paths(sphere, signal):
-    return {m: hht(sphere, signal, method="filtering", multiresolution=m) for m in ("on", "off")}
+    return {m: hht(sphere, signal, method="filtering", multiresolution=m) for m in ("always", "never")}
 
 
 @pytest.fixture(scope="module")
@@ -69,7 +69,7 @@ def coarse(sphere):
 def test_imfs_of_the_input_level_keep_their_monogenic_signal(sphere, fine):
     """IMFs that stayed on the input's level are the direct ones; their band quadrature (floor half their
     cut, where the pass band is below 1e-10) agrees with the full one to 1e-6 in amplitude and Riesz vectors."""
-    on, off = fine["on"], fine["off"]
+    on, off = fine["always"], fine["never"]
     info = on.info["emd"]["imfs"]
     staying = [k for k, imf in enumerate(info) if imf["level"] == 0 and imf["residue_level"] == 0]
     assert staying
@@ -84,7 +84,7 @@ def test_imfs_of_the_input_level_keep_their_monogenic_signal(sphere, fine):
 def test_coarse_imfs_keep_their_frequency(coarse):
     """An IMF filtered on a coarser level: its median instantaneous frequency within 2% of the direct one
     (0.3% measured), and the quality figures within the issue's 0.01."""
-    on, off = coarse["on"], coarse["off"]
+    on, off = coarse["always"], coarse["never"]
     checked = 0
     for k, imf in enumerate(on.info["emd"]["imfs"][: off.n_imfs]):
         if imf["level"] > 0:
