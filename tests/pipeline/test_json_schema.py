@@ -88,3 +88,24 @@ def test_cli_prints_and_writes_the_schema(tmp_path, capsys):
     target = tmp_path / "editor" / "pipeline.schema.json"
     assert main(["schema", "--output", str(target)]) == 0
     assert target.read_text(encoding="utf-8") == schema_text()
+
+
+def _enums(node):
+    if isinstance(node, dict):
+        yield from node.get("enum", [])
+        for value in node.values():
+            yield from _enums(value)
+    elif isinstance(node, list):
+        for value in node:
+            yield from _enums(value)
+
+
+def test_no_choice_is_a_word_yaml_reads_as_a_boolean():
+    """YAML 1.1 (PyYAML) reads on/off/yes/no/true/false unquoted as booleans, so a choice spelled so
+    could not be written plainly in a pipeline file ('multiresolution: on' was refused as True)."""
+    booleans = {"on", "off", "yes", "no", "true", "false"}  # PyYAML leaves y and n (the axis "y") as text
+    words = [value for value in _enums(pipeline_schema()) if isinstance(value, str)]
+    assert words, "the schema lists no choices"
+    assert not [w for w in words if w.lower() in booleans]
+    assert read_yaml("emd: {multiresolution: always}", "test")["emd"]["multiresolution"] == "always"
+    assert read_yaml("emd: {multiresolution: on}", "test")["emd"]["multiresolution"] is True  # the trap
