@@ -121,9 +121,7 @@ class Hierarchy:
 
     def to_finest(self, values: np.ndarray, index: int) -> np.ndarray:
         """Values on level ``index`` prolonged to level 0."""
-        for level in reversed(self.levels[1 : index + 1]):
-            values = level.prolong(values)
-        return values
+        return self.prolong(values, index, 0)
 
     def prolong(self, values: np.ndarray, source: int, target: int) -> np.ndarray:
         """Values on level ``source`` prolonged to the finer level ``target``."""
@@ -216,11 +214,7 @@ def _barycentric(points: np.ndarray, coarse: Surface) -> sp.csr_matrix:
     uv = closest["primitive_uvs"].numpy().astype(np.float64)
     uv = np.clip(uv, 0.0, 1.0)
     uv /= np.maximum(1.0, uv.sum(axis=1))[:, None]
-    weights = np.column_stack([1.0 - uv.sum(axis=1), uv])
-    n = len(points)
-    return sp.csr_matrix(
-        (weights.ravel(), faces[triangle].ravel(), np.arange(0, 3 * n + 1, 3)), shape=(n, coarse.n_vertices)
-    )
+    return _rows(np.column_stack([1.0 - uv.sum(axis=1), uv]), faces[triangle], coarse.n_vertices)
 
 
 def _shepard(points: np.ndarray, coarse: np.ndarray) -> sp.csr_matrix:
@@ -229,6 +223,10 @@ def _shepard(points: np.ndarray, coarse: np.ndarray) -> sp.csr_matrix:
     distance, index = cKDTree(coarse).query(points, k=k)
     distance, index = distance.reshape(len(points), k), index.reshape(len(points), k)
     weights = 1.0 / np.maximum(distance, 1e-9 * max(float(distance.max()), 1e-300)) ** 2
-    weights /= weights.sum(axis=1, keepdims=True)
-    n = len(points)
-    return sp.csr_matrix((weights.ravel(), index.ravel(), np.arange(0, k * n + 1, k)), shape=(n, len(coarse)))
+    return _rows(weights / weights.sum(axis=1, keepdims=True), index, len(coarse))
+
+
+def _rows(weights: np.ndarray, columns: np.ndarray, n_columns: int) -> sp.csr_matrix:
+    """The sparse matrix whose row ``i`` holds ``weights[i]`` at ``columns[i]`` (same width per row)."""
+    n, k = weights.shape
+    return sp.csr_matrix((weights.ravel(), columns.ravel(), np.arange(0, k * n + 1, k)), shape=(n, n_columns))

@@ -25,13 +25,12 @@ import numpy as np
 
 from ..errors import InputError
 from ..geometry.hierarchy import hierarchy
-from ..geometry.signals import fluctuation
 from ..geometry.surface import Surface
 from .eigenpairs import upper_bound
 from .options import RieszOptions
-from .quadrature import quadrature_nodes
+from .quadrature import QuadraturePlan, combine_quadrature_parts, quadrature_nodes, quadrature_part
 from .riesz_transform import riesz, vertex_gradient
-from .shifts import shift_analysis, shifted_solve
+from .shifts import shift_analysis
 
 __all__ = ["BAND_FLOOR", "riesz_part", "combine_riesz_parts", "band_potential"]
 
@@ -59,13 +58,10 @@ def band_potential(surface: Surface, f: np.ndarray, floor: float, tol: float, ba
     (k, n) ndarray
     """
     mbar = upper_bound(surface)
-    sigmas, weights = quadrature_nodes(min(floor, 0.5 * mbar), mbar, tol)
-    rhs = (surface.mass_diagonal * fluctuation(surface, f)).T
-    symbolic = shift_analysis(surface, backend, tol)
-    total = np.zeros_like(rhs)
-    for sigma, weight in zip(sigmas, weights):
-        total += weight * shifted_solve(surface, sigma, rhs, symbolic=symbolic)
-    return fluctuation(surface, total.T)
+    low = min(floor, 0.5 * mbar)
+    plan = QuadraturePlan((low, mbar), tol, *quadrature_nodes(low, mbar, tol))
+    part = quadrature_part(surface, f, plan, symbolic=shift_analysis(surface, backend, tol))
+    return combine_quadrature_parts(surface, [part])
 
 
 def riesz_part(
