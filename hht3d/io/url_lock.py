@@ -46,7 +46,9 @@ _POLL = 0.5
 _JOIN = 10.0
 _LOG = get_logger("hht3d.io")
 _HELD: dict[str, _Held] = {}
-_GUARD = threading.Lock()
+#: Locks being taken (``url`` -> ``fs, path, record``): a stop removes them if they are on the store.
+_PENDING: dict[str, tuple] = {}
+_GUARD = threading.RLock()  # reentrant: a stop handler may run while this thread holds it
 
 
 class _Held:
@@ -76,14 +78,19 @@ class _Held:
         if self.fs is None:
             return
         self._beat.join(_JOIN)
-        try:
-            if _read(self.fs, self.path)[0].get("run") == self.record["run"]:
-                self.fs.rm_file(self.path)
-        except Exception as exc:  # the back-ends raise many types (network, client errors)
-            _LOG.warning(
-                f"{redact(self.url)}/{LOCK}: cannot remove this run's lock ({_access_error(exc)}); "
-                f"the next run takes it over {EXPIRY:g} s after its last heartbeat"
-            )
+        _remove_if_ours(self.url, self.fs, self.path, self.record)
+
+
+def _remove_if_ours(url: str, fs: Any, path: str, record: dict) -> None:
+    """Remove the lock object at ``path`` if it is the one ``record`` describes (this run's)."""
+    try:
+        if _read(fs, path)[0].get("run") == record["run"]:
+            fs.rm_file(path)
+    except Exception as exc:  # the back-ends raise many types (network, client errors)
+        _LOG.warning(
+            f"{redact(url)}/{LOCK}: cannot remove this run's lock ({_access_error(exc)}); "
+            f"the next run takes it over {EXPIRY:g} s after its last heartbeat"
+        )
 
 
 @contextlib.contextmanager
@@ -114,12 +121,19 @@ def url_lock(folder: str, storage_options: dict | None = None, run: str | None =
 
 
 def release_all() -> None:
-    """Release every lock this process holds (a clean stop, :func:`hht3d.stopping.clean_stop`)."""
+    """Release every lock this process holds or is taking (a clean stop, :func:`hht3d.stopping.clean_stop`).
+
+    A lock being taken may already be on the store while its creation is checked: a stop in that
+    window removes it too, if it is this run's."""
     with _GUARD:
-        held = list(_HELD.values())
+        held, pending = list(_HELD.values()), list(_PENDING.items())
         _HELD.clear()
+        _PENDING.clear()
     for lock in held:
         lock.release()
+    for url, (fs, path, record) in pending:
+        if all(lock.url != url for lock in held):
+            _remove_if_ours(url, fs, path, record)
 
 
 def _acquire(url: str, storage_options: dict | None, run: str | None) -> _Held:
@@ -127,6 +141,20 @@ def _acquire(url: str, storage_options: dict | None, run: str | None) -> _Held:
     if _protocol(url) not in _CONDITIONAL:
         return _unlocked(url, "this store has no conditional writes here")
     record = {"host": socket.gethostname(), "pid": os.getpid(), "run": run, "started": _stamp(time.time())}
+    with _GUARD:
+        _PENDING[url] = (fs, path, record)
+    try:
+        held = _create(url, fs, path, record)
+        with _GUARD:  # held before no longer pending: a stop between the two finds it either way
+            _HELD[url] = held
+        return held
+    finally:
+        with _GUARD:
+            _PENDING.pop(url, None)
+
+
+def _create(url: str, fs: Any, path: str, record: dict) -> _Held:
+    """Write the lock ``record``, waiting for (or taking over from) another run's."""
     deadline = None
     while True:
         record["expires"] = _stamp(time.time() + EXPIRY)
