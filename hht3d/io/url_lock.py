@@ -44,6 +44,8 @@ EXPIRY = 120.0
 _POLL = 0.5
 #: Seconds a release waits for a heartbeat under way.
 _JOIN = 10.0
+#: Seconds a stop keeps removing a lock it was taking, for writes in flight that land late.
+_LATE_WRITES = 2.0
 _LOG = get_logger("hht3d.io")
 _HELD: dict[str, _Held] = {}
 #: Locks being taken (``url`` -> ``fs, path, record``): a stop removes them if they are on the store.
@@ -84,7 +86,8 @@ class _Held:
 def _remove_if_ours(url: str, fs: Any, path: str, record: dict) -> None:
     """Remove the lock object at ``path`` if it is the one ``record`` describes (this run's)."""
     try:
-        if _read(fs, path)[0].get("run") == record["run"]:
+        found = _read(fs, path)[0]
+        if found and found.get("run") == record["run"]:
             fs.rm_file(path)
     except Exception as exc:  # the back-ends raise many types (network, client errors)
         _LOG.warning(
@@ -133,7 +136,18 @@ def release_all() -> None:
         lock.release()
     for url, (fs, path, record) in pending:
         if all(lock.url != url for lock in held):
-            _remove_if_ours(url, fs, path, record)
+            _remove_late(url, fs, path, record)
+
+
+def _remove_late(url: str, fs: Any, path: str, record: dict) -> None:
+    """Remove a lock being taken, and again if a write that was in flight (the creation or its
+    check, sent by the store's event loop) lands after that, for :data:`_LATE_WRITES` seconds."""
+    until = time.monotonic() + _LATE_WRITES
+    while True:
+        _remove_if_ours(url, fs, path, record)
+        if time.monotonic() >= until:
+            return
+        time.sleep(_POLL / 5)
 
 
 def _acquire(url: str, storage_options: dict | None, run: str | None) -> _Held:
