@@ -18,6 +18,7 @@ from ..errors import InputError, NumericalError
 from ..geometry.signals import fluctuation
 from ..geometry.surface import Surface
 from ..geometry.validation import check_surface
+from ..linalg.chebyshev import spectral_radius_bound
 from .shifts import shift_analysis, shifted_matrix
 
 __all__ = [
@@ -35,8 +36,6 @@ DENSE_MAX_VERTICES = 6000
 #: ``m = SAFETY · λ_1`` so that the lower bound stays below ``λ_1`` despite
 #: eigensolver error.
 SAFETY = 0.9
-#: Power iterations tightening the upper spectral bound (:func:`upper_bound`).
-POWER_ITERATIONS = 10
 #: ARPACK gives way to the dense eigendecomposition when the eigenpairs asked for are at least
 #: this fraction of the spectrum (dense is then cheaper: ARPACK's work grows with the count) ...
 DENSE_SHARE = 0.5
@@ -45,32 +44,11 @@ DENSE_SHARE_SMALL = 0.1
 
 
 def upper_bound(surface: Surface) -> float:
-    """``M̄ ≥ λ_max``: the Collatz–Wielandt bound for ``M⁻¹|L|`` (cached on the surface).
-
-    ``λ_max(M⁻¹L) ≤ ρ(M⁻¹|L|)`` because ``|xᵀLx| ≤ |x|ᵀ|L||x|``, and for the
-    non-negative ``M⁻¹|L|`` and any positive ``w``,
-    ``ρ ≤ max_i (M⁻¹|L|w)_i / w_i`` (Collatz–Wielandt).  With ``w = 1`` this
-    is Gershgorin's bound ``max_i Σ_j |L_ij| / M_ii``; power iterations
-    ``w ← M⁻¹|L|w`` tighten it towards ``ρ``.  Every iterate gives a valid
-    bound and the smallest is kept.  On meshes ``ρ`` is within a few per
-    cent of ``λ_max`` (the top eigenvector sits at the worst-shaped
-    vertices), where Gershgorin is 1.3–2× above it.
-    """
+    """``M̄ ≥ λ_max``: :func:`~hht3d.linalg.chebyshev.spectral_radius_bound` of ``L`` and ``M`` (cached on the
+    surface); on meshes within a few per cent of ``λ_max``, where Gershgorin is 1.3–2× above it."""
     key = "riesz:upper_bound"
     if key not in surface.cache:
-        lap = abs(surface.stiffness)
-        inv_mass = 1.0 / surface.mass_diagonal
-        w = np.ones(surface.n_vertices)
-        best = np.inf
-        for _ in range(POWER_ITERATIONS):
-            y = inv_mass * (lap @ w)
-            top = float(np.max(y))
-            best = min(best, float(np.max(y / w)))
-            if top == 0:
-                break
-            # rows of |L| that are zero give 0 whatever w is: keep w positive there
-            w = np.where(y > 0, y / top, 1.0)
-        surface.cache[key] = best
+        surface.cache[key] = spectral_radius_bound(surface.stiffness, surface.mass_diagonal)
     return surface.cache[key]
 
 
