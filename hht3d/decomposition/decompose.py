@@ -83,9 +83,12 @@ class EMDResult:
     quality : Quality, optional
         Energy ratio, index of orthogonality and warnings
         (:func:`hht3d.decomposition.quality.decomposition_quality`).
-    levels : tuple of (int, ndarray)
+    levels : tuple of (int, ndarray, ndarray or None, ndarray or None)
         With the hierarchy (:mod:`.multiresolution`): each IMF on the level it was filtered on, as
-        ``(level, values)``; empty otherwise.
+        ``(level, values, source, potential)``; when the filter was a polynomial, ``potential`` is
+        the IMF's Riesz potential on that level (to ``POTENTIAL_TOLERANCE``) and ``source`` the
+        signal whose polynomial gives it to any other tolerance (both ``None`` otherwise); empty
+        without the hierarchy.
     """
 
     imfs: np.ndarray
@@ -285,7 +288,9 @@ def emd(
         "stop_reason": reason,
         "options": options.as_dict(),
     }
-    levels = tuple((level, imf * scale) for level, imf in getattr(method, "levels", ()))
+    levels = tuple(
+        (level, *(None if v is None else v * scale for v in values)) for level, *values in getattr(method, "levels", ())
+    )
     return result_with_quality(surface, f, stacked, info, levels)
 
 

@@ -63,7 +63,16 @@ from ..geometry.validation import check_signal, check_surface
 from .extrema import extrema_spacing
 from .options import EMDOptions, start_tension
 
-__all__ = ["envelope_operator", "envelope_interpolation", "EnvelopeSolver", "envelope_energies", "MASS_FLOOR"]
+__all__ = [
+    "envelope_operator",
+    "envelope_interpolation",
+    "EnvelopeSolver",
+    "envelope_energies",
+    "membrane_laplacian",
+    "is_delaunay",
+    "floored_mass",
+    "MASS_FLOOR",
+]
 
 #: The local-mean correction's bilaplacian divides by vertex areas floored at this fraction of
 #: their median, so tiny vertices of a scan do not make its system numerically indefinite.
@@ -94,9 +103,9 @@ class _EnvelopeEnergies:
         keys = rows.astype(np.int64) * n + self.indices
         del rows
         self.bilaplacian = self._on_pattern(keys, bilaplacian)
-        membrane = _membrane(lap)
+        membrane = membrane_laplacian(surface)
         self.laplacian = self._on_pattern(keys, membrane)
-        self.floored = np.maximum(surface.mass_diagonal, MASS_FLOOR * np.median(surface.mass_diagonal))
+        self.floored = floored_mass(surface)
         self.membrane = membrane
         self.smoothing = self._on_pattern(keys, membrane @ sp.diags(1.0 / self.floored) @ membrane)
 
@@ -132,6 +141,24 @@ class _EnvelopeEnergies:
         a = sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n), copy=False)
         a.has_sorted_indices = True
         return a
+
+
+def membrane_laplacian(surface: Surface) -> sp.csr_matrix:
+    """:func:`_membrane` of the surface's stiffness matrix (the stiffness matrix itself when no cotangent
+    weight is negative, :func:`is_delaunay`)."""
+    return surface.stiffness if is_delaunay(surface) else _membrane(surface.stiffness)
+
+
+def is_delaunay(surface: Surface) -> bool:
+    """Whether no edge weight of the stiffness matrix is negative (no positive off-diagonal entry): then
+    the membrane Laplacian is the stiffness matrix itself."""
+    lap = surface.stiffness
+    return not np.any(lap.data[lap.indices != np.repeat(np.arange(lap.shape[0]), np.diff(lap.indptr))] > 0)
+
+
+def floored_mass(surface: Surface) -> np.ndarray:
+    """``M̃``: the vertex areas floored at :data:`MASS_FLOOR` of their median."""
+    return np.maximum(surface.mass_diagonal, MASS_FLOOR * np.median(surface.mass_diagonal))
 
 
 def _membrane(lap: sp.csr_matrix) -> sp.csr_matrix:

@@ -4,13 +4,14 @@ Iterative filtering (Lin, Wang & Zhou 2009; Cicone & Zhou 2021) replaces the
 envelope mean of sifting by a low-pass filter whose width comes from the
 extrema spacing.  On a surface the low-pass is a resolvent,
 
-    W_k = (M + K_k)⁻¹ M,     K_k = t_k² L M̃⁻¹ L  (``filter="bilaplacian"``)
-                             K_k = t_k L          (``filter="membrane"``),
+    W_k = (M̃ + K_k)⁻¹ M̃,     K_k = t_k² L M̃⁻¹ L  (``filter="bilaplacian"``)
+                               K_k = t_k L          (``filter="membrane"``),
 
 with ``L`` the membrane part of the stiffness matrix and ``M̃`` the vertex
 areas floored at :data:`~hht3d.decomposition.envelopes.MASS_FLOOR` of their
-median (as the local-mean correction of :mod:`.sifting`).  The IMF and the
-new residue are
+median (as the local-mean correction of :mod:`.sifting`), so that
+``W_k = g(A)`` is a function of ``A = M̃⁻¹L`` alone (see "Evaluation").  The
+IMF and the new residue are
 
     f_k = P(W_k) r_{k−1},    r_k = r_{k−1} − f_k,    P(G) = 1 − I_G(m, m),
 
@@ -20,11 +21,12 @@ Bernstein polynomial of degree ``2m − 1`` with ``0 ≤ P ≤ 1`` on ``[0, 1]``
 and slow parts go to the residue).  Its transition narrows as ``1/√m``;
 ``m = 2`` is the smoothstep ``1 − 3G² + 2G³`` of the local-mean correction.
 
-**No cancellation, by construction.**  ``W_k`` is self-adjoint in the ``M``
+**No cancellation, by construction.**  ``W_k`` is self-adjoint in the ``M̃``
 inner product with its spectrum in ``(0, 1]``, so in its eigenbasis
-``⟨f_k, r_k⟩_M = Σ P(1 − P) c² ≥ 0``: each step's energy ratio is at most 1
-on every signal and every mesh, and no guard is needed.  Leakage comes only
-from energy in the filter's transition band.
+``⟨f_k, r_k⟩_M̃ = Σ P(1 − P) c² ≥ 0``: each step's energy ratio is at most 1
+on every signal and every mesh whose areas are above the floor (``M̃ = M``),
+and beyond it only the floored vertices' share can differ; no guard is
+needed.  Leakage comes only from energy in the filter's transition band.
 
 The cut
 -------
@@ -43,11 +45,29 @@ one membrane solve, and bounded to within :data:`LOCAL_RANGE` of ``d``:
 both symmetric positive semidefinite with the constants in their kernel, so
 the no-cancellation argument holds unchanged.
 
-Cost per IMF: one numeric factorization of ``M + K_k`` on the pattern the
-envelopes share (:class:`~hht3d.decomposition.envelopes.EnvelopeSolver`; one
-symbolic analysis per run) and ``2m − 1`` solves, in the Clenshaw recurrence
-of ``P`` in Chebyshev form (stable for any ``m``); ``cut="local"`` adds one
-factorization for the density.
+Evaluation
+----------
+``evaluation="solves"``: per IMF one numeric factorization of ``M + K_k`` on
+the pattern the envelopes share (:class:`~hht3d.decomposition.envelopes.EnvelopeSolver`;
+one symbolic analysis per run) and ``2m − 1`` solves, in the Clenshaw
+recurrence of ``P`` in Chebyshev form (stable for any ``m``); ``cut="local"``
+adds one factorization for the density.  The factor's fill grows faster than
+the mesh and dominates the memory of large surfaces.
+
+``evaluation="polynomial"`` (global cut): ``W = g(A)``, ``A = M̃⁻¹ L``,
+``g(λ) = 1/(1 + (tλ)²)`` (``1/(1 + tλ)`` for the membrane), so the IMF
+``P(g(A)) r`` is one function of ``A``, applied as a Chebyshev series to within
+:data:`POLYNOMIAL_TOLERANCE` (:mod:`hht3d.linalg.chebyshev`): sparse products
+only, memory linear in the vertices, no factorization.  It is the solves' filter
+(the IMFs agree to 1e-7 on spot and nefertiti, whose smallest areas are floored).
+Its degree grows like ``√(λ̄) / ω_c``, ``λ̄ ≥ λ_max(A)``, which the worst-shaped
+vertices set.  ``"auto"`` takes the polynomial on surfaces of
+:data:`POLYNOMIAL_VERTICES` or more, where a factorization's fill no longer fits, and with
+a slow backend (SuperLU, a plain install) from
+:data:`~hht3d.linalg.SLOW_FALLBACK_VERTICES` on, where its factorizations dominate (for the
+levels of :mod:`.multiresolution`, each level by its own size).  An IMF whose series would
+exceed :data:`MAX_POLYNOMIAL_DEGREE` (a cut far below the surface's resolution: the degree
+doubles as the cut halves, so on levels it stays bounded) is filtered by solves.
 
 Stopping
 --------
@@ -72,8 +92,11 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 from scipy.special import betainc
 
+from .. import linalg
 from ..geometry.surface import Surface
-from .envelopes import EnvelopeSolver
+from ..linalg.chebyshev import apply_series, chebyshev_series, recurrence_matrix, spectral_radius_bound
+from ..linalg.estimate import COSTS, SLOW_FALLBACK_VERTICES
+from .envelopes import EnvelopeSolver, floored_mass, membrane_laplacian
 from .extrema import active_extrema
 from .options import EMDOptions
 
@@ -85,6 +108,15 @@ __all__ = [
     "EXTREMA_FREQUENCY",
     "LOCAL_SMOOTHING",
     "LOCAL_RANGE",
+    "POLYNOMIAL_TOLERANCE",
+    "POLYNOMIAL_VERTICES",
+    "MAX_POLYNOMIAL_DEGREE",
+    "uses_polynomial",
+    "filter_response",
+    "polynomial_operator",
+    "polynomial_series",
+    "potential_response",
+    "POTENTIAL_TOLERANCE",
 ]
 
 #: ``κ``: a signal whose extrema lie ``d`` from their nearest opposite ones oscillates at ``κ / d``.
@@ -93,6 +125,60 @@ EXTREMA_FREQUENCY = math.pi
 LOCAL_SMOOTHING = 2.0
 #: The local spacing stays within this factor of the global one (either way).
 LOCAL_RANGE = 4.0
+#: Uniform error of the polynomial pass band (module notes, "Evaluation").
+POLYNOMIAL_TOLERANCE = 1e-7
+#: Uniform error of the series of the Riesz potential (``potential_response``), RieszOptions' default ``tol``.
+POTENTIAL_TOLERANCE = 1e-8
+#: ``evaluation="auto"`` takes the polynomial from this many vertices on.
+POLYNOMIAL_VERTICES = 2_000_000
+#: An IMF whose polynomial would need a higher degree is filtered by solves (the degree doubles as the cut halves).
+MAX_POLYNOMIAL_DEGREE = 4096
+
+
+def uses_polynomial(options: EMDOptions, n_vertices: int, backend: str | None = None) -> bool:
+    """Whether the filter of a surface of ``n_vertices`` is applied as a Chebyshev polynomial: asked for, or
+    ``"auto"`` from :data:`POLYNOMIAL_VERTICES` on, or from :data:`~hht3d.linalg.SLOW_FALLBACK_VERTICES`
+    with a slow backend (SuperLU); never with a local cut."""
+    if options.cut != "global" or options.evaluation == "solves":
+        return False
+    if options.evaluation == "polynomial" or n_vertices >= POLYNOMIAL_VERTICES:
+        return True
+    cost = COSTS.get(linalg.check_backend(backend))
+    return cost is not None and cost.slow and n_vertices >= SLOW_FALLBACK_VERTICES
+
+
+def filter_response(lam: np.ndarray, t: float, options: EMDOptions) -> np.ndarray:
+    """``P(g(λ))``: the share of an eigenfunction of eigenvalue ``λ`` that the filter of width ``t`` keeps
+    in the IMF (module notes)."""
+    power = 2 if options.filter == "bilaplacian" else 1
+    return passband(1.0 / (1.0 + (t * np.asarray(lam)) ** power), options.order)
+
+
+def potential_response(lam: np.ndarray, t: float, options: EMDOptions) -> np.ndarray:
+    """``ψ(λ) = P(g(λ)) / √(tλ)``: the Riesz potential ``λ^{-1/2} P(g(λ))`` of the IMF's filter over ``√t``, of
+    order 1 and vanishing like ``λ^{2m − 1/2}`` at 0, so its series converges like the filter's."""
+    lam = np.asarray(lam, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(lam > 0, filter_response(lam, t, options) / np.sqrt(t * lam), 0.0)
+
+
+def polynomial_operator(surface: Surface) -> tuple[float, sp.csr_matrix]:
+    """``λ̄ ≥ λ_max(M̃⁻¹L)`` (membrane ``L``, floored areas ``M̃``) and the
+    :func:`~hht3d.linalg.chebyshev.recurrence_matrix` of the polynomial filter on ``surface``."""
+    lap, mass = membrane_laplacian(surface), floored_mass(surface)
+    top = spectral_radius_bound(lap, mass)
+    return top, recurrence_matrix(lap, mass, top)
+
+
+def polynomial_series(
+    function: Callable[[np.ndarray], np.ndarray], top: float, t: float, tol: float
+) -> np.ndarray | None:
+    """The Chebyshev series on ``[0, λ̄]`` of a function that changes at ``1/t`` (a filter of width ``t``),
+    ``None`` beyond :data:`MAX_POLYNOMIAL_DEGREE`."""
+    if math.pi * math.sqrt(2 * top * t) > 2 * MAX_POLYNOMIAL_DEGREE:  # its first points alone would be more
+        return None
+    series = chebyshev_series(function, top, tol, scale=1.0 / t)
+    return series if len(series) - 1 <= MAX_POLYNOMIAL_DEGREE else None
 
 
 def opposite_distances(points: np.ndarray, is_max: np.ndarray, is_min: np.ndarray) -> np.ndarray:
@@ -143,21 +229,41 @@ class Filterer:
         self.surface = surface
         self.options = options
         self.eligible = eligible
-        self.solver = EnvelopeSolver(surface, backend)
-        self.mass = surface.mass_diagonal
-        self.n_solves = 0
+        self.backend = backend
+        self.polynomial = uses_polynomial(options, surface.n_vertices, backend)
+        self._solver: EnvelopeSolver | None = None
+        self._recurrence: tuple[float, sp.csr_matrix] | None = None
+        self.mass = floored_mass(surface)
+        self.n_solves = self.n_products = 0
         self.counts = (math.inf, math.inf)
+
+    @property
+    def solver(self) -> EnvelopeSolver:
+        """The solves' factorizations on the envelopes' pattern (made on first use)."""
+        if self._solver is None:
+            self._solver = EnvelopeSolver(self.surface, self.backend)
+        return self._solver
+
+    @property
+    def n_factorizations(self) -> int:
+        return 0 if self._solver is None else self._solver.n_factorizations
+
+    @property
+    def backend_name(self) -> str:
+        """What applied the filters: the solves' backend, ``"chebyshev"`` (the polynomial), or both joined by ``+``."""
+        solves = [linalg.check_backend(self.backend)] if self.n_factorizations or not self.n_products else []
+        return "+".join((["chebyshev"] if self.n_products else []) + solves)
 
     def imf(self, residue: np.ndarray) -> tuple[np.ndarray, dict] | None:
         """``P(W_k) r_{k−1}`` and its diagnostics; ``None`` when :meth:`cut` finds no oscillation."""
-        start, factorizations = time.perf_counter(), self.solver.n_factorizations
+        start, factorizations = time.perf_counter(), self.n_factorizations
         cut = self.cut(residue)
         if cut is None:
             return None
         t, passive, info = cut
-        imf = self.filtered(t, residue)
+        imf = self.filtered(t, residue, info)
         imf[passive] = 0.0
-        info.update(factorizations=self.solver.n_factorizations - factorizations, seconds=time.perf_counter() - start)
+        info.update(factorizations=self.n_factorizations - factorizations, seconds=time.perf_counter() - start)
         return imf, info
 
     def cut(self, residue: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict] | None:
@@ -180,21 +286,63 @@ class Filterer:
         info = {"n_maxima": counts[0], "n_minima": counts[1], "spacing": spacing, "cut_frequency": cut}
         return t, passive, {**info, "stop": "filter"}
 
-    def filtered(self, t: np.ndarray, residue: np.ndarray) -> np.ndarray:
-        """``P(W) r`` with the filter of width ``t`` (per vertex) on the shared pattern."""
-        factor = self.solver.factorize(self._system(t))
-        self.n_solves += 2 * self.options.order - 1
-        return apply_passband(factor.solve, self.mass, residue, self.options.order)
+    def filtered(self, t: np.ndarray, residue: np.ndarray, info: dict) -> np.ndarray:
+        """``P(W) r`` with the filter of width ``t`` (per vertex); the polynomial's degree goes in ``info``."""
+        return self.filtered_with_potential(t, residue, info, potential=False)[0]
+
+    def filtered_with_potential(
+        self, t: np.ndarray, residue: np.ndarray, info: dict, potential: bool = True
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """``P(W) r`` and, when the filter is a polynomial, its Riesz potential ``L^{-1/2} P(W) r`` from the same
+        pass (module notes, "Evaluation"); ``None`` for solves."""
+        width = float(t[0])
+        series = self._series(lambda lam: filter_response(lam, width, self.options), width, POLYNOMIAL_TOLERANCE)
+        if series is None:
+            factor = self.solver.factorize(self._system(t))
+            self.n_solves += 2 * self.options.order - 1
+            return apply_passband(factor.solve, self.mass, residue, self.options.order), None
+        info["degree"] = len(series) - 1
+        extra = self._potential_series(width) if potential else None
+        rows = [series] if extra is None else [series, extra]
+        stacked = np.zeros((len(rows), max(map(len, rows))))
+        for row, found in zip(stacked, rows):
+            row[: len(found)] = found
+        self.n_products += stacked.shape[1] - 1
+        out = apply_series(stacked, self._operator()[1], residue)
+        return out[0], None if extra is None else out[1] * math.sqrt(width)
+
+    def potential(self, t: np.ndarray, x: np.ndarray) -> np.ndarray | None:
+        """``L^{-1/2} P(W) x`` by the polynomial (``None`` when its degree would be too high, or for solves)."""
+        width = float(t[0])
+        series = self._potential_series(width)
+        if series is None:
+            return None
+        self.n_products += len(series) - 1
+        return apply_series(series, self._operator()[1], x) * math.sqrt(width)
+
+    def _series(self, function: Callable[[np.ndarray], np.ndarray], width: float, tol: float) -> np.ndarray | None:
+        """:func:`polynomial_series` on this surface's ``λ̄``; ``None`` for solves."""
+        return polynomial_series(function, self._operator()[0], width, tol) if self.polynomial else None
+
+    def _potential_series(self, width: float) -> np.ndarray | None:
+        return self._series(lambda lam: potential_response(lam, width, self.options), width, POTENTIAL_TOLERANCE)
+
+    def _operator(self) -> tuple[float, sp.csr_matrix]:
+        """:func:`polynomial_operator` of the surface (made once)."""
+        if self._recurrence is None:
+            self._recurrence = polynomial_operator(self.surface)
+        return self._recurrence
 
     def totals(self) -> dict:
-        """Run totals for ``EMDResult.info``: ``solves``, ``factorizations``, ``backend``; no sifts, no
-        envelope constraints."""
+        """Run totals for ``EMDResult.info``: ``solves``, ``products`` (of the polynomial), ``factorizations``,
+        ``backend``; no sifts, no envelope constraints."""
         return {
             "sifts": 0,
             "solves": self.n_solves,
+            "products": self.n_products,
             "max_constraint_error": 0.0,
-            "factorizations": self.solver.n_factorizations,
-            "backend": self.solver.backend,
+            "factorizations": self.n_factorizations,
+            "backend": self.backend_name,
         }
 
     def _local_spacing(self, extrema: np.ndarray, distances: np.ndarray) -> np.ndarray:
@@ -203,7 +351,7 @@ class Filterer:
         e = self.solver.energies
         spacing = float(np.median(distances))
         data = (LOCAL_SMOOTHING * spacing) ** 2 * e.laplacian
-        data[e.diagonal] += self.mass
+        data[e.diagonal] += self.surface.mass_diagonal
         factor = self.solver.factorize(e.matrix(data))
         weight, value = np.zeros(len(extrema)), np.zeros(len(extrema))
         weight[extrema], value[extrema] = 1.0, np.log(distances)

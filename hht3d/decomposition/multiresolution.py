@@ -29,7 +29,12 @@ finer residues).  The trend stop compares residues on one level.
 Prolonging a residue back to the input to find its extrema there does not work: the
 interpolation's kinks are extrema too (the cut of IMF 7 rose threefold).  The
 IMFs on their levels are kept in ``EMDResult.levels`` for the Riesz transform of each IMF
-on its level (:func:`hht3d.spectral.multilevel.riesz_part`).
+on its level (:func:`hht3d.spectral.multilevel.riesz_part`).  When a level's filter is a
+polynomial (:mod:`.filtering`, "Evaluation"), IMF ``k`` there is ``p(A) r + e``, ``p ≈ P∘g`` and
+``e = low − back`` what the transfer left.  Its entry also keeps ``x = r + e`` and the Riesz
+potential ``ψ(A) x`` (:func:`~hht3d.decomposition.filtering.potential_response`): that of ``r``
+from the filter's own pass (the same ``T_j(Y) r``, other coefficients), that of ``e`` from one
+more pass on the IMFs whose residue moved.
 """
 
 from __future__ import annotations
@@ -50,8 +55,10 @@ __all__ = ["MultilevelFilterer", "COARSE_MIN_DEGREE", "SPACING_LIMIT", "MULTIRES
 SPACING_LIMIT = 0.5
 #: Extrema on a coarse level are vertices of at least this many neighbours (module notes).
 COARSE_MIN_DEGREE = 5
-#: ``multiresolution="auto"`` uses the hierarchy from this many vertices on.
-MULTIRESOLUTION_VERTICES = 200_000
+#: ``multiresolution="auto"`` uses the hierarchy from this many vertices on: the measured crossover, where
+#: levels stop being slower than the direct path (whole HHT, PARDISO: 1.12× at 12.5k, 0.82× at 25k,
+#: 0.62× at 50k; ``benchmarks/results/multiresolution.md``).
+MULTIRESOLUTION_VERTICES = 20_000
 
 
 def uses_levels(options: EMDOptions, n_vertices: int) -> bool:
@@ -70,8 +77,8 @@ class MultilevelFilterer:
         self.filterers: dict[int, Filterer] = {}
         self.level = 0
         self.residue: np.ndarray | None = None
-        self.levels: list[tuple[int, np.ndarray]] = []
-        self.retired: dict[int, tuple[int, int, str]] = {}
+        self.levels: list[tuple[int, np.ndarray, np.ndarray | None, np.ndarray | None]] = []
+        self.retired: dict[int, tuple[int, int, int, str]] = {}
 
     def filterer(self, index: int) -> Filterer:
         """The filterer of level ``index`` (made once)."""
@@ -91,12 +98,13 @@ class MultilevelFilterer:
         here = self.level
         r = residue if self.residue is None else self.residue
         filterer = self.filterer(here)
-        factorizations = filterer.solver.n_factorizations
+        factorizations = filterer.n_factorizations
         cut = filterer.cut(r)
         if cut is None:
             return None
         t, _, info = cut
-        low = r - filterer.filtered(t, r)
+        passed, potential = filterer.filtered_with_potential(t, r, info)
+        low = r - passed
         target = self.hierarchy.coarsest_resolving(info["cut_frequency"], SPACING_LIMIT, here)
         carried = self.hierarchy.restrict(low, here, target)
         back = self.hierarchy.prolong(carried, target, here)
@@ -108,10 +116,14 @@ class MultilevelFilterer:
             level_vertices=len(r),
             residue_level=target,
             transfer_error=math.sqrt(float(mass @ (low - back) ** 2)) / norm if norm > 0 else 0.0,
-            factorizations=filterer.solver.n_factorizations - factorizations,
+            factorizations=filterer.n_factorizations - factorizations,
             seconds=time.perf_counter() - start,
         )
-        self.levels.append((here, level_imf))
+        if potential is not None and target > here:  # the transfer's remainder e = low − back is in the IMF too
+            remainder = filterer.potential(t, low - back)
+            potential = None if remainder is None else potential + remainder
+        # a polynomial IMF is (r − low) + e: its potential is that of r + e through the filter
+        self.levels.append((here, level_imf, level_imf + low if "degree" in info else None, potential))
         self.residue, self.level = carried, target
         if target > here:  # residues never come back: free the level's factorization now
             self._retire(here)
@@ -120,20 +132,26 @@ class MultilevelFilterer:
     def _retire(self, index: int) -> None:
         """Drop the filterer of level ``index`` (its factorizations), keeping its counts for :meth:`totals`."""
         filterer = self.filterers.pop(index)
-        self.retired[index] = (filterer.n_solves, filterer.solver.n_factorizations, filterer.solver.backend)
+        self.retired[index] = _counts(filterer)
 
     def totals(self) -> dict:
         """Run totals over the levels for ``EMDResult.info``, with ``levels``: the vertices of each level used."""
         if not self.filterers and not self.retired:
             self.filterer(0)
         counts = dict(self.retired)
-        counts.update({i: (f.n_solves, f.solver.n_factorizations, f.solver.backend) for i, f in self.filterers.items()})
+        counts.update({i: _counts(f) for i, f in self.filterers.items()})
         used = sorted(counts)
         return {
             "sifts": 0,
             "solves": sum(counts[i][0] for i in used),
+            "products": sum(counts[i][1] for i in used),
             "max_constraint_error": 0.0,
-            "factorizations": sum(counts[i][1] for i in used),
-            "backend": counts[used[0]][2],
+            "factorizations": sum(counts[i][2] for i in used),
+            "backend": "+".join(dict.fromkeys(name for i in used for name in counts[i][3].split("+"))),
             "levels": [self.hierarchy.levels[i].surface.n_vertices for i in used],
         }
+
+
+def _counts(filterer: Filterer) -> tuple[int, int, int, str]:
+    """A level's solves, polynomial products, factorizations and backend."""
+    return filterer.n_solves, filterer.n_products, filterer.n_factorizations, filterer.backend_name

@@ -39,6 +39,7 @@ __all__ = [
     "FILTERS",
     "CUTS",
     "MULTIRESOLUTION",
+    "EVALUATIONS",
     "ENVELOPES",
     "EXTREMA_RULES",
     "GUARD_TENSIONS",
@@ -47,12 +48,14 @@ __all__ = [
 
 #: Decomposition methods: envelope sifting (Sec. 4.1, :mod:`.sifting`) or iterative filtering (:mod:`.filtering`).
 METHODS = ("sifting", "filtering")
-#: Low-pass resolvents of iterative filtering: ``(M + t² L M̃⁻¹ L)⁻¹ M`` or ``(M + t L)⁻¹ M``.
+#: Low-pass resolvents of iterative filtering: ``(M̃ + t² L M̃⁻¹ L)⁻¹ M̃`` or ``(M̃ + t L)⁻¹ M̃``.
 FILTERS = ("bilaplacian", "membrane")
 #: Cuts of iterative filtering: one frequency for the surface, or one per vertex from the local extrema spacing.
 CUTS = ("global", "local")
 #: When iterative filtering carries its residues on coarser levels (:mod:`.multiresolution`).
 MULTIRESOLUTION = ("auto", "always", "never")
+#: How iterative filtering applies its pass band: sparse solves, or a Chebyshev polynomial (:mod:`.filtering`).
+EVALUATIONS = ("auto", "solves", "polynomial")
 #: Sifting stopping rules.
 STOPPING_RULES = ("sd", "rfg", "s_number", "fixed")
 #: Envelope interpolants: thin plate in tension (default), the paper's thin plate (Eq. 11), membrane.
@@ -175,8 +178,15 @@ class EMDOptions(Record):
     )
     multiresolution: str = option(
         "auto",
-        "method filtering: carry each residue on the coarsest level that resolves it (auto: from 200,000 vertices)",
+        "method filtering: carry each residue on the coarsest level that resolves it "
+        "(auto: from 20,000 vertices, the measured crossover)",
         choices=MULTIRESOLUTION,
+    )
+    evaluation: str = option(
+        "auto",
+        "method filtering: apply the pass band by sparse solves or by a Chebyshev polynomial, products only "
+        "(auto: on levels from 2,000,000 vertices, or 20,000 with SuperLU; global cut only)",
+        choices=EVALUATIONS,
     )
 
     @property

@@ -11,7 +11,13 @@ import scipy.sparse.linalg as spla
 
 from helpers.meshes import grid, icosphere
 from hht3d import Surface, emd, hht
-from hht3d.decomposition.filtering import apply_passband, opposite_distances, passband
+from hht3d.decomposition.filtering import (
+    POLYNOMIAL_TOLERANCE,
+    apply_passband,
+    opposite_distances,
+    passband,
+    uses_polynomial,
+)
 from hht3d.geometry.signals import fluctuation
 
 
@@ -51,17 +57,54 @@ def test_clenshaw_matches_the_eigenbasis_and_never_cancels(order):
         np.testing.assert_allclose(inner, np.sum(share * (1 - share) * c**2), rtol=1e-9, atol=1e-12)
 
 
-def test_first_imf_is_the_filter_of_the_module_notes(sphere):
-    """On an icosphere (Delaunay, no area below the floor, so ``K = t² L M⁻¹ L``) IMF 1 is
-    ``Σ_j P(1/(1 + (λ_j/ω_c²)²)) ⟨φ_j, s⟩_M φ_j`` over the generalized eigenpairs of ``(L, M)``."""
+@pytest.mark.parametrize("evaluation", ["solves", "polynomial"])
+def test_first_imf_is_the_filter_of_the_module_notes(sphere, evaluation):
+    """On an icosphere (Delaunay, no area below the floor, so ``K = t² L M⁻¹ L`` and ``M̃ = M``) IMF 1 is
+    ``Σ_j P(1/(1 + (λ_j/ω_c²)²)) ⟨φ_j, s⟩_M φ_j`` over the generalized eigenpairs of ``(L, M)``: to 1e-8
+    pointwise by solves, and within the polynomial's ``POLYNOMIAL_TOLERANCE`` (M-norm, relative) by it."""
     s = sphere
     signal = np.random.default_rng(1).standard_normal(s.n_vertices)
-    result = emd(s, signal, method="filtering", cut="global", max_imfs=1)
+    result = emd(s, signal, method="filtering", cut="global", max_imfs=1, evaluation=evaluation)
     cut = result.info["imfs"][0]["cut_frequency"]
     lam, phi = sl.eigh(s.stiffness.toarray(), np.diag(s.mass_diagonal))
     share = passband(1 / (1 + (lam / cut**2) ** 2), result.info["options"]["order"])
     expected = phi @ (share * (phi.T @ (s.mass_diagonal * signal)))
-    np.testing.assert_allclose(result.imfs[0], expected, atol=1e-8 * np.abs(signal).max())
+    if evaluation == "solves":
+        np.testing.assert_allclose(result.imfs[0], expected, atol=1e-8 * np.abs(signal).max())
+    else:
+        m = s.mass_diagonal
+        error = np.sqrt(m @ (result.imfs[0] - expected) ** 2 / (m @ signal**2))
+        assert error <= POLYNOMIAL_TOLERANCE and result.info["imfs"][0]["degree"] > 0, error
+        assert result.info["backend"] == "chebyshev" and result.info["factorizations"] == 0
+
+
+def test_auto_takes_the_polynomial_on_large_surfaces_and_global_cuts_only():
+    from hht3d.decomposition import filtering
+    from hht3d.decomposition.options import EMDOptions
+
+    assert not uses_polynomial(EMDOptions(method="filtering"), filtering.POLYNOMIAL_VERTICES - 1)
+    assert uses_polynomial(EMDOptions(method="filtering"), filtering.POLYNOMIAL_VERTICES)
+    assert not uses_polynomial(EMDOptions(method="filtering", cut="local", evaluation="polynomial"), 10**9)
+    assert not uses_polynomial(EMDOptions(method="filtering", evaluation="solves"), 10**9)
+
+
+def test_an_imf_beyond_the_largest_degree_is_filtered_by_solves(sphere, monkeypatch):
+    """With the largest degree lowered below IMF 2's, IMF 1 is a polynomial and IMF 2 comes from solves, and
+    both equal the solves' run (the polynomial to its tolerance)."""
+    from hht3d.decomposition import filtering
+
+    signal = np.random.default_rng(4).standard_normal(sphere.n_vertices)
+    polynomial = emd(sphere, signal, method="filtering", evaluation="polynomial", max_imfs=2)
+    first, second = (imf["degree"] for imf in polynomial.info["imfs"])
+    monkeypatch.setattr(filtering, "MAX_POLYNOMIAL_DEGREE", (first + second) // 2)
+    mixed = emd(sphere, signal, method="filtering", evaluation="polynomial", max_imfs=2)
+    assert "degree" in mixed.info["imfs"][0] and "degree" not in mixed.info["imfs"][1]
+    assert mixed.info["factorizations"] == 1 and mixed.info["backend"].startswith("chebyshev+")
+    solves = emd(sphere, signal, method="filtering", evaluation="solves", max_imfs=2)
+    m = sphere.mass_diagonal
+    for got in (polynomial, mixed):
+        error = np.sqrt((m * (got.imfs - solves.imfs) ** 2).sum() / (m @ signal**2))
+        assert error < 2 * POLYNOMIAL_TOLERANCE, error
 
 
 @pytest.mark.parametrize("options", [{"cut": "global"}, {"cut": "local"}, {"filter": "membrane"}, {"order": 2}])

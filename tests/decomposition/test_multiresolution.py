@@ -74,9 +74,11 @@ def test_quality_within_a_hundredth_of_the_direct_path(runs):
 
 
 def test_auto_keeps_the_direct_path_below_the_crossover(sphere, signal):
-    assert sphere.n_vertices < MULTIRESOLUTION_VERTICES
-    auto = emd(sphere, signal, method="filtering", max_imfs=2)
+    small = Surface(*icosphere(5))
+    assert small.n_vertices < MULTIRESOLUTION_VERTICES <= sphere.n_vertices
+    auto = emd(small, small.vertices[:, 2] ** 3, method="filtering", max_imfs=2)
     assert auto.levels == () and "levels" not in auto.info
+    assert emd(sphere, signal, method="filtering", max_imfs=1).levels
     options = EMDOptions(method="filtering")
     assert not uses_levels(options, MULTIRESOLUTION_VERTICES - 1) and uses_levels(options, MULTIRESOLUTION_VERTICES)
     assert not uses_levels(EMDOptions(multiresolution="always"), 10**8)  # sifting never uses levels
