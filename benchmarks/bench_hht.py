@@ -219,9 +219,12 @@ def _worker(args: list[str], env: dict, out: Path) -> dict:
 
 
 def _store(results: dict, part: str, record: dict) -> None:
-    """Put ``record`` in ``results[part]`` in place of the record of the same case and backend."""
+    """Put ``record`` in ``results[part]`` in place of the record of the same case (and backend, in the
+    backends part: elsewhere a failed run's record, which has none, is replaced by its success too)."""
     results[part] = [
-        r for r in results[part] if (r["case"], r.get("backend")) != (record["case"], record.get("backend"))
+        r
+        for r in results[part]
+        if r["case"] != record["case"] or (part == "backends" and r.get("backend") != record.get("backend"))
     ]
     results[part].append(record)
 

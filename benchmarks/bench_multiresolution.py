@@ -1,14 +1,23 @@
 """Iterative filtering on a coarsening hierarchy against the direct full-resolution path, in one run (issue 39).
 
-Per model, the whole HHT of the mean-curvature signal with ``method="filtering"`` twice, each in
-its own subprocess (so its peak resident memory, ``VmHWM``, is its own):
+Per model, the whole HHT of the mean-curvature signal with ``method="filtering"`` in up to four
+settings (:data:`MODES`), each in its own subprocess (so its peak resident memory, ``VmHWM``, is
+its own):
 
-``direct``    ``multiresolution="never"``: every IMF filtered on the input's vertices and its Riesz
-              transform by the full quadrature there (the baseline, same run);
-``multires``  ``multiresolution="always"``: each residue carried on the coarsest level of
-              :func:`hht3d.geometry.hierarchy.hierarchy` that resolves it
-              (:mod:`hht3d.decomposition.multiresolution`), and the Riesz transform of each IMF
-              on its level and in its band (:mod:`hht3d.spectral.multilevel`).
+``direct``      ``multiresolution="never"``, ``evaluation="solves"``: every IMF filtered on the
+                input's vertices and its Riesz transform by the full quadrature there (the
+                baseline, same run);
+``multires``    ``multiresolution="always"``, ``evaluation="solves"``: each residue carried on the
+                coarsest level of :func:`hht3d.geometry.hierarchy.hierarchy` that resolves it
+                (:mod:`hht3d.decomposition.multiresolution`), and the Riesz transform of each IMF
+                on its level and in its band (:mod:`hht3d.spectral.multilevel`);
+``polynomial``  the same levels with ``evaluation="polynomial"``: every filter that can be is a
+                Chebyshev polynomial, and so is the Riesz potential of its IMF (no factorization
+                on those levels);
+``plain``       ``multires``'s settings with ``evaluation="auto"`` and ``backend="superlu"``: a plain
+                install (polynomial from 20,000 vertices), against ``multires`` on the fast backend.
+
+All but ``plain`` use the fastest backend installed.
 
 A worker first runs the same HHT on spot (2.9k vertices; loads the solver and its libraries, not
 counted), resets its peak (``/proc/self/clear_refs``), then loads the model, takes the signal and
@@ -20,17 +29,18 @@ vectors (summed over the three components), the ratio of the median instantaneou
 the level each IMF was filtered on and the ``transfer_error`` of its residue
 (``‖r_k − P R r_k‖_M / ‖r_k‖_M``), and the differences (multires − direct) of the energy ratio
 and of the index of orthogonality.  Time ratios are multires / direct of the whole ``hht``, of
-EMD and of the spectra.
+EMD and of the spectra, for each setting against ``direct``.
 
 Models: ``nefertiti`` (50k) and ``igea`` (134k) from ``../shared/data`` and the generated sizes of
 :data:`benchmarks.meshes.SCALING` (``1m``: igea decimated and Loop-subdivided, made once and kept
 in ``--folder``).  Run::
 
-    python -m benchmarks.bench_multiresolution [--models nefertiti igea 1m] [--folder /tmp/hht3d-bench]
-        [--timeout 3600]
+    python -m benchmarks.bench_multiresolution [--models 12k 25k nefertiti igea 1m]
+        [--modes direct multires polynomial plain] [--folder /tmp/hht3d-bench] [--timeout 3600]
 
 Writes ``results/multiresolution.json`` and ``results/multiresolution.md`` (the records of models
-not re-run are kept from the previous file).
+and settings not re-run are kept from the previous file).  ``12k`` and ``25k`` (igea decimated) with
+nefertiti place the crossover of ``multiresolution="auto"``.
 """
 
 from __future__ import annotations
@@ -61,9 +71,16 @@ from benchmarks.common import (
 )
 from benchmarks.meshes import SCALING
 
-MODELS = ["nefertiti", "igea", "1m"]
-#: name -> the ``multiresolution`` setting of the run; ``direct`` is the baseline.
-MODES = {"direct": "never", "multires": "always"}
+MODELS = ["12k", "25k", "nefertiti", "igea", "1m"]
+#: name -> the settings of the run; ``direct`` is the baseline.
+MODES = {
+    "direct": {"multiresolution": "never", "evaluation": "solves"},
+    "multires": {"multiresolution": "always", "evaluation": "solves"},
+    "polynomial": {"multiresolution": "always", "evaluation": "polynomial"},
+    "plain": {"multiresolution": "always", "evaluation": "auto", "backend": "superlu"},
+}
+#: The setting each one is compared with, beside ``direct``: the plain install against the fast backend.
+PAIRS = {"multires": "direct", "polynomial": "direct", "plain": "multires"}
 FOLDER = Path("/tmp/hht3d-bench")
 #: A run still going after this many seconds is stopped and reported as such.
 CASE_TIMEOUT = 3600
@@ -98,7 +115,7 @@ def one(name: str, mode: str, folder: Path) -> dict:
 
     setting = MODES[mode]
     spot = hht3d.load(SPOT)
-    hht3d.hht(spot, mean_curvature(spot), method="filtering", multiresolution=setting)
+    hht3d.hht(spot, mean_curvature(spot), method="filtering", **setting)
     path = mesh_path(name, folder)
     reset = reset_peak()
     baseline = status_mb("VmRSS")
@@ -107,7 +124,7 @@ def one(name: str, mode: str, folder: Path) -> dict:
     loaded = time.perf_counter()
     signal = mean_curvature(surface)
     start = time.perf_counter()
-    result = hht3d.hht(surface, signal, method="filtering", multiresolution=setting)
+    result = hht3d.hht(surface, signal, method="filtering", **setting)
     seconds = time.perf_counter() - start
     peak = status_mb("VmHWM")
     quality = result.quality
@@ -122,10 +139,11 @@ def one(name: str, mode: str, folder: Path) -> dict:
         mass=surface.mass_diagonal,
     )
     keys = ("level", "level_vertices", "residue_level", "transfer_error", "cut_frequency", "seconds", "factorizations")
+    keys += ("degree",)
     return {
         "model": name,
         "mode": mode,
-        "multiresolution": setting,
+        "settings": setting,
         "source": str(path),
         "vertices": surface.n_vertices,
         "imfs": result.n_imfs,
@@ -134,6 +152,7 @@ def one(name: str, mode: str, folder: Path) -> dict:
         "stop_reason": emd.get("stop_reason"),
         "factorizations": emd.get("factorizations"),
         "solves": emd.get("solves"),
+        "products": emd.get("products"),
         "backend": emd.get("backend"),
         "seconds": {
             "load": loaded - load_before,
@@ -163,9 +182,9 @@ def _error(mass: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.sum(weight * (b - a) ** 2) / reference)) if reference > 0 else float("nan")
 
 
-def compare(folder: Path, name: str, direct: dict, multires: dict) -> dict:
-    """IMF by IMF, the multires run against the direct one (module notes)."""
-    a, b = (np.load(arrays_path(folder, name, mode)) for mode in MODES)
+def compare(folder: Path, name: str, modes: tuple[str, str], direct: dict, multires: dict) -> dict:
+    """IMF by IMF, the run of ``modes[1]`` (``multires``) against that of ``modes[0]`` (``direct``) (module notes)."""
+    a, b = (np.load(arrays_path(folder, name, mode)) for mode in modes)
     mass = a["mass"]
     k = min(len(a["imfs"]), len(b["imfs"]))
     per_imf = []
@@ -190,24 +209,26 @@ def compare(folder: Path, name: str, direct: dict, multires: dict) -> dict:
                 "frequency_ratio": float(np.median(fb) / np.median(fa)),
                 "median_pointwise_frequency_ratio": float(np.median(fb[positive] / fa[positive])),
                 "seconds_direct": direct["per_imf"][i].get("seconds") if i < len(direct["per_imf"]) else None,
-                "seconds_multires": info.get("seconds"),
+                "seconds_setting": info.get("seconds"),
             }
         )
     ratio = {key: multires["seconds"][key] / direct["seconds"][key] for key in ("hht", "emd", "spectra")}
     return {
         "model": name,
+        "modes": list(modes),
         "vertices": direct["vertices"],
         "imfs": [direct["imfs"], multires["imfs"]],
         "levels": multires["levels"],
         "seconds_direct": direct["seconds"]["hht"],
-        "seconds_multires": multires["seconds"]["hht"],
+        "seconds_setting": multires["seconds"]["hht"],
         "time_ratio": ratio["hht"],
         "emd_ratio": ratio["emd"],
         "spectra_ratio": ratio["spectra"],
         "peak_mb_direct": direct["peak_mb"],
-        "peak_mb_multires": multires["peak_mb"],
+        "peak_mb_setting": multires["peak_mb"],
         "delta_energy_ratio": multires["energy_ratio"] - direct["energy_ratio"],
         "delta_io": multires["orthogonality_index"] - direct["orthogonality_index"],
+        "runs": len(multires.get("repeats", [0])),
         "per_imf": per_imf,
     }
 
@@ -215,32 +236,52 @@ def compare(folder: Path, name: str, direct: dict, multires: dict) -> dict:
 # -- driver ------------------------------------------------------------------------------------------
 
 
-def run_model(name: str, folder: Path, env: dict, timeout: float) -> dict:
-    """Both runs of one model, each in its own subprocess, and their comparison; errors recorded."""
-    record: dict = {"model": name, "runs": {}}
-    for mode in MODES:
-        log(f"{name} {mode} (multiresolution={MODES[mode]!r}) ...")
-        try:
-            done = run_worker(__file__, ["--one", name, mode, "--folder", str(folder)], env=env, timeout=timeout)
-        except subprocess.TimeoutExpired:
-            record["runs"][mode] = {"stopped_s": timeout}
-            log(f"  stopped after {timeout} s")
-            continue
-        if done.returncode != 0:
-            record["runs"][mode] = {"error": f"exit {done.returncode}:\n{done.stderr[-4000:]}"}
-            log(f"  failed (exit {done.returncode}):\n{done.stderr[-4000:]}")
-            continue
-        r = worker_answer(done)
-        record["runs"][mode] = r
-        log(
-            f"  {r['vertices']:,} V, {r['imfs']} IMFs, levels {r['levels']}, hht {r['seconds']['hht']:.1f} s "
-            f"(EMD {r['seconds']['emd']:.1f}, spectra {r['seconds']['spectra']:.1f}), peak {r['peak_mb']:.0f} MB"
-        )
+def _run_once(name: str, mode: str, folder: Path, env: dict, timeout: float) -> dict:
+    """One worker's answer, or the record of its failure."""
+    try:
+        done = run_worker(__file__, ["--one", name, mode, "--folder", str(folder)], env=env, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        log(f"  stopped after {timeout} s")
+        return {"stopped_s": timeout}
+    if done.returncode != 0:
+        log(f"  failed (exit {done.returncode}):\n{done.stderr[-4000:]}")
+        return {"error": f"exit {done.returncode}:\n{done.stderr[-4000:]}"}
+    return worker_answer(done)
+
+
+def run_model(
+    name: str, modes: list[str], folder: Path, env: dict, timeout: float, previous: dict, repeats: int = 1
+) -> dict:
+    """The runs of one model, each in its own subprocess, ``repeats`` times with the median kept, and their
+    comparisons; errors recorded, the runs of ``previous`` not re-run kept."""
+    record: dict = {"model": name, "runs": {m: r for m, r in previous.get("runs", {}).items() if m not in modes}}
+    done_runs: dict[str, list[dict]] = {mode: [] for mode in modes}
+    for repeat in range(repeats):  # settings in turn, so a drift of the machine's speed hits them alike
+        for mode in [m for m in modes if m not in record["runs"] or done_runs[m]]:
+            log(f"{name} {mode} ({MODES[mode]}) run {repeat + 1}/{repeats} ...")
+            answer = _run_once(name, mode, folder, env, timeout)
+            if "seconds" not in answer:
+                record["runs"][mode] = answer
+                done_runs[mode] = []
+                continue
+            done_runs[mode].append(answer)
+            record["runs"][mode] = answer
+            log(
+                f"  {answer['vertices']:,} V, {answer['imfs']} IMFs, levels {answer['levels']}, "
+                f"hht {answer['seconds']['hht']:.1f} s (EMD {answer['seconds']['emd']:.1f}, "
+                f"spectra {answer['seconds']['spectra']:.1f}), peak {answer['peak_mb']:.0f} MB"
+            )
+    for mode, answers in done_runs.items():
+        if answers:  # the run of median time, with every run's time
+            answers.sort(key=lambda a: a["seconds"]["hht"])
+            record["runs"][mode] = answers[len(answers) // 2] | {"repeats": [a["seconds"]["hht"] for a in answers]}
     runs = record["runs"]
-    if all("seconds" in runs.get(mode, {}) for mode in MODES):
-        record["comparison"] = compare(folder, name, runs["direct"], runs["multires"])
-        c = record["comparison"]
-        log(f"  time ratio {c['time_ratio']:.2f} (EMD {c['emd_ratio']:.2f}, spectra {c['spectra_ratio']:.2f})")
+    record["comparisons"] = {}
+    for mode, base in PAIRS.items():
+        if "seconds" in runs.get(mode, {}) and "seconds" in runs.get(base, {}):
+            c = compare(folder, name, (base, mode), runs[base], runs[mode])
+            record["comparisons"][mode] = c
+            log(f"  {mode}/{base} {c['time_ratio']:.2f} (EMD {c['emd_ratio']:.2f}, spectra {c['spectra_ratio']:.2f})")
     return record
 
 
@@ -258,56 +299,62 @@ def markdown(data: dict) -> str:
         "",
         f"Machine: {meta['platform']}, {meta['cpus']} CPUs, backend {meta['backend']}, load "
         f"{meta['load_average']} at the start and {meta.get('load_average_end')} at the end ({meta['date']}). "
-        '`hht3d.hht(surface, mean_curvature(surface), method="filtering", multiresolution=...)`, '
-        'each run in its own process after a warm-up on spot; *direct* is `"never"` (the baseline), '
-        '*multires* `"always"`. Seconds are the whole `hht` call; ratios are multires / direct. '
-        "ΔER and ΔIO are multires − direct.",
+        '`hht3d.hht(surface, mean_curvature(surface), method="filtering", ...)`, each run in its own '
+        'process after a warm-up on spot. *direct*: `multiresolution="never"` (the baseline); *multires*: '
+        '`"always"`, filters by solves; *polynomial*: `"always"`, `evaluation="polynomial"`; *plain*: '
+        '*multires* on SuperLU with `evaluation="auto"`, compared with *multires*. Seconds are the whole '
+        "`hht` call; ratios are setting / its baseline; ΔER and ΔIO are setting − baseline. Models run with "
+        "`--repeat N` ran each setting N times in turn; the run of median time is shown (all times: *runs*).",
         "",
         "## Per model",
         "",
     ]
     rows, failures = [], []
     for rec in data["models"]:
-        c = rec.get("comparison")
-        if c is None:
-            for mode, run in rec["runs"].items():
-                if "seconds" not in run:
-                    failures.append(f"- {rec['model']} {mode}: {_failure(run)}")
-            continue
-        rows.append(
-            [c["model"], f"{c['vertices']:,}", f"{c['imfs'][0]} / {c['imfs'][1]}"]
-            + [short(c["seconds_direct"], 1), short(c["seconds_multires"], 1), short(c["time_ratio"])]
-            + [short(c["emd_ratio"]), short(c["spectra_ratio"])]
-            + [short(c["peak_mb_direct"], 0), short(c["peak_mb_multires"], 0)]
-            + [f"{c['delta_energy_ratio']:+.4f}", f"{c['delta_io']:+.4f}"]
-            + [", ".join(f"{v:,}" for v in c["levels"])]
-        )
-    header = ["model", "vertices", "IMFs direct / multires", "direct s", "multires s", "ratio"]
-    header += ["EMD ratio", "spectra ratio", "peak MB direct", "peak MB multires", "ΔER", "ΔIO", "level vertices used"]
+        for mode, run in rec["runs"].items():
+            if "seconds" not in run:
+                failures.append(f"- {rec['model']} {mode}: {_failure(run)}")
+        for c in rec.get("comparisons", {}).values():
+            rows.append(_model_row(c))
+    header = ["model", "setting / baseline", "vertices", "IMFs", "baseline s", "setting s", "ratio"]
+    header += ["EMD ratio", "spectra ratio", "peak MB baseline", "peak MB setting", "ΔER", "ΔIO", "level vertices used"]
+    header += ["runs"]
     out += [table(header, rows), ""]
     if failures:
         out += ["Failed or stopped runs:", "", *failures, ""]
     out += [
-        "## Per IMF (multires against direct)",
+        "## Per IMF (each setting against its baseline)",
         "",
         "*level*: the level IMF k was filtered on (its vertices) → the level its residue moved to; "
-        "errors are relative M-norm errors against the direct run; *freq ratio* is the median "
-        "frequency of multires over that of direct.",
+        "*degree*: of its polynomial (blank: solves); errors are relative M-norm errors against the "
+        "baseline run; *freq ratio* is the median frequency of the setting over that of the baseline.",
         "",
     ]
     rows = []
     for rec in data["models"]:
-        c = rec.get("comparison")
-        for p in (c or {}).get("per_imf", []):
-            level = "" if p["level"] is None else f"{p['level']} ({p['level_vertices']:,}) → {p['residue_level']}"
-            rows.append(
-                [c["model"], p["k"], level, short(p["transfer_error"], 3)]
-                + [short(p["imf_error"], 3), short(p["amplitude_error"], 3), short(p["riesz_error"], 3)]
-                + [short(p["frequency_ratio"], 3)]
-            )
-    header = ["model", "k", "level", "transfer error", "IMF err", "amplitude err", "Riesz err", "freq ratio"]
+        for c in rec.get("comparisons", {}).values():
+            for p in c.get("per_imf", []):
+                level = "" if p["level"] is None else f"{p['level']} ({p['level_vertices']:,}) → {p['residue_level']}"
+                rows.append(
+                    [c["model"], " / ".join(c["modes"][::-1]), p["k"], level, short(p.get("degree"), 0)]
+                    + [short(p["transfer_error"], 3), short(p["imf_error"], 3), short(p["amplitude_error"], 3)]
+                    + [short(p["riesz_error"], 3), short(p["frequency_ratio"], 3)]
+                )
+    header = ["model", "setting / baseline", "k", "level", "degree", "transfer error", "IMF err", "amplitude err"]
+    header += ["Riesz err", "freq ratio"]
     out += [table(header, rows), ""]
     return "\n".join(out)
+
+
+def _model_row(c: dict) -> list:
+    return (
+        [c["model"], " / ".join(c["modes"][::-1]), f"{c['vertices']:,}", f"{c['imfs'][0]} / {c['imfs'][1]}"]
+        + [short(c["seconds_direct"], 1), short(c["seconds_setting"], 1), short(c["time_ratio"])]
+        + [short(c["emd_ratio"]), short(c["spectra_ratio"])]
+        + [short(c["peak_mb_direct"], 0), short(c["peak_mb_setting"], 0)]
+        + [f"{c['delta_energy_ratio']:+.4f}", f"{c['delta_io']:+.4f}"]
+        + [", ".join(f"{v:,}" for v in c["levels"]), c.get("runs", 1)]
+    )
 
 
 def main(argv=None) -> int:
@@ -315,6 +362,8 @@ def main(argv=None) -> int:
     parser.add_argument("--models", nargs="+", default=MODELS, help=f"default: {' '.join(MODELS)}")
     parser.add_argument("--folder", type=Path, default=FOLDER, help="generated meshes and the arrays of each run")
     parser.add_argument("--timeout", type=float, default=CASE_TIMEOUT, help="seconds before a run is stopped")
+    parser.add_argument("--repeat", type=int, default=1, help="runs of each setting; the median is kept")
+    parser.add_argument("--modes", nargs="+", choices=list(MODES), default=list(MODES), help="settings to run")
     parser.add_argument("--one", nargs=2, metavar=("MODEL", "MODE"), help=argparse.SUPPRESS)  # a worker
     args = parser.parse_args(argv)
     if args.one:
@@ -328,7 +377,7 @@ def main(argv=None) -> int:
     for name in args.models:
         if mesh_path(name, args.folder) is None:
             continue
-        records[name] = run_model(name, args.folder, env, args.timeout)
+        records[name] = run_model(name, args.modes, args.folder, env, args.timeout, records.get(name, {}), args.repeat)
     order = {n: i for i, n in enumerate(MODELS)}
     data["models"] = sorted(records.values(), key=lambda r: order.get(r["model"], len(order)))
     data["meta"]["load_average_end"] = machine()["load_average"]

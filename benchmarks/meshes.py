@@ -20,7 +20,14 @@ from benchmarks.common import model_path
 #: The one source of the generated sizes, so the signal content stays comparable between them.
 SCALING_SOURCE = "igea"
 #: name -> (decimated base vertices, Loop levels); vertices after = 4^levels * base - O(1).
-SCALING = {"250k": (62_500, 1), "500k": (125_000, 1), "1m": (62_500, 2), "4m": (62_500, 3)}
+SCALING = {
+    "12k": (12_500, 0),
+    "25k": (25_000, 0),
+    "250k": (62_500, 1),
+    "500k": (125_000, 1),
+    "1m": (62_500, 2),
+    "4m": (62_500, 3),
+}
 #: Sizes run unless --sizes says otherwise (4m needs about 14 GB and half an hour).
 DEFAULT_SIZES = ["250k", "500k", "1m"]
 
