@@ -35,6 +35,7 @@ the input (:func:`~hht3d.spectral.riesz_transform.riesz`).  The IMFs split into 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from typing import Any
 
@@ -128,7 +129,7 @@ def polynomial_potential(
     out = []
     for x, cut in zip(sources, cuts):
         t = 1.0 / float(cut) ** 2
-        series = polynomial_series(lambda lam, t=t: potential_response(lam, t, options), top, t, tol)
+        series = polynomial_series(functools.partial(potential_response, t=t, options=options), top, t, tol)
         if series is None:
             return None
         out.append(apply_series(series, y2, x) * np.sqrt(t))
