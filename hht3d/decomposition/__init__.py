@@ -15,6 +15,7 @@ from .options import (
     EMD_DEFAULTS,
     ENSEMBLE_DEFAULTS,
     ENVELOPES,
+    EVALUATIONS,
     EXTREMA_RULES,
     FILTERING_OPTIONS,
     FILTERS,
