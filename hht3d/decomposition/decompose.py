@@ -253,6 +253,11 @@ def emd(
     f = check_signal(check_surface(surface), signal)
     start = time.perf_counter()
     _check_second_order(options, backend)
+    if options.method == "filtering" and options.evaluation == "polynomial" and options.cut == "local":
+        raise InputError(
+            "evaluation='polynomial' needs cut='global': a local cut's filter is not a function of one "
+            "operator, so no polynomial applies it; use evaluation='solves' or 'auto'"
+        )
     method = (MultilevelFilterer if uses_levels(options, len(f)) else METHOD_CLASSES[options.method])(
         surface, options, backend
     )

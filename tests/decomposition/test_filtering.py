@@ -88,6 +88,13 @@ def test_auto_takes_the_polynomial_on_large_surfaces_and_global_cuts_only():
     assert not uses_polynomial(EMDOptions(method="filtering", evaluation="solves"), 10**9)
 
 
+def test_a_polynomial_with_a_local_cut_is_refused_in_one_line(sphere):
+    from hht3d.errors import InputError
+
+    with pytest.raises(InputError, match="evaluation='polynomial' needs cut='global'"):
+        emd(sphere, sphere.vertices[:, 2], method="filtering", evaluation="polynomial", cut="local")
+
+
 def test_an_imf_beyond_the_largest_degree_is_filtered_by_solves(sphere, monkeypatch):
     """With the largest degree lowered below IMF 2's, IMF 1 is a polynomial and IMF 2 comes from solves, and
     both equal the solves' run (the polynomial to its tolerance)."""
