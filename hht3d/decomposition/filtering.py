@@ -96,7 +96,7 @@ from .. import linalg
 from ..geometry.surface import Surface
 from ..linalg.chebyshev import apply_series, chebyshev_series, recurrence_matrix, spectral_radius_bound
 from ..linalg.estimate import COSTS, SLOW_FALLBACK_VERTICES
-from .envelopes import EnvelopeSolver, floored_mass, membrane_laplacian
+from .envelopes import EnvelopeSolver, floored_mass, is_delaunay, membrane_laplacian
 from .extrema import active_extrema
 from .options import EMDOptions
 
@@ -116,6 +116,7 @@ __all__ = [
     "polynomial_operator",
     "polynomial_series",
     "potential_response",
+    "potential_usable",
     "POTENTIAL_TOLERANCE",
 ]
 
@@ -145,6 +146,13 @@ def uses_polynomial(options: EMDOptions, n_vertices: int, backend: str | None = 
         return True
     cost = COSTS.get(linalg.check_backend(backend))
     return cost is not None and cost.slow and n_vertices >= SLOW_FALLBACK_VERTICES
+
+
+def potential_usable(surface: Surface) -> bool:
+    """Whether the polynomial's Riesz potential on ``surface`` is the Riesz quadrature's: its membrane operator is
+    the cotangent Laplacian (:func:`~hht3d.decomposition.envelopes.is_delaunay`), or the surface is too large
+    (:data:`POLYNOMIAL_VERTICES`) for the quadrature's factorizations (:mod:`hht3d.spectral.multilevel`)."""
+    return surface.n_vertices >= POLYNOMIAL_VERTICES or is_delaunay(surface)
 
 
 def filter_response(lam: np.ndarray, t: float, options: EMDOptions) -> np.ndarray:

@@ -46,7 +46,7 @@ import numpy as np
 
 from ..geometry.hierarchy import Hierarchy, hierarchy
 from ..geometry.surface import Surface
-from .filtering import Filterer
+from .filtering import Filterer, potential_usable
 from .options import EMDOptions
 
 __all__ = ["MultilevelFilterer", "COARSE_MIN_DEGREE", "SPACING_LIMIT", "MULTIRESOLUTION_VERTICES", "uses_levels"]
@@ -55,9 +55,8 @@ __all__ = ["MultilevelFilterer", "COARSE_MIN_DEGREE", "SPACING_LIMIT", "MULTIRES
 SPACING_LIMIT = 0.5
 #: Extrema on a coarse level are vertices of at least this many neighbours (module notes).
 COARSE_MIN_DEGREE = 5
-#: ``multiresolution="auto"`` uses the hierarchy from this many vertices on: the measured crossover, where
-#: levels stop being slower than the direct path (whole HHT, PARDISO: 1.12× at 12.5k, 0.82× at 25k,
-#: 0.62× at 50k; ``benchmarks/results/multiresolution.md``).
+#: ``multiresolution="auto"`` uses the hierarchy from this many vertices on: the measured crossover (whole HHT,
+#: PARDISO, median of 3: 0.92× the direct time at 12.5k, 0.99× at 25k; ``benchmarks/results/multiresolution.md``).
 MULTIRESOLUTION_VERTICES = 20_000
 
 
@@ -103,7 +102,8 @@ class MultilevelFilterer:
         if cut is None:
             return None
         t, _, info = cut
-        passed, potential = filterer.filtered_with_potential(t, r, info)
+        usable = potential_usable(filterer.surface)  # else the Riesz stage takes its band quadrature
+        passed, potential = filterer.filtered_with_potential(t, r, info, potential=usable)
         low = r - passed
         target = self.hierarchy.coarsest_resolving(info["cut_frequency"], SPACING_LIMIT, here)
         carried = self.hierarchy.restrict(low, here, target)

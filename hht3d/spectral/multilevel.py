@@ -41,13 +41,12 @@ from typing import Any
 
 import numpy as np
 
-from ..decomposition.envelopes import is_delaunay
 from ..decomposition.filtering import (
-    POLYNOMIAL_VERTICES,
     POTENTIAL_TOLERANCE,
     polynomial_operator,
     polynomial_series,
     potential_response,
+    potential_usable,
 )
 from ..decomposition.options import EMDOptions
 from ..errors import InputError
@@ -179,7 +178,7 @@ def riesz_part(
         cuts = [decomposition.info["imfs"][k]["cut_frequency"] for k in here]
         _, _, sources, potentials = zip(*(decomposition.levels[k] for k in here))
         u = None
-        polynomial = is_delaunay(level.surface) or level.surface.n_vertices >= POLYNOMIAL_VERTICES
+        polynomial = potential_usable(level.surface)
         if polynomial and all(p is not None for p in potentials) and options.tol >= POTENTIAL_TOLERANCE:
             u = np.array(potentials)
         elif polynomial and all(source is not None for source in sources):
