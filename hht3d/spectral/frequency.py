@@ -68,7 +68,9 @@ Frequencies above it are reported (:func:`resolution_report`), never clipped.
 
 from __future__ import annotations
 
+import functools
 import os
+from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any, cast
@@ -96,9 +98,12 @@ _SYMMETRIC = np.array([[0, 1, 2], [1, 3, 4], [2, 4, 5]])
 _MAX_UNWRAP = 8
 #: Floor of the discrete Riesz response (it tends to 0 at the Nyquist limit).
 _MIN_RESPONSE = 0.05
-#: Edges of all threads' signals at once: igea (0.8M edges) gets 2 threads, 1M vertices
-#: (6M edges) one, which keeps the whole HHT of 1M vertices under 4 GiB.
-_THREAD_EDGES = 4_000_000
+#: Vertices of all threads' signals at once: each thread holds about 25 floats a vertex (its
+#: signal's orientation, first fit and response), so 1M vertices get 2 threads and 4M one.
+_THREAD_VERTICES = 4_000_000
+#: Edges a block of the phase route spans: its per-edge work arrays (about a dozen, with the edge
+#: offsets) stay near 100 MB a thread whatever the surface's size.
+_BLOCK_EDGES = 1 << 20
 
 
 def instantaneous_frequency(
@@ -147,14 +152,11 @@ def instantaneous_frequency(
             f"signals must have shape (k, {surface.n_vertices}) and their Riesz transforms "
             f"(k, {surface.n_vertices}, 3), got {f.shape} and {r.shape}"
         )
-    f, r = _unit_scale(f, r)
     if options.frequency == "gradient":
-        return _gradient_frequency(surface, f, r, options.gradient)
+        return _gradient_frequency(surface, *_unit_scale(f, r), options.gradient)
     stencil = _stencil(surface, options.gradient)
-    with ThreadPoolExecutor(
-        _threads(len(f), len(stencil.rows))
-    ) as pool:  # NumPy and SciPy's sparse products release the GIL
-        rows = list(pool.map(lambda fi, ri: _phase_frequency(stencil, fi, ri), f, r))
+    with ThreadPoolExecutor(_threads(len(f), surface.n_vertices)) as pool:  # NumPy releases the GIL
+        rows = list(pool.map(lambda fi, ri: _phase_frequency(stencil, *_unit_scale(fi[None], ri[None])), f, r))
     return np.array(rows).reshape(f.shape)
 
 
@@ -169,17 +171,16 @@ def _unit_scale(f: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return f / scale[:, None], r / scale[:, None, None]
 
 
-def _threads(count: int, edges: int) -> int:
+def _threads(count: int, vertices: int) -> int:
     """Threads for ``count`` signals, one signal each: the cores this process may use, or
     ``OMP_NUM_THREADS`` where set (Dask's worker processes set it to 1), and no more than
-    keep :data:`_THREAD_EDGES` per-edge values alive at once (each thread holds about ten
-    arrays of ``edges`` floats)."""
+    keep :data:`_THREAD_VERTICES` vertices' work arrays alive at once."""
     budget = os.environ.get("OMP_NUM_THREADS", "")
     if budget.isdigit() and int(budget) > 0:
         cores = int(budget)
     else:
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    return max(1, min(count, cores, _THREAD_EDGES // max(edges, 1)))
+    return max(1, min(count, cores, _THREAD_VERTICES // max(vertices, 1)))
 
 
 # -- the paper's route: vertex gradients of the sampled fields --------------------------------
@@ -218,23 +219,110 @@ def _norm_gradient(surface: Surface, rf: np.ndarray, q: np.ndarray, kind: str) -
 class _Stencil:
     """Directed edges ``i → j`` of a vertex gradient operator and of the Laplacian, cached per surface.
 
-    Edges are sorted by ``i`` (``starts`` is the CSR row pointer).
-    ``fit @ x`` (3n,) applies the gradient's coefficients ``c_ij`` to
-    per-edge differences ``x``; ``along @ g`` (E,) is ``g_i · (x_j − x_i)``
-    for per-vertex vectors ``g`` (3n,); ``ring`` is the (n, n) adjacency of
-    the same edges.  ``weights @ y`` sums ``−L_ij y_ij`` over the Laplacian's
-    edges, whose offsets ``lap_along`` takes likewise.
+    ``points`` are the vertices (3, n).  The gradient ``G`` (3n, n) has rows
+    ``∇f_i = Σ_j c_ij (f_j − f_i)``: its edges, sorted by ``i`` (``starts`` is the row pointer),
+    keep their ends ``j`` (``cols``) and the coefficients ``c_ij`` (``coef``, (3, E)); the
+    Laplacian's edges, likewise, keep ``−L_ij`` (``lap_weight``).  About 40 bytes an edge; the
+    phase route reads them a block of vertices at a time (:class:`_Block`), so no per-edge work
+    array spans the whole surface.
     """
 
-    n: int
-    rows: np.ndarray
-    cols: np.ndarray
+    points: np.ndarray
     starts: np.ndarray
-    fit: sp.csr_matrix
-    along: sp.csr_matrix
-    ring: sp.csr_matrix
-    weights: sp.csr_matrix
-    lap_along: sp.csr_matrix
+    cols: np.ndarray
+    coef: np.ndarray
+    lap_starts: np.ndarray
+    lap_cols: np.ndarray
+    lap_weight: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.points.shape[1]
+
+    def blocks(self) -> Iterator["_Block"]:
+        """The vertices in consecutive ranges of about :data:`_BLOCK_EDGES` edges, one block at a time."""
+        step = max(1, _BLOCK_EDGES * self.n // max(len(self.cols), 1))
+        for a in range(0, self.n, step):
+            yield _Block(self, a, min(a + step, self.n))
+
+
+class _Block:
+    """The edges of the vertices ``[a, b)`` of a stencil, with the maps the phase route applies.
+
+    Per-vertex inputs are whole-surface arrays read at each edge's start ``i`` (:meth:`at_start`)
+    or end ``j`` (``cols``); per-vertex outputs cover ``[a, b)``.  The offsets ``x_j − x_i`` are gathered on first use,
+    so a block's memory is its own.  Edges are sorted by ``i``: a value per vertex reaches its
+    edges by :func:`numpy.repeat`, the fastest gather.
+    """
+
+    def __init__(self, st: _Stencil, a: int, b: int) -> None:
+        self.st, self.a, self.b = st, a, b
+        self.edges = slice(st.starts[a], st.starts[b])
+        self.lap = slice(st.lap_starts[a], st.lap_starts[b])
+        self.cols = st.cols[self.edges]
+        self.counts = np.diff(st.starts[a : b + 1])
+        self.lap_counts = np.diff(st.lap_starts[a : b + 1])
+
+    @property
+    def size(self) -> int:
+        return self.b - self.a
+
+    def at_start(self, y: np.ndarray) -> np.ndarray:
+        """``y_i`` per edge, for a whole-surface ``y`` (n,)."""
+        return np.repeat(y[self.a : self.b], self.counts)
+
+    @functools.cached_property
+    def offset(self) -> np.ndarray:
+        """``x_j − x_i`` (3, E) of the gradient's edges."""
+        return self._offset(self.cols, self.counts)
+
+    @functools.cached_property
+    def lap_offset(self) -> np.ndarray:
+        """``x_j − x_i`` (3, E) of the Laplacian's edges."""
+        return self._offset(self.st.lap_cols[self.lap], self.lap_counts)
+
+    def _offset(self, cols: np.ndarray, counts: np.ndarray) -> np.ndarray:
+        points = self.st.points
+        return np.stack([points[c][cols] - np.repeat(points[c][self.a : self.b], counts) for c in range(3)])
+
+    def fit(self, x: np.ndarray) -> np.ndarray:
+        """``Σ_j c_ij x_ij`` (size, 3): the gradient's coefficients applied to per-edge differences."""
+        coef = self.st.coef[:, self.edges]
+        return np.column_stack([self._sum(self.owner, coef[c] * x) for c in range(3)])
+
+    def along(self, g: np.ndarray) -> np.ndarray:
+        """``g_i · (x_j − x_i)`` per edge for block vectors ``g`` (size, 3)."""
+        return self._along(g, self.offset, self.counts)
+
+    def ring(self, y: np.ndarray) -> np.ndarray:
+        """``Σ_j y_j`` over each vertex's edges, for a whole-surface ``y`` (n,)."""
+        return self._sum(self.owner, y[self.cols])
+
+    def lap_along(self, g: np.ndarray) -> np.ndarray:
+        """``g_i · (x_j − x_i)`` per Laplacian edge."""
+        return self._along(g, self.lap_offset, self.lap_counts)
+
+    def lap_sum(self, y: np.ndarray) -> np.ndarray:
+        """``Σ_j −L_ij y_ij`` over each vertex's Laplacian edges."""
+        return self._sum(self.lap_owner, self.st.lap_weight[self.lap] * y)
+
+    def _along(self, g: np.ndarray, offset: np.ndarray, counts: np.ndarray) -> np.ndarray:
+        at = [np.repeat(g[:, c], counts) for c in range(3)]
+        return at[0] * offset[0] + at[1] * offset[1] + at[2] * offset[2]
+
+    @functools.cached_property
+    def owner(self) -> np.ndarray:
+        """``i − a`` per edge."""
+        return np.repeat(np.arange(self.size), self.counts)
+
+    @functools.cached_property
+    def lap_owner(self) -> np.ndarray:
+        """``i − a`` per Laplacian edge."""
+        return np.repeat(np.arange(self.size), self.lap_counts)
+
+    def _sum(self, owner: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """Per-vertex sums of per-edge ``values`` (in edge order, as a sparse product adds them)."""
+        return np.bincount(owner, weights=values, minlength=self.size)
 
 
 def _stencil(surface: Surface, kind: str) -> _Stencil:
@@ -244,67 +332,96 @@ def _stencil(surface: Surface, kind: str) -> _Stencil:
     return surface.cache[key]
 
 
-def _along(vertices: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> sp.csr_matrix:
-    """(E, 3n) map of per-vertex vectors ``g`` to ``g_i · (x_j − x_i)`` per edge (3 entries a row)."""
-    return sp.csr_matrix(
-        (
-            (vertices[cols] - vertices[rows]).ravel(),
-            (3 * rows[:, None] + np.arange(3)).ravel(),
-            np.arange(0, 3 * len(rows) + 1, 3),
-        ),
-        shape=(len(rows), 3 * len(vertices)),
+def _build_stencil(surface: Surface, kind: str) -> _Stencil:
+    """The edges of ``G`` and of ``L``, gathered a block of rows at a time (no whole-surface sort)."""
+    n = surface.n_vertices
+    step = max(1, _BLOCK_EDGES // 8)
+    ranges = [(a, min(a + step, n)) for a in range(0, n, step)]
+    gradient, stiffness = surface.gradient(kind), surface.stiffness.tocsr()
+    counts, cols, coef = (
+        np.concatenate(part, axis=-1) for part in zip(*(_gradient_edges(gradient, a, b) for a, b in ranges))
+    )
+    lap_counts, lap_cols, lap_weight = (
+        np.concatenate(part) for part in zip(*(_laplacian_edges(stiffness, a, b) for a, b in ranges))
+    )
+    return _Stencil(
+        np.ascontiguousarray(surface.vertices.T),
+        np.r_[0, np.cumsum(counts)],
+        cols,
+        coef,
+        np.r_[0, np.cumsum(lap_counts)],
+        lap_cols,
+        lap_weight,
     )
 
 
-def _build_stencil(surface: Surface, kind: str) -> _Stencil:
-    """The gradient ``G`` (3n, n) has rows ``∇f_i = Σ_j c_ij (f_j − f_i)``: gather the ``c_ij``."""
-    n, verts = surface.n_vertices, surface.vertices
-    coo = surface.gradient(kind).tocoo()
-    vertex, component = np.divmod(coo.row, 3)
-    off = (coo.col != vertex) & (coo.data != 0)
-    keys = vertex[off].astype(np.int64) * n + coo.col[off]
-    order = np.argsort(keys, kind="stable")  # sorted runs (one per row of G): merged, not re-sorted
-    first = np.r_[True, keys[order][1:] != keys[order][:-1]]
-    edges = keys[order][first]
+def _gradient_edges(gradient: sp.csr_matrix, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Edges per vertex, ends ``j`` sorted and ``c_ij`` (3, E) of the vertices ``[a, b)``: the
+    off-diagonal entries of the rows ``3i .. 3i + 2`` of ``G``, an edge wherever one component is
+    nonzero."""
+    block = gradient[3 * a : 3 * b].tocoo()
+    block.sum_duplicates()
+    vertex, component = np.divmod(block.row, 3)
+    n = gradient.shape[1]
+    off = (block.col != vertex + a) & (block.data != 0)
+    keys = vertex[off].astype(np.int64) * n + block.col[off]
+    order = np.argsort(keys, kind="stable")
+    ordered = keys[order]
+    first = np.r_[True, ordered[1:] != ordered[:-1]]
     index = np.empty_like(order)
     index[order] = np.cumsum(first) - 1
-    coef = np.zeros((len(edges), 3))
-    np.add.at(coef, (index, component[off]), coo.data[off])
-    rows, cols = np.divmod(edges, n)
-    # column e holds edge e's three coefficients: built as CSC (no sort), then converted
-    fit = sp.csc_matrix(
-        (coef.ravel(), (3 * rows[:, None] + np.arange(3)).ravel(), np.arange(0, 3 * len(edges) + 1, 3)),
-        shape=(3 * n, len(edges)),
-    ).tocsr()
-    lap = surface.stiffness.tocoo()
-    keep = (lap.row != lap.col) & (lap.data != 0)
-    lap_rows, lap_cols = lap.row[keep], lap.col[keep]
-    weights = sp.csr_matrix((-lap.data[keep], (lap_rows, np.arange(len(lap_rows)))), shape=(n, len(lap_rows)))
-    return _Stencil(
-        n,
-        rows,
-        cols,
-        np.searchsorted(rows, np.arange(n + 1)),
-        fit,
-        _along(verts, rows, cols),
-        sp.csr_matrix((np.ones(len(edges)), (rows, cols)), shape=(n, n)),
-        weights,
-        _along(verts, lap_rows, lap_cols),
+    coef = np.zeros((3, int(first.sum())))
+    coef[component[off], index] = block.data[off]  # one entry per (row, column): no sums
+    rows, cols = np.divmod(ordered[first], n)
+    return np.bincount(rows, minlength=b - a), cols.astype(_index_type(n)), coef
+
+
+def _laplacian_edges(stiffness: sp.csr_matrix, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Edges per vertex, ends ``j`` and ``−L_ij`` of the off-diagonal nonzeros of the rows ``[a, b)`` of ``L``."""
+    block = stiffness[a:b].tocoo()
+    keep = (block.row + a != block.col) & (block.data != 0)
+    rows = block.row[keep]
+    return (
+        np.bincount(rows, minlength=b - a),
+        block.col[keep].astype(_index_type(stiffness.shape[0])),
+        -block.data[keep],
     )
+
+
+def _index_type(n: int) -> type:
+    return np.int32 if n < 2**31 else np.int64
 
 
 def _phase_frequency(st: _Stencil, f: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """``|∇ψ|`` of one signal from edge phase increments, unwrapped and dispersion-corrected."""
+    """``|∇ψ|`` of one signal (a row of ``f``, ``r``) from edge phase increments, unwrapped and
+    dispersion-corrected: a first fit, the Riesz response from it (which reads the first fit on
+    each vertex's ring), then the corrected fit, each a pass over the stencil's blocks."""
+    f, r = f[0], r[0]
     q = np.linalg.norm(r, axis=1)
     o = _orientation(st, r, q)
-    q_i = np.einsum("vc,vc->v", r, o)[st.rows]
+    qo = np.einsum("vc,vc->v", r, o)
     r_t, o_t = np.ascontiguousarray(r.T), np.ascontiguousarray(o.T)  # 1-D gathers are the fast ones
-    q_j = sum(r_t[c][st.cols] * o_t[c][st.rows] for c in range(3))
-    f_i, f_j = f[st.rows], f[st.cols]
-    grad = _unwrapped_fit(st, f_i, f_j, q_i, q_j, None)
-    response = _riesz_response(st, grad, f**2 + q**2)
-    grad = _unwrapped_fit(st, f_i, f_j, q_i / response[st.rows], q_j / response[st.cols], grad)
-    return np.linalg.norm(grad, axis=1)
+
+    def fit(block: _Block, response: np.ndarray | None, guess: np.ndarray | None) -> np.ndarray:
+        q_i = block.at_start(qo)
+        q_j = sum(r_t[c][block.cols] * block.at_start(o_t[c]) for c in range(3))
+        if response is not None:
+            q_i, q_j = q_i / block.at_start(response), q_j / response[block.cols]
+        return _unwrapped_fit(block, block.at_start(f), f[block.cols], q_i, q_j, guess)
+
+    first = np.empty((st.n, 3))
+    for block in st.blocks():
+        first[block.a : block.b] = fit(block, None, None)
+    energy = f**2 + q**2
+    magnitude = np.linalg.norm(first, axis=1)
+    moment = energy * magnitude
+    response = np.empty(st.n)
+    for block in st.blocks():
+        response[block.a : block.b] = _riesz_response(block, first, magnitude, moment, energy)
+    omega = np.empty(st.n)
+    for block in st.blocks():
+        omega[block.a : block.b] = np.linalg.norm(fit(block, response, first[block.a : block.b]), axis=1)
+    return omega
 
 
 def _orientation(st: _Stencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -316,23 +433,40 @@ def _orientation(st: _Stencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
     ``f``) its direction is unreliable; the principal direction of
     ``Σ r_j r_jᵀ`` over the vertex and its ring orients the phase there.
     """
-    ring_max = np.zeros(st.n)
-    has = st.starts[1:] > st.starts[:-1]
-    if len(st.cols):
-        ring_max[has] = np.maximum.reduceat(q[st.cols], st.starts[:-1][has])
     o = np.divide(r, q[:, None], out=np.zeros_like(r), where=q[:, None] > 0)
-    fold = np.flatnonzero((q <= _FOLD_RATIO * ring_max) | (q == 0))
-    if fold.size:
-        products = np.stack([r[:, a] * r[:, b] for a, b in _PAIRS], axis=1)
-        tensor = (st.ring[fold] @ products + products[fold])[:, _SYMMETRIC]
-        o[fold] = np.linalg.eigh(tensor)[1][:, :, -1]
+    products = None
+    for block in st.blocks():
+        ring_max = np.zeros(block.size)
+        has = block.counts > 0
+        starts = np.cumsum(block.counts) - block.counts
+        if len(block.cols):
+            ring_max[has] = np.maximum.reduceat(q[block.cols], starts[has])
+        here = q[block.a : block.b]
+        fold = np.flatnonzero((here <= _FOLD_RATIO * ring_max) | (here == 0))
+        if fold.size:
+            if products is None:
+                products = np.stack([r[:, a] * r[:, b] for a, b in _PAIRS], axis=1)
+            tensor = (_fold_ring(block, fold, products) + products[block.a + fold])[:, _SYMMETRIC]
+            o[block.a + fold] = np.linalg.eigh(tensor)[1][:, :, -1]
     return o
 
 
+def _fold_ring(block: _Block, fold: np.ndarray, products: np.ndarray) -> np.ndarray:
+    """``Σ_j`` of ``products`` (n, 6) over the ring of each of the block's vertices ``fold``."""
+    slot = np.full(block.size, -1)
+    slot[fold] = np.arange(len(fold))
+    edge_slot = np.repeat(slot, block.counts)
+    mine = edge_slot >= 0
+    values = products[block.cols[mine]]
+    return np.column_stack(
+        [np.bincount(edge_slot[mine], weights=values[:, p], minlength=len(fold)) for p in range(len(_PAIRS))]
+    )
+
+
 def _unwrapped_fit(
-    st: _Stencil, f_i: np.ndarray, f_j: np.ndarray, q_i: np.ndarray, q_j: np.ndarray, guess: np.ndarray | None
+    block: _Block, f_i: np.ndarray, f_j: np.ndarray, q_i: np.ndarray, q_j: np.ndarray, guess: np.ndarray | None
 ) -> np.ndarray:
-    """Gradient (n, 3) fitted to the edge increments ``arg(z_j z̄_i)``, ``z = f + i q`` at the
+    """Gradient (size, 3) fitted to the edge increments ``arg(z_j z̄_i)``, ``z = f + i q`` at the
     edges' ends, each shifted by the whole turns that bring it closest to the gradient's
     prediction ``∇ψ_i · (x_j − x_i)``.
 
@@ -343,39 +477,39 @@ def _unwrapped_fit(
     grad = guess
     for _ in range(_MAX_UNWRAP):
         if grad is not None:
-            new_turns = np.round((st.along @ grad.ravel() - increment) / (2 * np.pi))
+            new_turns = np.round((block.along(grad) - increment) / (2 * np.pi))
             if grad is not guess and np.array_equal(new_turns, turns):
                 break
             turns = new_turns
-        grad = (st.fit @ (increment + 2 * np.pi * turns)).reshape(st.n, 3)
+        grad = block.fit(increment + 2 * np.pi * turns)
     return cast(np.ndarray, grad)  # the loop runs at least once
 
 
-def _riesz_response(st: _Stencil, grad: np.ndarray, energy: np.ndarray) -> np.ndarray:
-    """``|R_h w| / |R w|`` (n,) for the plane wave ``w`` of the local wavevector.
+def _riesz_response(
+    block: _Block, grad: np.ndarray, magnitude: np.ndarray, moment: np.ndarray, energy: np.ndarray
+) -> np.ndarray:
+    """``|R_h w| / |R w|`` (size,) for the plane wave ``w`` of the local wavevector.
 
-    The wavevector has the direction of ``grad`` at each vertex and the
-    energy-weighted mean of ``|grad|`` over the vertex and its ring (a plane
-    wave reads its wavenumber there on average, even where the Riesz
+    The wavevector has the direction of ``grad`` (n, 3) at each vertex and the
+    energy-weighted mean of ``|grad|`` over the vertex and its ring (``moment`` is
+    ``energy·|grad|``, both (n,); a plane wave reads its wavenumber there on average, even where the Riesz
     magnitude is distorted).  The discrete transform ``∇_h L^{-1/2}``
     scales ``R w`` by the gradient stencil's symbol ``|Σ_j c_ij sin(k·d_ij)|/|k|``
     over ``√(Σ_j w_ij (1 − cos k·d_ij) / Σ_j w_ij (k·d_ij)²/2)`` (the
     Laplacian's symbol relative to its long-wave limit); both tend to 1 as
     ``|k| h → 0``.  Floored at :data:`_MIN_RESPONSE`.
     """
-    magnitude = np.linalg.norm(grad, axis=1)
-    both = np.column_stack([energy * magnitude, energy])
-    weighted, total = (st.ring @ both + both).T
-    mean = np.divide(weighted, total, out=np.zeros(st.n), where=total > 0)
-    wave = np.divide(
-        grad * mean[:, None], magnitude[:, None], out=np.zeros_like(grad), where=magnitude[:, None] > 0
-    ).ravel()
-    symbol = np.linalg.norm((st.fit @ np.sin(st.along @ wave)).reshape(st.n, 3), axis=1)
-    gradient_ratio = np.divide(symbol, mean, out=np.ones(st.n), where=mean > 0)
-    lap_phase = st.lap_along @ wave
-    dispersion = st.weights @ (1 - np.cos(lap_phase))
-    long_wave = st.weights @ (0.5 * lap_phase**2)
+    here = slice(block.a, block.b)
+    weighted, total = block.ring(moment) + moment[here], block.ring(energy) + energy[here]
+    mean = np.divide(weighted, total, out=np.zeros(block.size), where=total > 0)
+    moving = magnitude[here, None]
+    wave = np.divide(grad[here] * mean[:, None], moving, out=np.zeros((block.size, 3)), where=moving > 0)
+    symbol = np.linalg.norm(block.fit(np.sin(block.along(wave))), axis=1)
+    gradient_ratio = np.divide(symbol, mean, out=np.ones(block.size), where=mean > 0)
+    lap_phase = block.lap_along(wave)
+    dispersion = block.lap_sum(1 - np.cos(lap_phase))
+    long_wave = block.lap_sum(0.5 * lap_phase**2)
     laplacian_ratio = np.sqrt(
-        np.divide(dispersion, long_wave, out=np.ones(st.n), where=(long_wave > 0) & (dispersion > 0))
+        np.divide(dispersion, long_wave, out=np.ones(block.size), where=(long_wave > 0) & (dispersion > 0))
     )
     return np.clip(gradient_ratio / laplacian_ratio, _MIN_RESPONSE, 1 / _MIN_RESPONSE)

@@ -10,6 +10,8 @@ route on a regular grid.
 
 from __future__ import annotations
 
+import tracemalloc
+
 import numpy as np
 import pytest
 from scipy.special import lpmv
@@ -18,6 +20,7 @@ from helpers.meshes import grid, icosphere
 from hht3d.errors import InputError
 from hht3d.geometry.surface import Surface
 from hht3d.spectral import FREQUENCY_METHODS, fractional_laplacian, instantaneous_frequency, resolvable_frequency, riesz
+from hht3d.spectral import frequency as frequency_module
 from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
 
 # A strip [0, 1] x [0, 16h], h = 1/128.  cos(mπx) is a Neumann eigenfunction of the
@@ -211,6 +214,55 @@ def test_signals_at_once_equal_one_at_a_time(monkeypatch):
     alone = np.stack([instantaneous_frequency(small, f[i : i + 1], r[i : i + 1])[0] for i in range(3)])
     assert np.array_equal(together, alone)
     assert np.all(np.isfinite(together)) and together.min() >= 0
+
+
+def test_blocks_of_a_few_vertices_read_the_plane_waves_unchanged(monkeypatch):
+    # The phase route works a block of vertices at a time; blocks of ~8 vertices put a block
+    # boundary inside almost every ring, so every read across blocks (the orientation's ring,
+    # the response's ring mean, the corrected fit's neighbours) is exercised.  The per-vertex
+    # sums run in edge order whatever the blocks, so the numbers are the same to the bit, and
+    # the jittered strip's plane waves still read their wavenumber (bound of the test above).
+    s = strip(jitter=0.2)
+    signals = np.cos(WAVENUMBERS[RESOLVED, None] * s.vertices[:, 0])
+    rf = riesz(s, signals)
+    whole = instantaneous_frequency(s, signals, rf)
+    monkeypatch.setattr(frequency_module, "_BLOCK_EDGES", 50)
+    s.cache.pop("frequency:stencil:lsq")
+    blocked = instantaneous_frequency(s, signals, rf)
+    assert np.array_equal(blocked, whole)
+    median = np.median(blocked[:, away_from_edges(s)], axis=1)
+    assert np.allclose(median / WAVENUMBERS[RESOLVED], 1.0, atol=0.05)
+
+
+def test_the_phase_route_needs_no_per_edge_array_of_the_whole_surface(monkeypatch):
+    # Memory, counted by tracemalloc (NumPy reports its buffers to it), per vertex of a 41k-vertex
+    # icosphere (6 edges a vertex) with blocks of 4,096 edges and one thread:
+    # - the cached stencil: its ends (4 bytes) and coefficients (24) of the gradient's edges and
+    #   the Laplacian's (4 + 8), 40 bytes an edge, plus the points and row pointers (40 a vertex):
+    #   280 bytes; bound 320.  Built a block at a time: bound 400 while building.
+    # - a signal's work: about 25 whole-surface floats (its orientation, first fit, response, ...):
+    #   200 bytes; bound 260.
+    # The former stencil of sparse matrices held 964 bytes a vertex, peaked at 2,154 while built,
+    # and a signal's per-edge arrays took 649: each bound fails by more than 2x there.
+    monkeypatch.setenv("OMP_NUM_THREADS", "1")
+    monkeypatch.setattr(frequency_module, "_BLOCK_EDGES", 4096)
+    s = Surface(*icosphere(6))
+    n = s.n_vertices
+    rng = np.random.default_rng(0)
+    f = rng.standard_normal((1, n))
+    r = rng.standard_normal((1, n, 3))
+    s.gradient("lsq"), s.stiffness  # the surface's own operators are not the estimator's
+    tracemalloc.start()
+    try:
+        frequency_module._stencil(s, "lsq")
+        stencil, building = tracemalloc.get_traced_memory()
+        tracemalloc.reset_peak()
+        instantaneous_frequency(s, f, r)
+        work = tracemalloc.get_traced_memory()[1] - stencil
+    finally:
+        tracemalloc.stop()
+    assert stencil / n < 320 and building / n < 400
+    assert work / n < 260
 
 
 def test_zero_signal_reads_zero(regular):
