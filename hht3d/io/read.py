@@ -187,11 +187,19 @@ def load(
     return surface
 
 
+#: Faces read as one fixed-size array when every face is a triangle: plyfile then maps the element
+#: instead of parsing it face by face (igea subdivided to 1M vertices: 1.6 s against 8.5 s).
+_TRIANGLES = {"face": {"vertex_indices": 3, "vertex_index": 3}}
+
+
 def _read_ply(path: Path) -> dict:
     from plyfile import PlyData
 
     try:
-        ply = PlyData.read(str(path))
+        try:
+            ply = PlyData.read(str(path), known_list_len=_TRIANGLES)
+        except Exception:  # not all triangles, or not readable: the general reader says which
+            ply = PlyData.read(str(path), mmap=False)
         vertex = ply["vertex"].data
     except Exception as exc:  # plyfile raises many types on corrupt input
         raise InputError(f"{path}: not a readable PLY file ({exc})") from None
@@ -210,7 +218,7 @@ def _read_ply(path: Path) -> dict:
     attributes: dict[str, np.ndarray] = {}
     for key in names:
         if key not in PLY_RESERVED and vertex[key].dtype.kind in "biuf":
-            attributes.setdefault(usable_name(key), np.asarray(vertex[key], dtype=np.float64))
+            attributes.setdefault(usable_name(key), np.array(vertex[key], dtype=np.float64))  # not a map of the file
     data["attributes"] = attributes
     return data
 
@@ -281,6 +289,8 @@ def _ply_faces(ply: Any, path: Path) -> np.ndarray | None:
     if key is None:
         raise InputError(f"{path}: PLY faces lack a vertex_indices property")
     polygons = face[key]
+    if polygons.ndim == 2:  # read as triangles (_TRIANGLES)
+        return polygons.astype(np.int64)
     sizes = np.fromiter((len(p) for p in polygons), dtype=np.int64, count=len(polygons))
     if np.all(sizes == 3):
         return np.vstack(polygons).astype(np.int64)

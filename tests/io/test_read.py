@@ -148,3 +148,21 @@ def test_a_pcd_declaring_a_trillion_points_is_refused(tmp_path):
 def test_a_path_with_a_nul_is_an_input_error():
     with pytest.raises(InputError, match="NUL character"):
         load("scan\0.ply")
+
+
+@pytest.mark.parametrize("byte_order", ["<", ">"])
+def test_a_triangle_ply_read_at_once_matches_plyfiles_face_by_face_reader(tmp_path, byte_order):
+    """All-triangle faces are read as one (f, 3) array (plyfile maps them); the oracle is plyfile's
+    general reader, which parses each face's list.  Nothing returned maps the file."""
+    from plyfile import PlyData
+
+    from helpers.bad_files import _ply
+
+    v, f = icosphere(3)
+    path = tmp_path / "sphere.ply"
+    _ply(path, v, f, index="u4", byte_order=byte_order)
+    surface = load(path, clean=False)
+    reference = PlyData.read(str(path), mmap=False)["face"].data["vertex_indices"]
+    np.testing.assert_array_equal(surface.faces, np.vstack(reference))
+    np.testing.assert_array_equal(surface.vertices, v)
+    assert surface.faces.flags.owndata and surface.vertices.flags.owndata
