@@ -6,6 +6,7 @@ import scipy.sparse.linalg as sla
 
 from helpers.meshes import fibonacci_sphere, grid, jittered_height_field, reference_operators
 from hht3d import Surface
+from hht3d.geometry import operators
 
 # Unit-sphere Laplace–Beltrami eigenvalues l(l+1) with multiplicity 2l+1, l = 1..3.
 SPHERE_EIGENVALUES = np.repeat([2.0, 6.0, 12.0], [3, 5, 7])
@@ -38,11 +39,16 @@ def test_laplacian_is_symmetric_psd_with_constant_kernel(sphere):
     assert sphere.mass_diagonal.sum() == pytest.approx(4 * np.pi, rel=2e-3)
 
 
-def test_operators_equal_a_face_by_face_reference_on_obtuse_triangles():
+@pytest.mark.parametrize("face_block", [None, 7], ids=["one block", "blocks of 7 faces"])
+def test_operators_equal_a_face_by_face_reference_on_obtuse_triangles(monkeypatch, face_block):
     # tests/helpers/meshes.py builds L, the mixed-Voronoi areas and the normals face by face from angles
     # (arccos), independently of the vectorised code; 127 of the 260 jittered triangles are
     # obtuse, so both branches of Meyer et al.'s areas are used.  Same formulas in double
     # precision: measured 2e-15 relative, bound 1e-13.  The areas add up to the surface area.
+    # The per-face geometry also runs a block of faces at a time (operators.FACE_BLOCK), which
+    # large meshes do: blocks of 7 split the mesh into 38 of them.
+    if face_block is not None:
+        monkeypatch.setattr(operators, "FACE_BLOCK", face_block)
     v, f = jittered_height_field()
     surface = Surface(v, f)
     lap, area, normals = reference_operators(v, f)
