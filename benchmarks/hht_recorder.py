@@ -5,7 +5,7 @@ instrumentation of the sparse solvers and a few sub-steps (benchmark only, no ef
 resetting the high-water mark at the stage's start; it wraps the PARDISO phases (analysis 11,
 numeric factorization 22, solve 33, with PARDISO's own memory report from ``iparm``), the
 construction, factorizations and solves of the other backends, and ``spectral_bounds``,
-``monogenic_from_potential`` and ``envelope_energies``.
+``monogenic_from_potential``, ``monogenic_from_riesz``, ``riesz_part`` and ``envelope_energies``.
 """
 
 from __future__ import annotations
@@ -144,6 +144,7 @@ class Recorder:
         import hht3d.decomposition.envelopes as envelopes
         import hht3d.linalg.backends as linalg
         import hht3d.spectral.monogenic_signal as mono_module
+        import hht3d.spectral.multilevel as multilevel
         import hht3d.spectral.quadrature as quadrature
 
         recorder = self
@@ -170,6 +171,8 @@ class Recorder:
             self._instrument_backend(impl)
         quadrature.spectral_bounds = self.timed("rt_bounds", quadrature.spectral_bounds, "bounds")
         mono_module.monogenic_from_potential = self.timed("rt_quantities", mono_module.monogenic_from_potential)
+        mono_module.monogenic_from_riesz = self.timed("rt_quantities", mono_module.monogenic_from_riesz)
+        multilevel.riesz_part = self.timed("rt_riesz_levels", multilevel.riesz_part)
         timed_energies = self.timed("emd_operator_q", envelopes.envelope_energies)
 
         def energies(surface):  # the surface holds them weakly, so their size is taken here
