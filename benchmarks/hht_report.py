@@ -553,7 +553,34 @@ def _filtering_section(results: dict) -> list[str]:
     failed = [r for r in results["scaling"] if "error" in r and any(f"({p})" in r["case"] for p in presets)]
     for r in failed:
         out.append(f"- {r['case']}: not run: {r['error'].strip().splitlines()[-1][:300]}")
+    levels = sorted((r for r in runs if r["emd_options"] == "filtering-levels"), key=lambda r: r["vertices"])
+    stage_rows = [
+        [r["case"], f"{r['vertices']:,}", *(_mb(r["stages"][s]["peak_mb"]) for s in STAGES)]
+        + [f"{r['peak_rss_mb'] * 2**20 / r['vertices']:,.0f}"]
+        for r in levels
+    ]
+    out += [
+        "",
+        "Peak RSS during each stage on levels (MB; a stage's peak includes what earlier stages left resident):",
+        "",
+        table(["case", "#V", *STAGES, "peak bytes / vertex"], stage_rows),
+        "",
+    ]
+    for r in levels:
+        target = LEVELS_TARGETS.get(round(r["vertices"] / 1e6))
+        if target is not None:
+            seconds, gigabytes = target
+            total, peak = r["seconds"]["total"], r["peak_rss_mb"] / 1024
+            line = f"- Targets at {r['vertices']:,} vertices: total <= {seconds:,} s: {total:,.0f} s, "
+            line += "met" if total <= seconds else "**missed**"
+            if gigabytes is not None:
+                line += f"; peak <= {gigabytes} GB: {peak:.1f} GiB, {'met' if peak <= gigabytes else '**missed**'}"
+            out.append(line + ".")
     return out + [""]
+
+
+#: Issue 39's targets on levels by millions of vertices: (total seconds, peak GB or None).
+LEVELS_TARGETS: dict[int, tuple[int, int | None]] = {1: (120, None), 4: (600, 6), 10: (1800, 12)}
 
 
 def _million_targets(runs: list, case: str, label: str, target_s: float) -> list[str]:
