@@ -101,6 +101,9 @@ _MIN_RESPONSE = 0.05
 #: Vertices of all threads' signals at once: each thread holds about 25 floats a vertex (its
 #: signal's orientation, first fit and response), so 1M vertices get 2 threads and 4M one.
 _THREAD_VERTICES = 4_000_000
+#: Surfaces of this many vertices or more build the edge stencil at each call (0.7 s a million
+#: vertices) rather than keep its 280 bytes a vertex for the rest of the run.
+_CACHED_VERTICES = 1_000_000
 #: Edges a block of the phase route spans: its per-edge work arrays (about a dozen, with the edge
 #: offsets) stay near 100 MB a thread whatever the surface's size.
 _BLOCK_EDGES = 1 << 20
@@ -326,6 +329,9 @@ class _Block:
 
 
 def _stencil(surface: Surface, kind: str) -> _Stencil:
+    """The surface's stencil, kept in its cache below :data:`_CACHED_VERTICES` vertices."""
+    if surface.n_vertices >= _CACHED_VERTICES:
+        return _build_stencil(surface, kind)
     key = f"frequency:stencil:{kind}"
     if key not in surface.cache:
         surface.cache[key] = _build_stencil(surface, kind)

@@ -263,6 +263,11 @@ def test_the_phase_route_needs_no_per_edge_array_of_the_whole_surface(monkeypatc
         tracemalloc.stop()
     assert stencil / n < 320 and building / n < 400
     assert work / n < 260
+    assert "frequency:stencil:lsq" in s.cache
+    monkeypatch.setattr(frequency_module, "_CACHED_VERTICES", n)  # a large surface keeps no stencil
+    big = Surface(*icosphere(6))
+    instantaneous_frequency(big, f, r)
+    assert not any(key.startswith("frequency:stencil") for key in big.cache)
 
 
 def test_zero_signal_reads_zero(regular):
