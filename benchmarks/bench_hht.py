@@ -112,8 +112,7 @@ def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper")
     from hht3d.decomposition import EMD_DEFAULTS, FILTERING_OPTIONS, PAPER_OPTIONS, emd
     from hht3d.geometry.signals import mean_curvature
     from hht3d.spectral import quadrature_nodes
-    from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_riesz
-    from hht3d.spectral.multilevel import combine_riesz_parts, riesz_part
+    from hht3d.spectral import monogenic_signal, multilevel
     from hht3d.spectral.options import RIESZ_DEFAULTS
 
     rec = Recorder()
@@ -144,10 +143,13 @@ def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper")
         decomposition = emd(surface, signal, **options)
     with rec.stage("rt"):
         if levels == "always":  # each IMF's Riesz vectors on its level and band (hht3d.spectral.multilevel)
-            vectors = combine_riesz_parts(surface, [riesz_part(surface, decomposition, RIESZ_DEFAULTS)])
-            mono = monogenic_from_riesz(surface, decomposition.imfs, vectors)
+            # through the modules: the recorder wraps riesz_part and monogenic_from_riesz there
+            part = multilevel.riesz_part(surface, decomposition, RIESZ_DEFAULTS)
+            vectors = multilevel.combine_riesz_parts(surface, [part])
+            del part
+            mono = monogenic_signal.monogenic_from_riesz(surface, decomposition.imfs, vectors)
         else:
-            mono = monogenic(surface, decomposition.imfs)
+            mono = monogenic_signal.monogenic(surface, decomposition.imfs)
     info = decomposition.info
     m, mbar = surface.cache.get("riesz:bounds", (np.nan, np.nan))
     shifts = len(quadrature_nodes(m, mbar, 1e-8)[0]) if np.isfinite(m) else 0
