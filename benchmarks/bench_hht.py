@@ -111,8 +111,7 @@ def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper")
     from hht3d import linalg
     from hht3d.decomposition import EMD_DEFAULTS, FILTERING_OPTIONS, PAPER_OPTIONS, emd
     from hht3d.geometry.signals import mean_curvature
-    from hht3d.spectral import quadrature_nodes
-    from hht3d.spectral import monogenic_signal, multilevel
+    from hht3d.spectral import monogenic_signal, multilevel, quadrature_nodes
     from hht3d.spectral.options import RIESZ_DEFAULTS
 
     rec = Recorder()
