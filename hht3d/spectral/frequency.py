@@ -68,19 +68,16 @@ Frequencies above it are reported (:func:`resolution_report`), never clipped.
 
 from __future__ import annotations
 
-import functools
 import os
-from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from typing import Any, cast
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import InputError
 from ..geometry.surface import Surface
 from ..records import renamed_keywords
+from .edge_stencil import Block, EdgeStencil, edge_stencil
 from .options import FREQUENCY_METHODS, RieszOptions
 from .riesz_transform import vertex_gradient
 
@@ -101,12 +98,6 @@ _MIN_RESPONSE = 0.05
 #: Vertices of all threads' signals at once: each thread holds about 25 floats a vertex (its
 #: signal's orientation, first fit and response), so 1M vertices get 2 threads and 4M one.
 _THREAD_VERTICES = 4_000_000
-#: Surfaces of this many vertices or more build the edge stencil at each call (0.7 s a million
-#: vertices) rather than keep its 280 bytes a vertex for the rest of the run.
-_CACHED_VERTICES = 1_000_000
-#: Edges a block of the phase route spans: its per-edge work arrays (about a dozen, with the edge
-#: offsets) stay near 100 MB a thread whatever the surface's size.
-_BLOCK_EDGES = 1 << 20
 
 
 def instantaneous_frequency(
@@ -157,7 +148,7 @@ def instantaneous_frequency(
         )
     if options.frequency == "gradient":
         return _gradient_frequency(surface, *_unit_scale(f, r), options.gradient)
-    stencil = _stencil(surface, options.gradient)
+    stencil = edge_stencil(surface, options.gradient)
     with ThreadPoolExecutor(_threads(len(f), surface.n_vertices)) as pool:  # NumPy releases the GIL
         rows = list(pool.map(lambda fi, ri: _phase_frequency(stencil, *_unit_scale(fi[None], ri[None])), f, r))
     return np.array(rows).reshape(f.shape)
@@ -218,187 +209,7 @@ def _norm_gradient(surface: Surface, rf: np.ndarray, q: np.ndarray, kind: str) -
 # -- phase increments along edges --------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class _Stencil:
-    """Directed edges ``i → j`` of a vertex gradient operator and of the Laplacian, cached per surface.
-
-    ``points`` are the vertices (3, n).  The gradient ``G`` (3n, n) has rows
-    ``∇f_i = Σ_j c_ij (f_j − f_i)``: its edges, sorted by ``i`` (``starts`` is the row pointer),
-    keep their ends ``j`` (``cols``) and the coefficients ``c_ij`` (``coef``, (3, E)); the
-    Laplacian's edges, likewise, keep ``−L_ij`` (``lap_weight``).  About 40 bytes an edge; the
-    phase route reads them a block of vertices at a time (:class:`_Block`), so no per-edge work
-    array spans the whole surface.
-    """
-
-    points: np.ndarray
-    starts: np.ndarray
-    cols: np.ndarray
-    coef: np.ndarray
-    lap_starts: np.ndarray
-    lap_cols: np.ndarray
-    lap_weight: np.ndarray
-
-    @property
-    def n(self) -> int:
-        return self.points.shape[1]
-
-    def blocks(self) -> Iterator["_Block"]:
-        """The vertices in consecutive ranges of about :data:`_BLOCK_EDGES` edges, one block at a time."""
-        step = max(1, _BLOCK_EDGES * self.n // max(len(self.cols), 1))
-        for a in range(0, self.n, step):
-            yield _Block(self, a, min(a + step, self.n))
-
-
-class _Block:
-    """The edges of the vertices ``[a, b)`` of a stencil, with the maps the phase route applies.
-
-    Per-vertex inputs are whole-surface arrays read at each edge's start ``i`` (:meth:`at_start`)
-    or end ``j`` (``cols``); per-vertex outputs cover ``[a, b)``.  The offsets ``x_j − x_i`` are gathered on first use,
-    so a block's memory is its own.  Edges are sorted by ``i``: a value per vertex reaches its
-    edges by :func:`numpy.repeat`, the fastest gather.
-    """
-
-    def __init__(self, st: _Stencil, a: int, b: int) -> None:
-        self.st, self.a, self.b = st, a, b
-        self.edges = slice(st.starts[a], st.starts[b])
-        self.lap = slice(st.lap_starts[a], st.lap_starts[b])
-        self.cols = st.cols[self.edges]
-        self.counts = np.diff(st.starts[a : b + 1])
-        self.lap_counts = np.diff(st.lap_starts[a : b + 1])
-
-    @property
-    def size(self) -> int:
-        return self.b - self.a
-
-    def at_start(self, y: np.ndarray) -> np.ndarray:
-        """``y_i`` per edge, for a whole-surface ``y`` (n,)."""
-        return np.repeat(y[self.a : self.b], self.counts)
-
-    @functools.cached_property
-    def offset(self) -> np.ndarray:
-        """``x_j − x_i`` (3, E) of the gradient's edges."""
-        return self._offset(self.cols, self.counts)
-
-    @functools.cached_property
-    def lap_offset(self) -> np.ndarray:
-        """``x_j − x_i`` (3, E) of the Laplacian's edges."""
-        return self._offset(self.st.lap_cols[self.lap], self.lap_counts)
-
-    def _offset(self, cols: np.ndarray, counts: np.ndarray) -> np.ndarray:
-        points = self.st.points
-        return np.stack([points[c][cols] - np.repeat(points[c][self.a : self.b], counts) for c in range(3)])
-
-    def fit(self, x: np.ndarray) -> np.ndarray:
-        """``Σ_j c_ij x_ij`` (size, 3): the gradient's coefficients applied to per-edge differences."""
-        coef = self.st.coef[:, self.edges]
-        return np.column_stack([self._sum(self.owner, coef[c] * x) for c in range(3)])
-
-    def along(self, g: np.ndarray) -> np.ndarray:
-        """``g_i · (x_j − x_i)`` per edge for block vectors ``g`` (size, 3)."""
-        return self._along(g, self.offset, self.counts)
-
-    def ring(self, y: np.ndarray) -> np.ndarray:
-        """``Σ_j y_j`` over each vertex's edges, for a whole-surface ``y`` (n,)."""
-        return self._sum(self.owner, y[self.cols])
-
-    def lap_along(self, g: np.ndarray) -> np.ndarray:
-        """``g_i · (x_j − x_i)`` per Laplacian edge."""
-        return self._along(g, self.lap_offset, self.lap_counts)
-
-    def lap_sum(self, y: np.ndarray) -> np.ndarray:
-        """``Σ_j −L_ij y_ij`` over each vertex's Laplacian edges."""
-        return self._sum(self.lap_owner, self.st.lap_weight[self.lap] * y)
-
-    def _along(self, g: np.ndarray, offset: np.ndarray, counts: np.ndarray) -> np.ndarray:
-        at = [np.repeat(g[:, c], counts) for c in range(3)]
-        return at[0] * offset[0] + at[1] * offset[1] + at[2] * offset[2]
-
-    @functools.cached_property
-    def owner(self) -> np.ndarray:
-        """``i − a`` per edge."""
-        return np.repeat(np.arange(self.size), self.counts)
-
-    @functools.cached_property
-    def lap_owner(self) -> np.ndarray:
-        """``i − a`` per Laplacian edge."""
-        return np.repeat(np.arange(self.size), self.lap_counts)
-
-    def _sum(self, owner: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """Per-vertex sums of per-edge ``values`` (in edge order, as a sparse product adds them)."""
-        return np.bincount(owner, weights=values, minlength=self.size)
-
-
-def _stencil(surface: Surface, kind: str) -> _Stencil:
-    """The surface's stencil, kept in its cache below :data:`_CACHED_VERTICES` vertices."""
-    if surface.n_vertices >= _CACHED_VERTICES:
-        return _build_stencil(surface, kind)
-    key = f"frequency:stencil:{kind}"
-    if key not in surface.cache:
-        surface.cache[key] = _build_stencil(surface, kind)
-    return surface.cache[key]
-
-
-def _build_stencil(surface: Surface, kind: str) -> _Stencil:
-    """The edges of ``G`` and of ``L``, gathered a block of rows at a time (no whole-surface sort)."""
-    n = surface.n_vertices
-    step = max(1, _BLOCK_EDGES // 8)
-    ranges = [(a, min(a + step, n)) for a in range(0, n, step)]
-    gradient, stiffness = surface.gradient(kind), surface.stiffness.tocsr()
-    counts, cols, coef = (
-        np.concatenate(part, axis=-1) for part in zip(*(_gradient_edges(gradient, a, b) for a, b in ranges))
-    )
-    lap_counts, lap_cols, lap_weight = (
-        np.concatenate(part) for part in zip(*(_laplacian_edges(stiffness, a, b) for a, b in ranges))
-    )
-    return _Stencil(
-        np.ascontiguousarray(surface.vertices.T),
-        np.r_[0, np.cumsum(counts)],
-        cols,
-        coef,
-        np.r_[0, np.cumsum(lap_counts)],
-        lap_cols,
-        lap_weight,
-    )
-
-
-def _gradient_edges(gradient: sp.csr_matrix, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Edges per vertex, ends ``j`` sorted and ``c_ij`` (3, E) of the vertices ``[a, b)``: the
-    off-diagonal entries of the rows ``3i .. 3i + 2`` of ``G``, an edge wherever one component is
-    nonzero."""
-    block = gradient[3 * a : 3 * b].tocoo()
-    block.sum_duplicates()
-    vertex, component = np.divmod(block.row, 3)
-    n = gradient.shape[1]
-    off = (block.col != vertex + a) & (block.data != 0)
-    keys = vertex[off].astype(np.int64) * n + block.col[off]
-    order = np.argsort(keys, kind="stable")
-    ordered = keys[order]
-    first = np.r_[True, ordered[1:] != ordered[:-1]]
-    index = np.empty_like(order)
-    index[order] = np.cumsum(first) - 1
-    coef = np.zeros((3, int(first.sum())))
-    coef[component[off], index] = block.data[off]  # one entry per (row, column): no sums
-    rows, cols = np.divmod(ordered[first], n)
-    return np.bincount(rows, minlength=b - a), cols.astype(_index_type(n)), coef
-
-
-def _laplacian_edges(stiffness: sp.csr_matrix, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Edges per vertex, ends ``j`` and ``−L_ij`` of the off-diagonal nonzeros of the rows ``[a, b)`` of ``L``."""
-    block = stiffness[a:b].tocoo()
-    keep = (block.row + a != block.col) & (block.data != 0)
-    rows = block.row[keep]
-    return (
-        np.bincount(rows, minlength=b - a),
-        block.col[keep].astype(_index_type(stiffness.shape[0])),
-        -block.data[keep],
-    )
-
-
-def _index_type(n: int) -> type:
-    return np.int32 if n < 2**31 else np.int64
-
-
-def _phase_frequency(st: _Stencil, f: np.ndarray, r: np.ndarray) -> np.ndarray:
+def _phase_frequency(st: EdgeStencil, f: np.ndarray, r: np.ndarray) -> np.ndarray:
     """``|∇ψ|`` of one signal (a row of ``f``, ``r``) from edge phase increments, unwrapped and
     dispersion-corrected: a first fit, the Riesz response from it (which reads the first fit on
     each vertex's ring), then the corrected fit, each a pass over the stencil's blocks."""
@@ -408,7 +219,7 @@ def _phase_frequency(st: _Stencil, f: np.ndarray, r: np.ndarray) -> np.ndarray:
     qo = np.einsum("vc,vc->v", r, o)
     r_t, o_t = np.ascontiguousarray(r.T), np.ascontiguousarray(o.T)  # 1-D gathers are the fast ones
 
-    def fit(block: _Block, response: np.ndarray | None, guess: np.ndarray | None) -> np.ndarray:
+    def fit(block: Block, response: np.ndarray | None, guess: np.ndarray | None) -> np.ndarray:
         q_i = block.at_start(qo)
         q_j = sum(r_t[c][block.cols] * block.at_start(o_t[c]) for c in range(3))
         if response is not None:
@@ -430,7 +241,7 @@ def _phase_frequency(st: _Stencil, f: np.ndarray, r: np.ndarray) -> np.ndarray:
     return omega
 
 
-def _orientation(st: _Stencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
+def _orientation(st: EdgeStencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Unit orientation (n, 3) of the signed quadrature ``Rf·o``.
 
     ``Rf_i/|Rf_i|``: then ``∇(Rf·o) = ∇|Rf|`` at the vertex, and the fitted
@@ -457,7 +268,7 @@ def _orientation(st: _Stencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
     return o
 
 
-def _fold_ring(block: _Block, fold: np.ndarray, products: np.ndarray) -> np.ndarray:
+def _fold_ring(block: Block, fold: np.ndarray, products: np.ndarray) -> np.ndarray:
     """``Σ_j`` of ``products`` (n, 6) over the ring of each of the block's vertices ``fold``."""
     slot = np.full(block.size, -1)
     slot[fold] = np.arange(len(fold))
@@ -470,7 +281,7 @@ def _fold_ring(block: _Block, fold: np.ndarray, products: np.ndarray) -> np.ndar
 
 
 def _unwrapped_fit(
-    block: _Block, f_i: np.ndarray, f_j: np.ndarray, q_i: np.ndarray, q_j: np.ndarray, guess: np.ndarray | None
+    block: Block, f_i: np.ndarray, f_j: np.ndarray, q_i: np.ndarray, q_j: np.ndarray, guess: np.ndarray | None
 ) -> np.ndarray:
     """Gradient (size, 3) fitted to the edge increments ``arg(z_j z̄_i)``, ``z = f + i q`` at the
     edges' ends, each shifted by the whole turns that bring it closest to the gradient's
@@ -492,7 +303,7 @@ def _unwrapped_fit(
 
 
 def _riesz_response(
-    block: _Block, grad: np.ndarray, magnitude: np.ndarray, moment: np.ndarray, energy: np.ndarray
+    block: Block, grad: np.ndarray, magnitude: np.ndarray, moment: np.ndarray, energy: np.ndarray
 ) -> np.ndarray:
     """``|R_h w| / |R w|`` (size,) for the plane wave ``w`` of the local wavevector.
 

@@ -19,8 +19,14 @@ from scipy.special import lpmv
 from helpers.meshes import grid, icosphere
 from hht3d.errors import InputError
 from hht3d.geometry.surface import Surface
-from hht3d.spectral import FREQUENCY_METHODS, fractional_laplacian, instantaneous_frequency, resolvable_frequency, riesz
-from hht3d.spectral import frequency as frequency_module
+from hht3d.spectral import (
+    FREQUENCY_METHODS,
+    edge_stencil,
+    fractional_laplacian,
+    instantaneous_frequency,
+    resolvable_frequency,
+    riesz,
+)
 from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
 
 # A strip [0, 1] x [0, 16h], h = 1/128.  cos(mπx) is a Neumann eigenfunction of the
@@ -226,7 +232,7 @@ def test_blocks_of_a_few_vertices_read_the_plane_waves_unchanged(monkeypatch):
     signals = np.cos(WAVENUMBERS[RESOLVED, None] * s.vertices[:, 0])
     rf = riesz(s, signals)
     whole = instantaneous_frequency(s, signals, rf)
-    monkeypatch.setattr(frequency_module, "_BLOCK_EDGES", 50)
+    monkeypatch.setattr(edge_stencil, "BLOCK_EDGES", 50)
     s.cache.pop("frequency:stencil:lsq")
     blocked = instantaneous_frequency(s, signals, rf)
     assert np.array_equal(blocked, whole)
@@ -245,7 +251,7 @@ def test_the_phase_route_needs_no_per_edge_array_of_the_whole_surface(monkeypatc
     # The former stencil of sparse matrices held 964 bytes a vertex, peaked at 2,154 while built,
     # and a signal's per-edge arrays took 649: each bound fails by more than 2x there.
     monkeypatch.setenv("OMP_NUM_THREADS", "1")
-    monkeypatch.setattr(frequency_module, "_BLOCK_EDGES", 4096)
+    monkeypatch.setattr(edge_stencil, "BLOCK_EDGES", 4096)
     s = Surface(*icosphere(6))
     n = s.n_vertices
     rng = np.random.default_rng(0)
@@ -254,7 +260,7 @@ def test_the_phase_route_needs_no_per_edge_array_of_the_whole_surface(monkeypatc
     s.gradient("lsq"), s.stiffness  # the surface's own operators are not the estimator's
     tracemalloc.start()
     try:
-        frequency_module._stencil(s, "lsq")
+        edge_stencil.edge_stencil(s, "lsq")
         stencil, building = tracemalloc.get_traced_memory()
         tracemalloc.reset_peak()
         instantaneous_frequency(s, f, r)
@@ -264,7 +270,7 @@ def test_the_phase_route_needs_no_per_edge_array_of_the_whole_surface(monkeypatc
     assert stencil / n < 320 and building / n < 400
     assert work / n < 260
     assert "frequency:stencil:lsq" in s.cache
-    monkeypatch.setattr(frequency_module, "_CACHED_VERTICES", n)  # a large surface keeps no stencil
+    monkeypatch.setattr(edge_stencil, "CACHED_VERTICES", n)  # a large surface keeps no stencil
     big = Surface(*icosphere(6))
     instantaneous_frequency(big, f, r)
     assert not any(key.startswith("frequency:stencil") for key in big.cache)
