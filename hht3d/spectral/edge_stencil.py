@@ -80,6 +80,11 @@ class Block:
     def size(self) -> int:
         return self.b - self.a
 
+    @property
+    def starts(self) -> np.ndarray:
+        """Where each vertex's edges start within the block (size,)."""
+        return self.st.starts[self.a : self.b] - self.st.starts[self.a]
+
     def at_start(self, y: np.ndarray) -> np.ndarray:
         """``y_i`` per edge, for a whole-surface ``y`` (n,)."""
         return np.repeat(y[self.a : self.b], self.counts)

@@ -255,9 +255,8 @@ def _orientation(st: EdgeStencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
     for block in st.blocks():
         ring_max = np.zeros(block.size)
         has = block.counts > 0
-        starts = np.cumsum(block.counts) - block.counts
         if len(block.cols):
-            ring_max[has] = np.maximum.reduceat(q[block.cols], starts[has])
+            ring_max[has] = np.maximum.reduceat(q[block.cols], block.starts[has])
         here = q[block.a : block.b]
         fold = np.flatnonzero((here <= _FOLD_RATIO * ring_max) | (here == 0))
         if fold.size:
