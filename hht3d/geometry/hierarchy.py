@@ -9,8 +9,12 @@ mean vertex area):
   taken among its boundary vertices if it has any (so the coarse boundary runs along the
   fine one); coarse vertices are finer vertices, with their normals;
 * meshes keep the triangles whose three corners fall in three clusters (vertex
-  clustering), once, and the clusters such triangles reference; the cotangent
-  Laplacian of the coarse mesh is its operator;
+  clustering), once, and the clusters such triangles reference; the coarse mesh's
+  operator is the intrinsic Delaunay Laplacian (``laplacian="robust"``).  Its cotangent
+  Laplacian would not do: clustering leaves needles and caps with angles near 0 and π,
+  whose weights reached 6.7e5, so ``λ_max h²`` was 6.7e6 on igea's level 1 (151 on the
+  input), where the intrinsic Delaunay one gives 51 (48-65 on igea's levels 1-3, 40-76 on
+  nefertiti's), and the polynomial filters' degree grows like ``√λ_max``;
 * point clouds keep every cluster, with the robust point-cloud Laplacian.
 
 Transfers (``P`` from level ``ℓ + 1`` to level ``ℓ``, ``n_ℓ × n_{ℓ+1}``, rows summing to 1):
@@ -157,7 +161,7 @@ def _coarser(finer: Level, index: int) -> Level:
         samples, faces = _cluster_triangles(fine.vertices, cluster[fine.faces], samples)
         if len(samples) < MIN_VERTICES:
             raise InputError(f"{name}: vertex clustering left {len(samples)} vertices")
-        coarse = Surface(fine.vertices[samples], faces, normals=fine.normals[samples], name=name)
+        coarse = Surface(fine.vertices[samples], faces, normals=fine.normals[samples], laplacian="robust", name=name)
         prolongation = _barycentric(fine.vertices, coarse)
     else:
         coarse = Surface(fine.vertices[samples], normals=fine.normals[samples], n_neighbors=fine.n_neighbors, name=name)
