@@ -23,6 +23,7 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
+import dask
 from dask import delayed
 from dask.base import tokenize
 
@@ -33,7 +34,7 @@ from ..graph import stages as graph
 from ..io.folder import OutputFolder, check_locations
 from ..io.manifest import new_run_id
 from ..io.sealed import seal
-from ..io.storage import file_name, join, local_path, resolve_locations, stem
+from ..io.storage import file_name, input_size, join, local_path, resolve_locations, stem
 from ..output_formats import plain_formats
 from ..transform import HHTResult
 from .guard import MAX_ERROR, Failure, Guarded
@@ -119,13 +120,20 @@ def items_graph(items: dict, folder: OutputFolder, make_item: Callable[..., Any]
     finds done (:meth:`~hht3d.io.folder.OutputFolder.done`: locally, outputs the
     manifest records as complete with the same size and checksum; for a URL,
     likewise in its manifest object) is a ``"skipped"`` row instead.
+
+    The larger an input file, the higher its tasks' ``priority`` (honoured by
+    ``dask.distributed``): the longest chain starts first, and the small items fill the
+    other workers meanwhile, instead of the largest starting last while the others idle.
     """
+    sizes = {source: input_size(source, folder.storage_options) for source in items}
+    rank = {source: index for index, source in enumerate(sorted(items, key=sizes.__getitem__))}
     rows = []
     for source, paths in items.items():
         if resume and folder.done(paths):
             rows.append(skipped_summary(source, paths, folder.storage_options))
         else:
-            rows.append(make_item(source, paths))
+            with dask.annotate(priority=rank[source]):
+                rows.append(make_item(source, paths))
     return delayed(list, pure=True)(rows)
 
 

@@ -41,6 +41,7 @@ __all__ = [
     "under",
     "options_for",
     "filesystem",
+    "input_size",
     "file_name",
     "stem",
     "parent_name",
@@ -145,6 +146,17 @@ def filesystem(url: str, storage_options: dict | None = None) -> tuple[Any, str]
         raise InputError(
             f"{redact(url)}: cannot open {protocol}:// ({one_line(exc)}); check the URL and storage_options"
         ) from None
+
+
+def input_size(location: Path | str, storage_options: dict | None = None) -> int:
+    """Bytes of an input file or object, 0 when it cannot be read (its load then says why)."""
+    try:
+        if is_url(location):
+            fs, path = filesystem(location, storage_options)
+            return int(fs.size(path) or 0)
+        return Path(location).stat().st_size
+    except Exception:  # missing, unreadable, or a back-end's own error types: the load reports it
+        return 0
 
 
 def _key(url: str) -> str:

@@ -9,11 +9,13 @@ import pytest
 
 from helpers.datasets import _make_inputs
 from helpers.folders import dead_writers_part, produced_names
+from helpers.meshes import icosphere
 from helpers.results import assert_same_hht, hht_arrays_from_ply
-from hht3d import load
-from hht3d.dataset import run_dataset
+from hht3d import Surface, load
+from hht3d.dataset import dataset_graph, run_dataset
 from hht3d.errors import OutputError
 from hht3d.geometry.signals import mean_curvature
+from hht3d.io import write_ply
 from hht3d.transform import hht
 
 
@@ -107,3 +109,19 @@ def test_an_output_pattern_with_another_field_is_named(pattern, tmp_path):
     with pytest.raises(InputError, match="the only field is {stem}"):
         run_dataset([data_path("spot.ply")], tmp_path / "out", scheduler="synchronous", pattern=pattern)
     assert not (tmp_path / "out").exists()
+
+
+def test_the_largest_input_gets_the_highest_task_priority(tmp_path):
+    """dask.distributed runs ready tasks by their ``priority`` annotation: the largest file's chain must
+    start first, or it runs last while the other workers idle (1.57x on 2 workers, bench_graph)."""
+    folder, out = tmp_path / "in", tmp_path / "out"
+    folder.mkdir()
+    for name, subdivisions in (("a", 4), ("b", 2), ("c", 3)):  # names in another order than sizes
+        write_ply(folder / f"{name}.ply", Surface(*icosphere(subdivisions)))
+    priority = {}
+    for layer in dataset_graph(folder, out, max_imfs=1).__dask_graph__().layers.values():
+        note = (layer.annotations or {}).get("priority")
+        priority.update(
+            {str(key).split("_hht.npz-")[0]: note(key) for key in layer if note and "_hht.npz-" in str(key)}
+        )
+    assert sorted(priority, key=priority.get) == ["write b", "write c", "write a"], priority
