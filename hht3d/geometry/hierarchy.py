@@ -45,6 +45,7 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from .operators import adjacency, tangent_gradient
 from .surface import MIN_VERTICES, Surface
 
 __all__ = ["Level", "Hierarchy", "hierarchy", "COARSENING", "VOXEL_SPACINGS", "CLOUD_NEIGHBOURS", "MIN_LEVEL_VERTICES"]
@@ -80,6 +81,19 @@ class Level:
     spacing: float
     prolongation: sp.csr_matrix | None = None
     samples: np.ndarray | None = None
+
+    def gradient(self, kind: str) -> sp.csr_matrix:
+        """The level's tangent gradient ``(3n, n)`` (:meth:`Surface.gradient`).  On a coarse mesh the least
+        squares of ``kind="lsq"`` run over the neighbours of its intrinsic Delaunay Laplacian, not its faces'
+        1-rings, which hold the needles and caps: of a potential ``u = L^{-1/2} f``, for which
+        ``‖∇u‖ = ‖f‖``, the faces' 1-rings gave ``‖∇u‖ = 1.54 ‖f‖`` on igea's level 1, the Laplacian's 0.995."""
+        coarse = self.surface
+        if kind != "lsq" or self.samples is None or not coarse.is_mesh:
+            return coarse.gradient(kind)
+        if "gradient:lsq:laplacian" not in coarse.cache:
+            neighbours = adjacency(coarse.n_vertices, laplacian=coarse.stiffness)
+            coarse.cache["gradient:lsq:laplacian"] = tangent_gradient(coarse.vertices, coarse.normals, neighbours)
+        return coarse.cache["gradient:lsq:laplacian"]
 
     def prolong(self, values: np.ndarray) -> np.ndarray:
         """``P v``: values (``(n,)`` or ``(k, n)``) on the next finer level."""

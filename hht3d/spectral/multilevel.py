@@ -187,7 +187,8 @@ def riesz_part(
         if u is None:
             values = np.array([decomposition.levels[k][1] for k in here])
             u = band_potential(level.surface, values, (BAND_FLOOR * min(cuts)) ** 2, options.tol, backend)
-        for k, field in zip(here, vertex_gradient(level.surface, u, options.gradient).reshape(len(here), -1, 3)):
+        fields = vertex_gradient(level.surface, u, options.gradient, level.gradient(options.gradient))
+        for k, field in zip(here, fields.reshape(len(here), -1, 3)):
             vectors = levels.to_finest(field.T, index).T
             out.append((k, vectors - np.sum(vectors * normals, axis=1, keepdims=True) * normals))
     return out

@@ -63,6 +63,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import InputError
 from ..geometry.signals import fluctuation
@@ -200,7 +201,9 @@ def riesz(
     return vertex_gradient(surface, u, options.gradient)
 
 
-def vertex_gradient(surface: Surface, u: np.ndarray, kind: str = RIESZ_DEFAULTS.gradient) -> np.ndarray:
+def vertex_gradient(
+    surface: Surface, u: np.ndarray, kind: str = RIESZ_DEFAULTS.gradient, operator: sp.spmatrix | None = None
+) -> np.ndarray:
     """Tangent gradients of (n,) or (k, n) per-vertex fields: (n, 3) or (k, n, 3).
 
     Parameters
@@ -211,6 +214,9 @@ def vertex_gradient(surface: Surface, u: np.ndarray, kind: str = RIESZ_DEFAULTS.
         One field ``(n,)`` or a stack ``(k, n)``.
     kind : str, optional
         The gradient operator, as in :class:`~hht3d.spectral.options.RieszOptions` (default ``"lsq"``).
+    operator : sparse (3n, n), optional
+        A gradient operator to apply instead of ``surface.gradient(kind)`` (a coarse level's,
+        :meth:`hht3d.geometry.hierarchy.Level.gradient`).
 
     Returns
     -------
@@ -226,7 +232,7 @@ def vertex_gradient(surface: Surface, u: np.ndarray, kind: str = RIESZ_DEFAULTS.
     >>> vertex_gradient(spot, spot.vertices[:, 0]).shape, vertex_gradient(spot, spot.vertices.T).shape
     ((2930, 3), (3, 2930, 3))
     """
-    grad = surface.gradient(kind)
+    grad = surface.gradient(kind) if operator is None else operator
     n = surface.n_vertices
     u2 = np.atleast_2d(u)
     out = np.asarray(grad @ u2.T).reshape(n, 3, len(u2)).transpose(2, 0, 1)
