@@ -84,6 +84,8 @@ def test_auto_takes_the_polynomial_on_large_surfaces_and_global_cuts_only():
 
     assert not uses_polynomial(EMDOptions(method="filtering"), filtering.POLYNOMIAL_VERTICES - 1)
     assert uses_polynomial(EMDOptions(method="filtering"), filtering.POLYNOMIAL_VERTICES)
+    assert uses_polynomial(EMDOptions(method="filtering"), 500, coarse=True)  # a coarse level of the hierarchy
+    assert not uses_polynomial(EMDOptions(method="filtering", evaluation="solves"), 500, coarse=True)
     assert not uses_polynomial(EMDOptions(method="filtering", cut="local", evaluation="polynomial"), 10**9)
     assert not uses_polynomial(EMDOptions(method="filtering", evaluation="solves"), 10**9)
 

@@ -54,6 +54,15 @@ def test_each_residue_moves_to_the_coarsest_level_resolving_its_cut(sphere, runs
         assert 0 <= imf["transfer_error"] < 0.05
 
 
+def test_auto_filters_the_coarse_levels_by_polynomial_and_the_input_by_solves(runs):
+    """Coarse levels are well-shaped (their Laplacian is intrinsic Delaunay: tests/geometry/test_hierarchy.py), so
+    ``evaluation="auto"`` takes the polynomial there, and solves on an input below POLYNOMIAL_VERTICES."""
+    info = runs["always"].info["imfs"]
+    assert any(imf["level"] > 0 for imf in info)
+    assert all(("degree" in imf) == (imf["level"] > 0) for imf in info), info
+    assert all(imf["factorizations"] == 0 for imf in info if imf["level"] > 0)
+
+
 def test_the_direct_imfs_up_to_the_first_move_which_differs_by_its_transfer_error(runs, signal, sphere):
     """Until a residue moves, both paths compute the same filter on the same residue; the IMF whose residue
     moves differs from the direct one by exactly ``r_k − P R r_k``, whose norm ``transfer_error`` reports."""
