@@ -14,8 +14,10 @@ its own):
 ``polynomial``  the same levels with ``evaluation="polynomial"``: every filter that can be is a
                 Chebyshev polynomial, and so is the Riesz potential of its IMF (no factorization
                 on those levels);
-``plain``       ``multires``'s settings with ``evaluation="auto"`` and ``backend="superlu"``: a plain
-                install (polynomial from 20,000 vertices), against ``multires`` on the fast backend.
+``auto``        the same levels with ``evaluation="auto"`` (the defaults on levels): polynomials on the
+                coarse levels, and on the input from 2,000,000 vertices;
+``plain``       ``auto``'s settings with ``backend="superlu"``: a plain install (polynomial from
+                20,000 vertices), against ``auto`` on the fast backend.
 
 All but ``plain`` use the fastest backend installed.
 
@@ -36,7 +38,7 @@ Models: ``nefertiti`` (50k) and ``igea`` (134k) from ``../shared/data`` and the 
 in ``--folder``).  Run::
 
     python -m benchmarks.bench_multiresolution [--models 12k 25k nefertiti igea 1m]
-        [--modes direct multires polynomial plain] [--folder /tmp/hht3d-bench] [--timeout 3600]
+        [--modes direct multires polynomial auto plain] [--folder /tmp/hht3d-bench] [--timeout 3600]
 
 Writes ``results/multiresolution.json`` and ``results/multiresolution.md`` (the records of models
 and settings not re-run are kept from the previous file).  ``12k`` and ``25k`` (igea decimated) with
@@ -77,10 +79,11 @@ MODES = {
     "direct": {"multiresolution": "never", "evaluation": "solves"},
     "multires": {"multiresolution": "always", "evaluation": "solves"},
     "polynomial": {"multiresolution": "always", "evaluation": "polynomial"},
+    "auto": {"multiresolution": "always", "evaluation": "auto"},
     "plain": {"multiresolution": "always", "evaluation": "auto", "backend": "superlu"},
 }
 #: The setting each one is compared with, beside ``direct``: the plain install against the fast backend.
-PAIRS = {"multires": "direct", "polynomial": "direct", "plain": "multires"}
+PAIRS = {"multires": "direct", "polynomial": "direct", "auto": "direct", "plain": "auto"}
 FOLDER = Path("/tmp/hht3d-bench")
 #: A run still going after this many seconds is stopped and reported as such.
 CASE_TIMEOUT = 3600
@@ -301,8 +304,8 @@ def markdown(data: dict) -> str:
         f"{meta['load_average']} at the start and {meta.get('load_average_end')} at the end ({meta['date']}). "
         '`hht3d.hht(surface, mean_curvature(surface), method="filtering", ...)`, each run in its own '
         'process after a warm-up on spot. *direct*: `multiresolution="never"` (the baseline); *multires*: '
-        '`"always"`, filters by solves; *polynomial*: `"always"`, `evaluation="polynomial"`; *plain*: '
-        '*multires* on SuperLU with `evaluation="auto"`, compared with *multires*. Seconds are the whole '
+        '`"always"`, filters by solves; *polynomial*: `"always"`, `evaluation="polynomial"`; *auto*: '
+        '`"always"`, `evaluation="auto"`; *plain*: *auto* on SuperLU, compared with *auto*. Seconds are the whole '
         "`hht` call; ratios are setting / its baseline; ΔER and ΔIO are setting − baseline. Models run with "
         "`--repeat N` ran each setting N times in turn; the run of median time is shown (all times: *runs*).",
         "",
