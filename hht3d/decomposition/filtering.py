@@ -62,10 +62,11 @@ only, memory linear in the vertices, no factorization.  It is the solves' filter
 (the IMFs agree to 1e-7 on spot and nefertiti, whose smallest areas are floored).
 Its degree grows like ``√(λ̄) / ω_c``, ``λ̄ ≥ λ_max(A)``, which the worst-shaped
 vertices set.  ``"auto"`` takes the polynomial on surfaces of
-:data:`POLYNOMIAL_VERTICES` or more, where a factorization's fill no longer fits, and with
-a slow backend (SuperLU, a plain install) from
-:data:`~hht3d.linalg.SLOW_FALLBACK_VERTICES` on, where its factorizations dominate (for the
-levels of :mod:`.multiresolution`, each level by its own size).  An IMF whose series would
+:data:`POLYNOMIAL_VERTICES` or more, where a factorization's fill no longer fits, on every
+coarse level of :mod:`.multiresolution` (their intrinsic Delaunay Laplacian keeps ``λ̄ h²`` at 40-76 on
+igea's and nefertiti's levels, whose IMFs took 1,063-1,519 degrees), and with a slow backend (SuperLU, a
+plain install) from :data:`~hht3d.linalg.SLOW_FALLBACK_VERTICES` on, where its factorizations
+dominate.  An IMF whose series would
 exceed :data:`MAX_POLYNOMIAL_DEGREE` (a cut far below the surface's resolution: the degree
 doubles as the cut halves, so on levels it stays bounded) is filtered by solves.
 

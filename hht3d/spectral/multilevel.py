@@ -26,7 +26,10 @@ filter's operator, the membrane ``L`` with floored areas, which is the quadratur
 percents (3.5% on spot; 1.7–11% measured on igea and its decimated and subdivided copies), so
 the potential is taken from the polynomial only there, or on levels of
 :data:`~hht3d.decomposition.filtering.POLYNOMIAL_VERTICES` or more, where the quadrature's
-factorizations do not fit; other levels take the band quadrature.
+factorizations do not fit; other levels take the band quadrature.  Coarse mesh levels have the
+intrinsic Delaunay Laplacian (:mod:`hht3d.geometry.hierarchy`), so only the input's level can
+lack it.  Their gradient fits over that Laplacian's neighbours
+(:meth:`~hht3d.geometry.hierarchy.Level.gradient`).
 
 Without levels (a decomposition that did not use them) each IMF takes the full quadrature on
 the input (:func:`~hht3d.spectral.riesz_transform.riesz`).  The IMFs split into groups,
