@@ -24,6 +24,8 @@ from typing import Callable, cast
 import numpy as np
 import scipy.sparse as sp
 
+from .blocks import CLOUD_BLOCK, MESH_BLOCK, built_by_blocks
+
 __all__ = [
     "face_areas",
     "face_normals",
@@ -156,23 +158,31 @@ def _voronoi_shares(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 def robust_mesh_operators(
     vertices: np.ndarray, faces: np.ndarray, mollify_factor: float = 1e-5
 ) -> tuple[sp.csr_matrix, np.ndarray]:
-    """``(L, mass_diagonal)`` from ``robust_laplacian.mesh_laplacian`` (intrinsic Delaunay)."""
+    """``(L, mass_diagonal)`` from ``robust_laplacian.mesh_laplacian`` (intrinsic Delaunay); by blocks of
+    :data:`~.blocks.MESH_BLOCK` vertices on larger meshes (:mod:`.blocks`)."""
     import robust_laplacian
 
-    lap, mass = robust_laplacian.mesh_laplacian(
-        np.ascontiguousarray(vertices), np.ascontiguousarray(faces), mollify_factor
-    )
-    return sp.csr_matrix(lap), np.asarray(mass.diagonal(), dtype=np.float64)
+    def build(points: np.ndarray, triangles: np.ndarray | None) -> tuple[sp.spmatrix, np.ndarray]:
+        lap, mass = robust_laplacian.mesh_laplacian(
+            np.ascontiguousarray(points), np.ascontiguousarray(triangles), mollify_factor
+        )
+        return lap, mass.diagonal()
+
+    return built_by_blocks(build, vertices, faces, MESH_BLOCK)
 
 
 def point_cloud_operators(
     points: np.ndarray, n_neighbors: int = 30, mollify_factor: float = 1e-5
 ) -> tuple[sp.csr_matrix, np.ndarray]:
-    """``(L, mass_diagonal)`` from ``robust_laplacian.point_cloud_laplacian``."""
+    """``(L, mass_diagonal)`` from ``robust_laplacian.point_cloud_laplacian``; by blocks of
+    :data:`~.blocks.CLOUD_BLOCK` points on larger clouds (:mod:`.blocks`)."""
     import robust_laplacian
 
-    lap, mass = robust_laplacian.point_cloud_laplacian(np.ascontiguousarray(points), mollify_factor, n_neighbors)
-    return sp.csr_matrix(lap), np.asarray(mass.diagonal(), dtype=np.float64)
+    def build(block: np.ndarray, _: np.ndarray | None) -> tuple[sp.spmatrix, np.ndarray]:
+        lap, mass = robust_laplacian.point_cloud_laplacian(np.ascontiguousarray(block), mollify_factor, n_neighbors)
+        return lap, mass.diagonal()
+
+    return built_by_blocks(build, points, None, CLOUD_BLOCK, n_neighbors)
 
 
 def adjacency(n: int, faces: np.ndarray | None = None, laplacian: sp.spmatrix | None = None) -> sp.csr_matrix:
