@@ -543,13 +543,18 @@ def _filtering_section(results: dict) -> list[str]:
         "",
     ]
     for preset in presets:
-        family = sorted((r for r in runs if r["emd_options"] == preset), key=lambda r: r["vertices"])
-        if len(family) > 1:
-            vertices = [r["vertices"] for r in family]
-            out.append(
-                f"- {preset}: total s {short(fit_exponent(vertices, [r['seconds']['total'] for r in family]))}, "
-                f"peak MB {short(fit_exponent(vertices, [r['peak_rss_mb'] for r in family]))}"
+        for clouds in (False, True):  # point clouds (no faces) are a family of their own
+            family = sorted(
+                (r for r in runs if r["emd_options"] == preset and (r["faces"] == 0) == clouds),
+                key=lambda r: r["vertices"],
             )
+            if len(family) > 1:
+                vertices = [r["vertices"] for r in family]
+                out.append(
+                    f"- {preset}{' (point clouds)' if clouds else ''}: total s "
+                    f"{short(fit_exponent(vertices, [r['seconds']['total'] for r in family]))}, "
+                    f"peak MB {short(fit_exponent(vertices, [r['peak_rss_mb'] for r in family]))}"
+                )
     failed = [r for r in results["scaling"] if "error" in r and any(f"({p})" in r["case"] for p in presets)]
     for r in failed:
         out.append(f"- {r['case']}: not run: {r['error'].strip().splitlines()[-1][:300]}")
@@ -571,7 +576,8 @@ def _filtering_section(results: dict) -> list[str]:
         if target is not None:
             seconds, gigabytes = target
             total, peak = r["seconds"]["total"], r["peak_rss_mb"] / 1024
-            line = f"- Targets at {r['vertices']:,} vertices: total <= {seconds:,} s: {total:,.0f} s, "
+            kind = "points (cloud)" if r["faces"] == 0 else "vertices"
+            line = f"- Targets at {r['vertices']:,} {kind}: total <= {seconds:,} s: {total:,.0f} s, "
             line += "met" if total <= seconds else "**missed**"
             if gigabytes is not None:
                 line += f"; peak <= {gigabytes} GB: {peak:.1f} GiB, {'met' if peak <= gigabytes else '**missed**'}"
