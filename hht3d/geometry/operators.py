@@ -340,11 +340,16 @@ def connected_components(adj: sp.csr_matrix) -> tuple[int, np.ndarray]:
 
 
 def boundary_vertices(n: int, faces: np.ndarray) -> np.ndarray:
-    """Boolean mask of vertices on an edge used by exactly one face."""
-    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    uniq, counts = np.unique(e, axis=0, return_counts=True)
+    """Boolean mask of vertices on an edge used by exactly one face.
+
+    Each edge is one integer, ``lo · n + hi``: ``np.unique`` of rows (``axis=0``) took 27 s on 4M vertices."""
+    corners = np.asarray(faces, dtype=np.int64)
+    first, second = corners.ravel(), corners[:, [1, 2, 0]].ravel()
+    keys, counts = np.unique(np.minimum(first, second) * n + np.maximum(first, second), return_counts=True)
+    single = keys[counts == 1]
     mask = np.zeros(n, dtype=bool)
-    mask[uniq[counts == 1].ravel()] = True
+    mask[single // n] = True
+    mask[single % n] = True
     return mask
 
 
