@@ -329,10 +329,11 @@ class Filterer:
         out = apply_series(stacked, self._operator()[1], residue)
         return out[0], None if extra is None else out[1] * math.sqrt(width)
 
-    def potential(self, t: np.ndarray, x: np.ndarray) -> np.ndarray | None:
-        """``L^{-1/2} P(W) x`` by the polynomial (``None`` when its degree would be too high, or for solves)."""
+    def potential(self, t: np.ndarray, x: np.ndarray, tol: float = POTENTIAL_TOLERANCE) -> np.ndarray | None:
+        """``L^{-1/2} P(W) x`` by the polynomial, its series to ``tol`` (``None`` when its degree would be too
+        high, or for solves)."""
         width = float(t[0])
-        series = self._potential_series(width)
+        series = self._potential_series(width, tol)
         if series is None:
             return None
         self.n_products += len(series) - 1
@@ -342,8 +343,8 @@ class Filterer:
         """:func:`polynomial_series` on this surface's ``λ̄``; ``None`` for solves."""
         return polynomial_series(function, self._operator()[0], width, tol) if self.polynomial else None
 
-    def _potential_series(self, width: float) -> np.ndarray | None:
-        return self._series(lambda lam: potential_response(lam, width, self.options), width, POTENTIAL_TOLERANCE)
+    def _potential_series(self, width: float, tol: float = POTENTIAL_TOLERANCE) -> np.ndarray | None:
+        return self._series(lambda lam: potential_response(lam, width, self.options), width, tol)
 
     def _operator(self) -> tuple[float, sp.csr_matrix]:
         """:func:`polynomial_operator` of the surface (made once)."""

@@ -34,7 +34,8 @@ polynomial (:mod:`.filtering`, "Evaluation"), IMF ``k`` there is ``p(A) r + e``,
 ``e = low − back`` what the transfer left.  Its entry also keeps ``x = r + e`` and the Riesz
 potential ``ψ(A) x`` (:func:`~hht3d.decomposition.filtering.potential_response`): that of ``r``
 from the filter's own pass (the same ``T_j(Y) r``, other coefficients), that of ``e`` from one
-more pass on the IMFs whose residue moved.
+more pass on the IMFs whose residue moved, to the same error in absolute terms (its series stops
+earlier by the ratio ``‖r‖ / ‖e‖``: :func:`_remainder_tolerance`).
 """
 
 from __future__ import annotations
@@ -46,13 +47,15 @@ import numpy as np
 
 from ..geometry.hierarchy import Hierarchy, hierarchy
 from ..geometry.surface import Surface
-from .filtering import Filterer, potential_usable
+from .filtering import POTENTIAL_TOLERANCE, Filterer, potential_usable
 from .options import EMDOptions
 
 __all__ = ["MultilevelFilterer", "COARSE_MIN_DEGREE", "SPACING_LIMIT", "MULTIRESOLUTION_VERTICES", "uses_levels"]
 
 #: Largest ``ω_c h`` (radians) of the level a residue with cut ``ω_c`` moves to.
 SPACING_LIMIT = 0.5
+#: The largest series tolerance of a transfer remainder's Riesz potential (:func:`_remainder_tolerance`).
+REMAINDER_TOLERANCE = 1e-4
 #: Extrema on a coarse level are vertices of at least this many neighbours (module notes).
 COARSE_MIN_DEGREE = 5
 #: ``multiresolution="auto"`` uses the hierarchy from this many vertices on: the measured crossover (whole HHT,
@@ -120,7 +123,7 @@ class MultilevelFilterer:
             seconds=time.perf_counter() - start,
         )
         if potential is not None and target > here:  # the transfer's remainder e = low − back is in the IMF too
-            remainder = filterer.potential(t, low - back)
+            remainder = filterer.potential(t, low - back, _remainder_tolerance(mass, r, info["transfer_error"] * norm))
             potential = None if remainder is None else potential + remainder
         # a polynomial IMF is (r − low) + e: its potential is that of r + e through the filter
         self.levels.append((here, level_imf, level_imf + low if "degree" in info else None, potential))
@@ -150,6 +153,15 @@ class MultilevelFilterer:
             "backend": "+".join(dict.fromkeys(name for i in used for name in counts[i][3].split("+"))),
             "levels": [self.hierarchy.levels[i].surface.n_vertices for i in used],
         }
+
+
+def _remainder_tolerance(mass: np.ndarray, r: np.ndarray, remainder_norm: float) -> float:
+    """The series tolerance of the remainder's potential that bounds its error, ``tol ‖e‖``, by the error
+    of the filter's own pass on ``r``, ``POTENTIAL_TOLERANCE ‖r‖`` (norms in ``M̃``): ``‖e‖`` is the transfer
+    error's share of the low-pass, 0.04–1.6%, so the series can stop 1–2 decades earlier (20–35% fewer
+    products); at most :data:`REMAINDER_TOLERANCE`."""
+    scale = math.sqrt(float(mass @ r**2)) / remainder_norm if remainder_norm > 0 else math.inf
+    return min(REMAINDER_TOLERANCE, POTENTIAL_TOLERANCE * scale)
 
 
 def _counts(filterer: Filterer) -> tuple[int, int, int, str]:
