@@ -22,7 +22,6 @@ with two dimensions (``benchmarks/results/las.md``).
 from __future__ import annotations
 
 import copy
-import os
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -36,6 +35,7 @@ from numpy.lib.recfunctions import structured_to_unstructured
 
 from ..errors import InputError, one_line
 from ..geometry.surface import MIN_VERTICES, Surface
+from ..linalg.threads import usable_cores
 from .atomic import atomic_path
 from .formats import short, usable_name
 
@@ -268,7 +268,7 @@ def _read_points(reader: Any, count: int, classes: Sequence[int] | None, kept: _
     reference: np.ndarray | None = None
     seen = np.zeros(256, dtype=bool)
     filled = read = 0
-    with ThreadPoolExecutor(_cpus()) as pool:
+    with ThreadPoolExecutor(usable_cores()) as pool:
         for chunk in reader.chunk_iterator(CHUNK_POINTS):
             read += len(chunk)
             keep: Any = slice(None)
@@ -320,11 +320,6 @@ def _coordinates(out: np.ndarray, ints: np.ndarray, reference: np.ndarray, scale
 def _copy(out: np.ndarray, values: Any, keep: Any) -> None:
     """A chunk's ``values`` at ``keep`` into ``out`` (converted to its type)."""
     out[...] = np.asarray(values)[keep]
-
-
-def _cpus() -> int:
-    """The CPUs this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 def write_las(path: Path | str, surface: Surface, fields: dict | None = None, *, precision: str = "float64") -> Path:

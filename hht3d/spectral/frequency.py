@@ -68,7 +68,6 @@ Frequencies above it are reported (:func:`resolution_report`), never clipped.
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, cast
 
@@ -76,6 +75,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..geometry.surface import Surface
+from ..linalg.threads import usable_cores
 from ..records import renamed_keywords
 from .edge_stencil import Block, EdgeStencil, edge_stencil
 from .options import FREQUENCY_METHODS, RieszOptions
@@ -166,15 +166,9 @@ def _unit_scale(f: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _threads(count: int, vertices: int) -> int:
-    """Threads for ``count`` signals, one signal each: the cores this process may use, or
-    ``OMP_NUM_THREADS`` where set (Dask's worker processes set it to 1), and no more than
-    keep :data:`_THREAD_VERTICES` vertices' work arrays alive at once."""
-    budget = os.environ.get("OMP_NUM_THREADS", "")
-    if budget.isdigit() and int(budget) > 0:
-        cores = int(budget)
-    else:
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    return max(1, min(count, cores, _THREAD_VERTICES // max(vertices, 1)))
+    """Threads for ``count`` signals, one signal each: :func:`~hht3d.linalg.threads.usable_cores`, and no more
+    than keep :data:`_THREAD_VERTICES` vertices' work arrays alive at once."""
+    return max(1, min(count, usable_cores(), _THREAD_VERTICES // max(vertices, 1)))
 
 
 # -- the paper's route: vertex gradients of the sampled fields --------------------------------
