@@ -41,8 +41,8 @@ models) to ``benchmarks/results/scratch/`` (git-ignored) in a separate
 subprocess, so generation neither counts in the times nor in the peak; then
 loaded like any model.  Note that a subdivided mesh carries the geometric
 detail of its base mesh only (its mean curvature is smoother than a scan of
-that size would be), so the IMF count can differ from the ladder's.  With ``--clouds`` each
-size's vertices also run as a point cloud (no faces: normals, the robust point-cloud Laplacian
+that size would be), so the IMF count can differ from the ladder's.  With ``--kinds cloud`` each
+size's vertices run as a point cloud (no faces: normals, the robust point-cloud Laplacian
 and everything else are built from the points, in the case's time).
 
 A part can be re-run alone: the records of cases not re-run are kept from the
@@ -51,7 +51,7 @@ previous ``hht.json``.
 Usage::
 
     python -m benchmarks.bench_hht [--parts ladder scaling backends] [--models NAME ...]
-        [--sizes 250k 500k 1m] [--scaling-max-imfs K] [--clouds] [--keep-meshes]
+        [--sizes 250k 500k 1m] [--scaling-max-imfs K] [--kinds mesh cloud] [--keep-meshes]
 
 The stage recorder is in :mod:`benchmarks.hht_recorder`, the generated meshes in
 :mod:`benchmarks.meshes`, the report in :mod:`benchmarks.hht_report`.
@@ -284,9 +284,12 @@ def main(argv=None) -> int:
         "--scaling-max-imfs", type=int, default=None, help="cap on IMFs for the scaling cases (default: emd's 10)"
     )
     parser.add_argument(
-        "--clouds",
-        action="store_true",
-        help="run each scaling size's vertices as a point cloud too (normals and Laplacian from the points)",
+        "--kinds",
+        nargs="+",
+        choices=["mesh", "cloud"],
+        default=["mesh"],
+        help="scaling cases: the generated meshes, and/or their vertices as point clouds (normals and Laplacian "
+        "from the points; default: mesh)",
     )
     parser.add_argument("--keep-meshes", action="store_true", help="keep the generated meshes in results/scratch")
     parser.add_argument("--blas-threads", type=int, default=1, help="OpenBLAS threads of the workers (ARPACK)")
@@ -339,8 +342,8 @@ def main(argv=None) -> int:
             if not mesh.is_file() or size not in results["generated"]:
                 log(f"generate {name} ...")
                 results["generated"][size] = _worker(["generate", size, str(mesh)], env, out)
-            cases = [(name, mesh)]
-            if args.clouds:
+            cases = [(name, mesh)] if "mesh" in args.kinds else []
+            if "cloud" in args.kinds:
                 cloud = SCRATCH / f"{name}_cloud.ply"
                 if not cloud.is_file():
                     cloud_of(mesh, cloud)
