@@ -37,6 +37,7 @@ __all__ = [
     "adjacency",
     "k_ring",
     "tangent_gradient",
+    "tangent_gradient_coefficients",
     "face_gradient",
     "vertex_fem_gradient",
     "connected_components",
@@ -255,7 +256,7 @@ def tangent_gradient(
     for first in range(0, n, block):
         last = min(first + block, n)
         edges = slice(adj.indptr[first], adj.indptr[last])
-        coef = _gradient_coefficients(vertices, normals, adj, first, last)  # (edges, 3)
+        coef = tangent_gradient_coefficients(vertices, normals, adj, first, last)  # (edges, 3)
         rows = np.repeat(np.arange(first, last), degree[first:last])
         cols = adj.indices[edges]
         # each vertex's entries: its neighbours, then itself with minus their sum
@@ -275,10 +276,11 @@ def tangent_gradient(
     return sp.csr_matrix((data, indices, indptr), shape=(3 * n, n))
 
 
-def _gradient_coefficients(
+def tangent_gradient_coefficients(
     vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matrix, first: int, last: int
 ) -> np.ndarray:
-    """``(P^T P)^+ P_ij / |v_j - v_i|`` for the edges leaving vertices ``first..last-1``."""
+    """``(P^T P)^+ P_ij / |v_j - v_i|`` (edges, 3) for the edges ``adj`` holds for vertices ``first..last-1``, in
+    its order: the entries ``c_ij`` of :func:`tangent_gradient` (``∇f_i = Σ_j c_ij (f_j − f_i)``)."""
     rows = np.repeat(np.arange(first, last), np.diff(adj.indptr[first : last + 1]))
     cols = adj.indices[adj.indptr[first] : adj.indptr[last]]
     d = vertices[cols] - vertices[rows]

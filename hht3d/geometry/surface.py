@@ -30,6 +30,9 @@ MIN_VERTICES = 4
 LAPLACIANS = ("cotan", "robust")
 #: Neighbours of the point-cloud Laplacian and normals (far above useful values; stops a typo).
 MAX_NEIGHBORS = 256
+#: Surfaces of this many vertices or more build a vertex gradient operator at each call (an lsq one
+#: takes about 250 bytes a vertex, 2.5 GB at 10M vertices) rather than keep it for the rest of the run.
+CACHED_GRADIENT_VERTICES = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -293,16 +296,20 @@ class Surface:
 
         ``kind="lsq"``: tangent-plane least squares of Eq. (17) over the
         1-ring (meshes and point clouds).  ``kind="fem"``: per-face gradients
-        averaged to vertices with area weights (meshes only).
+        averaged to vertices with area weights (meshes only).  Kept in the cache below
+        :data:`CACHED_GRADIENT_VERTICES` vertices, built at each call from there on.
         """
-        if kind == "lsq":
-            return self._cached(
-                "gradient:lsq", lambda: ops.tangent_gradient(self.vertices, self.normals, self.adjacency)
-            )
+        if kind not in ("lsq", "fem"):
+            raise InputError(f"unknown gradient kind {kind!r}; choose 'lsq' or 'fem'")
         if kind == "fem":
             self._require_mesh("the FEM gradient")
-            return self._cached("gradient:fem", lambda: ops.vertex_fem_gradient(self.vertices, self._triangles))
-        raise InputError(f"unknown gradient kind {kind!r}; choose 'lsq' or 'fem'")
+
+        def build() -> sp.csr_matrix:
+            if kind == "lsq":
+                return ops.tangent_gradient(self.vertices, self.normals, self.adjacency)
+            return ops.vertex_fem_gradient(self.vertices, self._triangles)
+
+        return build() if self.n_vertices >= CACHED_GRADIENT_VERTICES else self._cached(f"gradient:{kind}", build)
 
     def face_gradient(self) -> sp.csr_matrix:
         """Per-face P1 gradient operator ``(3f, n)`` (meshes only)."""

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..geometry.operators import tangent_gradient_coefficients
 from ..geometry.surface import Surface
 
 __all__ = ["BLOCK_EDGES", "CACHED_VERTICES", "Block", "EdgeStencil", "edge_stencil", "build_edge_stencil"]
@@ -158,10 +159,12 @@ def build_edge_stencil(surface: Surface, kind: str) -> EdgeStencil:
     n = surface.n_vertices
     step = max(1, BLOCK_EDGES // 8)
     ranges = [(a, min(a + step, n)) for a in range(0, n, step)]
-    gradient, stiffness = surface.gradient(kind), surface.stiffness.tocsr()
-    counts, cols, coef = (
-        np.concatenate(part, axis=-1) for part in zip(*(_gradient_edges(gradient, a, b) for a, b in ranges))
-    )
+    stiffness = surface.stiffness.tocsr()
+    if kind == "lsq":  # from the coefficients: no (3n, n) operator beside the stencil
+        edges = functools.partial(_lsq_edges, surface)
+    else:
+        edges = functools.partial(_gradient_edges, surface.gradient(kind))
+    counts, cols, coef = (np.concatenate(part, axis=-1) for part in zip(*(edges(a, b) for a, b in ranges)))
     lap_counts, lap_cols, lap_weight = (
         np.concatenate(part) for part in zip(*(_laplacian_edges(stiffness, a, b) for a, b in ranges))
     )
@@ -195,6 +198,17 @@ def _gradient_edges(gradient: sp.csr_matrix, a: int, b: int) -> tuple[np.ndarray
     coef[component[off], index] = block.data[off]  # one entry per (row, column): no sums
     rows, cols = np.divmod(ordered[first], n)
     return np.bincount(rows, minlength=b - a), cols.astype(_index_type(n)), coef
+
+
+def _lsq_edges(surface: Surface, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_gradient_edges` of ``surface.gradient("lsq")``, from its coefficients over the adjacency (whose
+    columns are sorted), without the operator: the same edges and values."""
+    adj = surface.adjacency
+    coef = tangent_gradient_coefficients(surface.vertices, surface.normals, adj, a, b)
+    keep = np.any(coef != 0, axis=1)
+    owner = np.repeat(np.arange(b - a), np.diff(adj.indptr[a : b + 1]))[keep]
+    cols = adj.indices[adj.indptr[a] : adj.indptr[b]][keep]
+    return np.bincount(owner, minlength=b - a), cols.astype(_index_type(surface.n_vertices)), coef[keep].T
 
 
 def _laplacian_edges(stiffness: sp.csr_matrix, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -192,7 +192,8 @@ def _norm_gradient(surface: Surface, rf: np.ndarray, q: np.ndarray, kind: str) -
     underestimates ``ω``.  At round-off zeros of ``Rf`` the direction is the
     top right singular vector of ``J`` (steepest slope of the cone ``|Rf|``).
     """
-    jac = np.stack([vertex_gradient(surface, rf[..., c], kind) for c in range(3)], axis=-1)
+    grad = surface.gradient(kind)  # once: large surfaces build it at each call
+    jac = np.stack([vertex_gradient(surface, rf[..., c], kind, grad) for c in range(3)], axis=-1)
     direction = np.divide(rf, q[..., None], out=np.zeros_like(rf), where=q[..., None] > 0)
     zero = q <= _ZERO_RTOL * q.max(axis=1, keepdims=True)
     if zero.any():

@@ -28,6 +28,7 @@ from hht3d.spectral import (
     riesz,
 )
 from hht3d.spectral.monogenic_signal import monogenic, monogenic_from_potential
+from hht3d.spectral.riesz_transform import vertex_gradient
 
 # A strip [0, 1] x [0, 16h], h = 1/128.  cos(mπx) is a Neumann eigenfunction of the
 # continuum strip and, sampled, of the cotangent Laplacian of the regular grid
@@ -271,9 +272,28 @@ def test_the_phase_route_needs_no_per_edge_array_of_the_whole_surface(monkeypatc
     assert work / n < 260
     assert "frequency:stencil:lsq" in s.cache
     monkeypatch.setattr(edge_stencil, "CACHED_VERTICES", n)  # a large surface keeps no stencil
+    monkeypatch.setattr("hht3d.geometry.surface.CACHED_GRADIENT_VERTICES", n)  # nor gradient operator
     big = Surface(*icosphere(6))
     instantaneous_frequency(big, f, r)
-    assert not any(key.startswith("frequency:stencil") for key in big.cache)
+    np.testing.assert_array_equal(vertex_gradient(big, f[0]), vertex_gradient(s, f[0]))
+    assert not any(key.startswith(("frequency:stencil", "gradient")) for key in big.cache)
+
+
+def test_the_lsq_stencil_applies_the_gradient_operator_without_building_it(monkeypatch):
+    # The stencil's gradient edges come from the least-squares coefficients over the adjacency, so no
+    # (3n, n) operator (250 bytes a vertex) sits beside it: applied to a field they give the operator's
+    # gradient to rounding (it adds c_ij f_j and the diagonal's −Σ c_ij f_i, the stencil c_ij (f_j − f_i)).
+    s = strip(jitter=0.2)
+    f = np.random.default_rng(2).standard_normal(s.n_vertices)
+    expected = (s.gradient("lsq") @ f).reshape(-1, 3)
+
+    def refuse(*_):
+        raise AssertionError("the stencil built a gradient operator")
+
+    monkeypatch.setattr(Surface, "gradient", refuse)
+    stencil = edge_stencil.build_edge_stencil(s, "lsq")
+    got = np.concatenate([block.fit(f[block.cols] - block.at_start(f)) for block in stencil.blocks()])
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
 
 
 def test_zero_signal_reads_zero(regular):
