@@ -92,3 +92,20 @@ def test_applied_series_equal_the_eigenbasis(pencil):
         assert np.all(error < 1e-9), error
     np.testing.assert_allclose(apply_series(series[0], y2, v), both[0], atol=1e-12)
     np.testing.assert_allclose(apply_series(series[0], y2, v[:, 1]), both[0][:, 1], atol=1e-12)
+
+
+@pytest.mark.parametrize("threads", [2, 3])
+def test_threads_share_the_rows_and_change_nothing(pencil, monkeypatch, threads):
+    """Rows cut over threads (blocks of 200 rows here) give the one-thread result to the bit: each row's
+    arithmetic is the same whichever thread does it; and still the eigenbasis's."""
+    lap, mass, values, vectors = pencil
+    top = spectral_radius_bound(lap, mass)
+    y2 = recurrence_matrix(lap, mass, top)
+    v = np.random.default_rng(1).standard_normal(len(mass))
+    series = chebyshev_series(lambda lam: np.exp(-lam / 20), top, 1e-10, scale=20)
+    one = apply_series(series, y2, v, threads=1)
+    monkeypatch.setattr("hht3d.linalg.chebyshev.THREAD_ROWS", 200)
+    shared = apply_series(series, y2, v, threads=threads)
+    np.testing.assert_array_equal(shared, one)
+    exact = vectors @ (np.exp(-values / 20) * (vectors.T @ (mass * v)))
+    assert np.sqrt(mass @ (shared - exact) ** 2 / (mass @ v**2)) < 1e-9
