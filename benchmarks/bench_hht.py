@@ -148,9 +148,7 @@ def run_case(name: str, path: Path, max_imfs: int | None, preset: str = "paper")
     with rec.stage("rt"):
         if levels == "always":  # each IMF's Riesz vectors on its level and band (hht3d.spectral.multilevel)
             # through the modules: the recorder wraps riesz_part and monogenic_from_riesz there
-            part = multilevel.riesz_part(surface, decomposition, RIESZ_DEFAULTS)
-            vectors = multilevel.combine_riesz_parts(surface, [part])
-            del part
+            vectors = multilevel.riesz_vectors(surface, decomposition, RIESZ_DEFAULTS)  # as hht3d.hht
             mono = monogenic_signal.monogenic_from_riesz(surface, decomposition.imfs, vectors)
         else:
             mono = monogenic_signal.monogenic(surface, decomposition.imfs)

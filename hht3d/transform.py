@@ -39,7 +39,7 @@ from .geometry.validation import check_signal
 from .hht_options import HHTOptions, hht_settings
 from .io.sealed import Sealed, unsealed
 from .spectral.monogenic_signal import MonogenicSignal, monogenic_from_potential, monogenic_from_riesz
-from .spectral.multilevel import combine_riesz_parts, riesz_part
+from .spectral.multilevel import riesz_vectors
 from .spectral.options import RieszOptions
 from .spectral.riesz_transform import fractional_laplacian
 from .spectral.spectrum import HilbertSpectrum
@@ -278,7 +278,7 @@ class _Eager:
         return self.task("riesz", fractional_laplacian)(surface, imfs, -0.5, riesz, backend=backend)
 
     def riesz_vectors(self, surface: Surface, decomposition: Any, riesz: RieszOptions, backend: str | None) -> Any:
-        return combine_riesz_parts(surface, [self.task("riesz", riesz_part)(surface, decomposition, riesz, backend)])
+        return self.task("riesz", riesz_vectors)(surface, decomposition, riesz, backend)
 
 
 def _imfs(decomposition: Any) -> np.ndarray:

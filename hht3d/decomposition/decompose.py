@@ -85,7 +85,8 @@ class EMDResult:
         (:func:`hht3d.decomposition.quality.decomposition_quality`).
     levels : tuple of (int, ndarray, ndarray or None, ndarray or None)
         With the hierarchy (:mod:`.multiresolution`): each IMF on the level it was filtered on, as
-        ``(level, values, source, potential)``; when the filter was a polynomial, ``potential`` is
+        ``(level, values, source, potential)`` (on level 0 ``values`` is the IMF's row of ``imfs``,
+        not a copy); when the filter was a polynomial, ``potential`` is
         the IMF's Riesz potential on that level (to ``POTENTIAL_TOLERANCE``) and ``source`` the
         signal whose polynomial gives it to any other tolerance (both ``None`` otherwise); empty
         without the hierarchy.
@@ -294,8 +295,9 @@ def emd(
         "options": options.as_dict(),
     }
     levels = tuple(
-        (level, *(None if v is None else v * scale for v in values)) for level, *values in getattr(method, "levels", ())
-    )
+        (level, stacked[k] if level == 0 else values * scale, *(None if v is None else v * scale for v in rest))
+        for k, (level, values, *rest) in enumerate(getattr(method, "levels", ()))
+    )  # an IMF of the input's level is its row of the IMFs: one copy of it
     return result_with_quality(surface, f, stacked, info, levels)
 
 

@@ -48,13 +48,26 @@ from ..errors import InputError
 from .operators import adjacency, tangent_gradient
 from .surface import MIN_VERTICES, Surface
 
-__all__ = ["Level", "Hierarchy", "hierarchy", "COARSENING", "VOXEL_SPACINGS", "CLOUD_NEIGHBOURS", "MIN_LEVEL_VERTICES"]
+__all__ = [
+    "Level",
+    "Hierarchy",
+    "hierarchy",
+    "release_hierarchy",
+    "KEPT_VERTICES",
+    "COARSENING",
+    "VOXEL_SPACINGS",
+    "CLOUD_NEIGHBOURS",
+    "MIN_LEVEL_VERTICES",
+]
 
 #: The voxel side of a coarser level, in spacings of the finer one (3-4× fewer vertices on meshes).
 VOXEL_SPACINGS = 2.0
 #: About this many finer vertices per coarser one (:data:`VOXEL_SPACINGS` gave 3.4-3.7 on nefertiti,
 #: 3.4-4 on igea subdivided to 1M); a level is made only from ``COARSENING * MIN_LEVEL_VERTICES`` up.
 COARSENING = 4.0
+#: From this many vertices :func:`release_hierarchy` drops a surface's hierarchy: at 10M vertices its
+#: levels and transfers hold about 1.5 GB, which the HHT's monogenic stage would otherwise carry.
+KEPT_VERTICES = 1_000_000
 #: Coarse points a point-cloud vertex interpolates from.
 CLOUD_NEIGHBOURS = 3
 #: No level is made with fewer vertices than this (its Laplacian would not resolve an oscillation).
@@ -157,6 +170,13 @@ class Hierarchy:
 def hierarchy(surface: Surface) -> Hierarchy:
     """The :class:`Hierarchy` of ``surface``, kept in its cache (not pickled: workers rebuild it)."""
     return surface.cache.setdefault("hierarchy", Hierarchy(surface))
+
+
+def release_hierarchy(surface: Surface) -> None:
+    """Drop the cached hierarchy of a surface of :data:`KEPT_VERTICES` vertices or more, once no later
+    stage needs it (the next :func:`hierarchy` rebuilds it, identically)."""
+    if surface.n_vertices >= KEPT_VERTICES:
+        surface.cache.pop("hierarchy", None)
 
 
 def _spacing(surface: Surface) -> float:

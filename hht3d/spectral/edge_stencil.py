@@ -2,9 +2,10 @@
 
 The phase route of :func:`hht3d.spectral.frequency.instantaneous_frequency` (Eq. 23) fits each
 vertex's phase gradient to increments along its edges.  :class:`EdgeStencil` keeps those edges as
-plain arrays (about 280 bytes a vertex), built a block of rows at a time, and :class:`Block` gives
-the maps the estimator applies over a range of vertices, so no per-edge work array spans the
-surface.  Per-vertex sums run in edge order, as the sparse products they replace add them.
+plain arrays (about 280 bytes a vertex, 230 where the gradient and the Laplacian have the same
+edges), built a block of rows at a time, and :class:`Block` gives the maps the estimator applies
+over a range of vertices, so no per-edge work array spans the surface.  Per-vertex sums run in
+edge order, as the sparse products they replace add them.
 """
 
 from __future__ import annotations
@@ -168,15 +169,10 @@ def build_edge_stencil(surface: Surface, kind: str) -> EdgeStencil:
     lap_counts, lap_cols, lap_weight = (
         np.concatenate(part) for part in zip(*(_laplacian_edges(stiffness, a, b) for a, b in ranges))
     )
-    return EdgeStencil(
-        np.ascontiguousarray(surface.vertices.T),
-        np.r_[0, np.cumsum(counts)],
-        cols,
-        coef,
-        np.r_[0, np.cumsum(lap_counts)],
-        lap_cols,
-        lap_weight,
-    )
+    starts, lap_starts = np.r_[0, np.cumsum(counts)], np.r_[0, np.cumsum(lap_counts)]
+    if np.array_equal(lap_starts, starts) and np.array_equal(lap_cols, cols):  # a mesh's 1-ring, most often
+        lap_starts, lap_cols = starts, cols
+    return EdgeStencil(np.ascontiguousarray(surface.vertices.T), starts, cols, coef, lap_starts, lap_cols, lap_weight)
 
 
 def _gradient_edges(gradient: sp.csr_matrix, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -95,8 +95,8 @@ _SYMMETRIC = np.array([[0, 1, 2], [1, 3, 4], [2, 4, 5]])
 _MAX_UNWRAP = 8
 #: Floor of the discrete Riesz response (it tends to 0 at the Nyquist limit).
 _MIN_RESPONSE = 0.05
-#: Vertices of all threads' signals at once: each thread holds about 25 floats a vertex (its
-#: signal's orientation, first fit and response), so 1M vertices get 2 threads and 4M one.
+#: Vertices of all threads' signals at once: each thread holds about 18 floats a vertex (its
+#: signal's Riesz vectors, orientation, first fit and response), so 1M vertices get 2 threads and 4M one.
 _THREAD_VERTICES = 4_000_000
 
 
@@ -147,22 +147,34 @@ def instantaneous_frequency(
             f"(k, {surface.n_vertices}, 3), got {f.shape} and {r.shape}"
         )
     if options.frequency == "gradient":
-        return _gradient_frequency(surface, *_unit_scale(f, r), options.gradient)
+        scale = _unit_scale(f, r)
+        return _gradient_frequency(surface, f / scale[:, None], r / scale[:, None, None], options.gradient)
     stencil = edge_stencil(surface, options.gradient)
+    omega = np.empty(f.shape)
+
+    def one(k: int) -> None:
+        scale = _unit_scale(f[k, None], r[k, None])[0]
+        r_t = np.empty((3, f.shape[1]))
+        omega[k] = _phase_frequency(stencil, f[k] / scale, np.divide(r[k].T, scale, out=r_t))
+
     with ThreadPoolExecutor(_threads(len(f), surface.n_vertices)) as pool:  # NumPy releases the GIL
-        rows = list(pool.map(lambda fi, ri: _phase_frequency(stencil, *_unit_scale(fi[None], ri[None])), f, r))
-    return np.array(rows).reshape(f.shape)
+        list(pool.map(one, range(len(f))))
+    return omega
 
 
-def _unit_scale(f: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each signal and its Riesz transform divided by their largest magnitude.
+def _unit_scale(f: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """The largest magnitude (k,) of each signal and its Riesz transform, 1 where both vanish.
 
     The phase, and so ``ω``, does not change with the signal's scale; products of
     signals of magnitude 1e200 would overflow (the fold tensor of :func:`_orientation`).
     """
-    scale = np.maximum(np.abs(f).max(axis=1, initial=0.0), np.abs(r).max(axis=(1, 2), initial=0.0))
-    scale = np.where(scale > 0, scale, 1.0)
-    return f / scale[:, None], r / scale[:, None, None]
+    scale = np.maximum(_peak(f, 1), _peak(r, (1, 2)))
+    return np.where(scale > 0, scale, 1.0)
+
+
+def _peak(x: np.ndarray, axes: int | tuple[int, ...]) -> np.ndarray:
+    """``max |x|`` over ``axes``, without an array of ``|x|``."""
+    return np.maximum(x.max(axis=axes, initial=0.0), -x.min(axis=axes, initial=0.0))
 
 
 def _threads(count: int, vertices: int) -> int:
@@ -204,15 +216,15 @@ def _norm_gradient(surface: Surface, rf: np.ndarray, q: np.ndarray, kind: str) -
 # -- phase increments along edges --------------------------------------------------------------
 
 
-def _phase_frequency(st: EdgeStencil, f: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """``|∇ψ|`` of one signal (a row of ``f``, ``r``) from edge phase increments, unwrapped and
-    dispersion-corrected: a first fit, the Riesz response from it (which reads the first fit on
-    each vertex's ring), then the corrected fit, each a pass over the stencil's blocks."""
-    f, r = f[0], r[0]
-    q = np.linalg.norm(r, axis=1)
-    o = _orientation(st, r, q)
-    qo = np.einsum("vc,vc->v", r, o)
-    r_t, o_t = np.ascontiguousarray(r.T), np.ascontiguousarray(o.T)  # 1-D gathers are the fast ones
+def _phase_frequency(st: EdgeStencil, f: np.ndarray, r_t: np.ndarray) -> np.ndarray:
+    """``|∇ψ|`` (n,) of one signal ``f`` (n,) with Riesz vectors ``r_t`` (3, n), from edge phase increments,
+    unwrapped and dispersion-corrected: a first fit, the Riesz response from it (which reads the first
+    fit on each vertex's ring), then the corrected fit, each a pass over the stencil's blocks.
+
+    The vectors come as rows (3, n), as the orientation leaves them: 1-D gathers are the fast ones."""
+    q = np.sqrt(r_t[0] ** 2 + r_t[1] ** 2 + r_t[2] ** 2)
+    o_t = _orientation(st, r_t, q)
+    qo = r_t[0] * o_t[0] + r_t[1] * o_t[1] + r_t[2] * o_t[2]
 
     def fit(block: Block, response: np.ndarray | None, guess: np.ndarray | None) -> np.ndarray:
         q_i = block.at_start(qo)
@@ -236,8 +248,8 @@ def _phase_frequency(st: EdgeStencil, f: np.ndarray, r: np.ndarray) -> np.ndarra
     return omega
 
 
-def _orientation(st: EdgeStencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Unit orientation (n, 3) of the signed quadrature ``Rf·o``.
+def _orientation(st: EdgeStencil, r_t: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Unit orientation (3, n) of the signed quadrature ``Rf·o``, for Riesz vectors ``r_t`` (3, n).
 
     ``Rf_i/|Rf_i|``: then ``∇(Rf·o) = ∇|Rf|`` at the vertex, and the fitted
     ``∇ψ`` is Eq. 23's ``∇φ``.  Where ``|Rf_i|`` is below :data:`_FOLD_RATIO`
@@ -245,8 +257,7 @@ def _orientation(st: EdgeStencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
     ``f``) its direction is unreliable; the principal direction of
     ``Σ r_j r_jᵀ`` over the vertex and its ring orients the phase there.
     """
-    o = np.divide(r, q[:, None], out=np.zeros_like(r), where=q[:, None] > 0)
-    products = None
+    o_t = np.divide(r_t, q, out=np.zeros_like(r_t), where=q > 0)
     for block in st.blocks():
         ring_max = np.zeros(block.size)
         has = block.counts > 0
@@ -255,20 +266,23 @@ def _orientation(st: EdgeStencil, r: np.ndarray, q: np.ndarray) -> np.ndarray:
         here = q[block.a : block.b]
         fold = np.flatnonzero((here <= _FOLD_RATIO * ring_max) | (here == 0))
         if fold.size:
-            if products is None:
-                products = np.stack([r[:, a] * r[:, b] for a, b in _PAIRS], axis=1)
-            tensor = (_fold_ring(block, fold, products) + products[block.a + fold])[:, _SYMMETRIC]
-            o[block.a + fold] = np.linalg.eigh(tensor)[1][:, :, -1]
-    return o
+            tensor = (_fold_ring(block, fold, r_t) + _products(r_t, block.a + fold))[:, _SYMMETRIC]
+            o_t[:, block.a + fold] = np.linalg.eigh(tensor)[1][:, :, -1].T
+    return o_t
 
 
-def _fold_ring(block: Block, fold: np.ndarray, products: np.ndarray) -> np.ndarray:
-    """``Σ_j`` of ``products`` (n, 6) over the ring of each of the block's vertices ``fold``."""
+def _products(r_t: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """The upper triangle (len, 6) of ``r rᵀ`` at ``vertices``, in :data:`_PAIRS` order."""
+    return np.stack([r_t[a][vertices] * r_t[b][vertices] for a, b in _PAIRS], axis=1)
+
+
+def _fold_ring(block: Block, fold: np.ndarray, r_t: np.ndarray) -> np.ndarray:
+    """``Σ_j r_j r_jᵀ`` (len(fold), 6) over the ring of each of the block's vertices ``fold``."""
     slot = np.full(block.size, -1)
     slot[fold] = np.arange(len(fold))
     edge_slot = np.repeat(slot, block.counts)
     mine = edge_slot >= 0
-    values = products[block.cols[mine]]
+    values = _products(r_t, block.cols[mine])
     return np.column_stack(
         [np.bincount(edge_slot[mine], weights=values[:, p], minlength=len(fold)) for p in range(len(_PAIRS))]
     )

@@ -229,8 +229,8 @@ def monogenic_from_riesz(
     rf = np.asarray(rf, dtype=np.float64)
     if rf.shape != (*f.shape, 3):
         raise InputError(f"riesz vectors have shape {rf.shape}; the imfs need {(*f.shape, 3)}")
+    omega = instantaneous_frequency(surface, f, rf, options)  # first: its work arrays are the stage's peak
     q = np.hypot(np.hypot(rf[..., 0], rf[..., 1]), rf[..., 2])  # no overflow at 1e200, no underflow at 1e-200
-    omega = instantaneous_frequency(surface, f, rf, options)
     return MonogenicSignal(
         imfs=f,
         riesz=rf,

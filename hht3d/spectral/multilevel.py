@@ -33,7 +33,8 @@ lack it.  Their gradient fits over that Laplacian's neighbours
 
 Without levels (a decomposition that did not use them) each IMF takes the full quadrature on
 the input (:func:`~hht3d.spectral.riesz_transform.riesz`).  The IMFs split into groups,
-``k ≡ group (mod groups)``, one task each (:func:`riesz_part`, :func:`combine_riesz_parts`).
+``k ≡ group (mod groups)``, one task each (:func:`riesz_part`, :func:`combine_riesz_parts`);
+:func:`riesz_vectors` takes them in one call and then lets a large surface's hierarchy go.
 """
 
 from __future__ import annotations
@@ -53,7 +54,7 @@ from ..decomposition.filtering import (
 )
 from ..decomposition.options import EMDOptions
 from ..errors import InputError
-from ..geometry.hierarchy import hierarchy
+from ..geometry.hierarchy import hierarchy, release_hierarchy
 from ..geometry.surface import Surface
 from ..linalg.chebyshev import apply_series
 from .eigenpairs import upper_bound
@@ -62,7 +63,14 @@ from .quadrature import QuadraturePlan, combine_quadrature_parts, quadrature_nod
 from .riesz_transform import riesz, vertex_gradient
 from .shifts import shift_analysis
 
-__all__ = ["BAND_FLOOR", "riesz_part", "combine_riesz_parts", "band_potential", "polynomial_potential"]
+__all__ = [
+    "BAND_FLOOR",
+    "riesz_part",
+    "combine_riesz_parts",
+    "riesz_vectors",
+    "band_potential",
+    "polynomial_potential",
+]
 
 #: The band of an IMF with cut ``ω_c`` starts at ``BAND_FLOOR · ω_c``.
 BAND_FLOOR = 0.5
@@ -201,3 +209,13 @@ def combine_riesz_parts(surface: Surface, parts: Sequence[list[tuple[int, np.nda
     """The ``(k, n, 3)`` Riesz vectors of all IMFs from every :func:`riesz_part`."""
     found = sorted(((k, v) for part in parts for k, v in part), key=lambda item: item[0])
     return np.array([v for _, v in found]).reshape(len(found), surface.n_vertices, 3)
+
+
+def riesz_vectors(
+    surface: Surface, decomposition: Any, options: RieszOptions, backend: str | None = None
+) -> np.ndarray:
+    """The ``(k, n, 3)`` Riesz vectors of all IMFs in one part, then the surface's hierarchy released
+    (:func:`~hht3d.geometry.hierarchy.release_hierarchy`): the last use of its levels in :func:`hht3d.hht`."""
+    vectors = combine_riesz_parts(surface, [riesz_part(surface, decomposition, options, backend)])
+    release_hierarchy(surface)
+    return vectors

@@ -9,13 +9,20 @@ import numpy as np
 import pytest
 from scipy.special import eval_legendre
 
+import hht3d.geometry.hierarchy as hierarchy_module
 from helpers.meshes import icosphere
 from hht3d import Surface, emd, hht, riesz
 from hht3d.decomposition.filtering import filter_response
 from hht3d.decomposition.options import FILTERING_OPTIONS
 from hht3d.geometry.hierarchy import hierarchy
 from hht3d.spectral import dense_eigenpairs
-from hht3d.spectral.multilevel import band_potential, combine_riesz_parts, polynomial_potential, riesz_part
+from hht3d.spectral.multilevel import (
+    band_potential,
+    combine_riesz_parts,
+    polynomial_potential,
+    riesz_part,
+    riesz_vectors,
+)
 from hht3d.spectral.options import RieszOptions
 from hht3d.spectral.riesz_transform import fractional_laplacian
 
@@ -191,3 +198,24 @@ def test_with_negative_cotangent_weights_polynomial_imfs_take_the_band_quadratur
     for k in range(min(poly.n_imfs, solves.n_imfs)):
         a, b = poly.monogenic.riesz[k], solves.monogenic.riesz[k]
         assert np.sqrt(mass @ ((a - b) ** 2).sum(1) / (mass @ (b**2).sum(1))) < 1e-5, k
+
+
+def test_a_large_surfaces_hierarchy_goes_after_its_riesz_vectors_and_comes_back_the_same(monkeypatch):
+    """From KEPT_VERTICES the hierarchy leaves the cache once the Riesz vectors are taken (1.5 GB at 10M
+    vertices); the next use rebuilds it, deterministically, so the vectors are the same to the bit.  The IMFs
+    of the input's level share the IMFs' rows instead of keeping a copy."""
+    surface = Surface(*icosphere(4))
+    x, _, z = surface.vertices.T
+    signal = eval_legendre(12, x) + 3 * eval_legendre(2, (x + z) / 2**0.5)
+    decomposition = emd(surface, signal, method="filtering", multiresolution="always")
+    on_level = [level for level, *_ in decomposition.levels]
+    assert 0 in on_level and max(on_level) > 0  # a coarse IMF: its vectors go through the transfers
+    for k, (level, values, *_) in enumerate(decomposition.levels):
+        assert (level == 0) == np.shares_memory(values, decomposition.imfs[k])
+    kept = riesz_vectors(surface, decomposition, RieszOptions())
+    assert "hierarchy" in surface.cache
+    monkeypatch.setattr(hierarchy_module, "KEPT_VERTICES", surface.n_vertices)
+    released = riesz_vectors(surface, decomposition, RieszOptions())
+    assert "hierarchy" not in surface.cache
+    np.testing.assert_array_equal(released, kept)
+    np.testing.assert_array_equal(riesz_vectors(surface, decomposition, RieszOptions()), kept)
