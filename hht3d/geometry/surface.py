@@ -64,7 +64,8 @@ class Surface:
         Triangles; ``None`` or empty for a point cloud.
     normals : (n, 3) array_like, optional
         Unit vertex normals.  Default: area-weighted face normals (meshes) or
-        normals estimated and consistently oriented by Open3D (point clouds).
+        normals estimated by Open3D and consistently oriented
+        (:func:`~hht3d.geometry.normals.estimate_point_normals`; point clouds).
     colors : (n, 3) array_like, optional
         RGB in [0, 1].
     attributes : dict of str to (n,) arrays, optional
