@@ -21,18 +21,30 @@ length shift ``ε`` is the largest one any triangle of the block needs (at most
 ``mollify_factor`` times the mean edge length, 1e-5): entries move by ``O(ε / ℓ)``.  The
 rows are assembled into ``(L + Lᵀ) / 2`` with the diagonal set to minus the off-diagonal
 row sums, so ``L`` stays symmetric with ``L 1 = 0``; each vertex's mass is its block's.
-Transient memory is that of one block; blocks run one after the other.
+The blocks are built in :func:`~.block_processes.process_count` child processes
+(:mod:`.block_processes`), so transient memory is that of one block per process.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections import deque
+from collections.abc import Callable, Iterator
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-__all__ = ["MESH_BLOCK", "CLOUD_BLOCK", "MESH_HALO_RINGS", "CLOUD_HALO_SPANS", "bisection_blocks", "built_by_blocks"]
+from .block_processes import mapped, process_count
+
+__all__ = [
+    "MESH_BLOCK",
+    "CLOUD_BLOCK",
+    "MESH_HALO_RINGS",
+    "CLOUD_HALO_SPANS",
+    "bisection_blocks",
+    "built_by_blocks",
+    "own_rows",
+]
 
 #: Meshes of more vertices are built by blocks of at most this many (about 0.6 GB transient each).
 MESH_BLOCK = 200_000
@@ -44,7 +56,7 @@ MESH_HALO_RINGS = 4
 #: the same rows on nefertiti's vertices, 1 rows 7% off).
 CLOUD_HALO_SPANS = 2.0
 
-#: ``build(points, faces) -> (L, mass_diagonal)`` of a whole (sub-)surface.
+#: ``build(points, faces) -> (L, mass_diagonal)`` of a whole (sub-)surface; it must pickle (child processes).
 Builder = Callable[[np.ndarray, "np.ndarray | None"], "tuple[sp.spmatrix, np.ndarray]"]
 
 
@@ -76,17 +88,32 @@ def built_by_blocks(
         lap, mass = build(points, faces)
         return sp.csr_matrix(lap), np.asarray(mass, dtype=np.float64)
     halo = _mesh_halo(n, faces) if faces is not None else _cloud_halo(points, n_neighbors)
+    prepared: deque[tuple[np.ndarray, np.ndarray]] = deque()
+
+    def arguments() -> Iterator[tuple]:
+        for block in bisection_blocks(points, size):
+            kept, sub_faces = halo(block)
+            prepared.append((block, kept))
+            yield build, points[kept], sub_faces, np.searchsorted(kept, block)  # kept is sorted, holds the block
+
     rows, cols, vals, mass = [], [], [], np.zeros(n)
-    for block in bisection_blocks(points, size):
-        kept, sub_faces = halo(block)
-        lap, sub_mass = build(points[kept], sub_faces)
-        own = np.searchsorted(kept, block)  # kept is sorted and holds the block
-        part = sp.csr_matrix(lap)[own].tocoo()
-        rows.append(block[part.row])
-        cols.append(kept[part.col])
-        vals.append(part.data)
-        mass[block] = np.asarray(sub_mass)[own]
+    for row, col, val, own_mass in mapped(own_rows, arguments(), process_count()):
+        block, kept = prepared.popleft()
+        rows.append(block[row])
+        cols.append(kept[col])
+        vals.append(val)
+        mass[block] = own_mass
     return _symmetric(n, np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)), mass
+
+
+def own_rows(
+    build: Builder, points: np.ndarray, faces: np.ndarray | None, own: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(row, col, value, mass)`` of the rows ``own`` of ``build(points, faces)``: one block's share
+    (``row`` indexes ``own``, ``col`` the points)."""
+    lap, mass = build(points, faces)
+    part = sp.csr_matrix(lap)[own].tocoo()
+    return part.row, part.col, part.data, np.asarray(mass)[own]
 
 
 def _mesh_halo(n: int, faces: np.ndarray) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:

@@ -161,15 +161,7 @@ def robust_mesh_operators(
 ) -> tuple[sp.csr_matrix, np.ndarray]:
     """``(L, mass_diagonal)`` from ``robust_laplacian.mesh_laplacian`` (intrinsic Delaunay); by blocks of
     :data:`~.blocks.MESH_BLOCK` vertices on larger meshes (:mod:`.blocks`)."""
-    import robust_laplacian
-
-    def build(points: np.ndarray, triangles: np.ndarray | None) -> tuple[sp.spmatrix, np.ndarray]:
-        lap, mass = robust_laplacian.mesh_laplacian(
-            np.ascontiguousarray(points), np.ascontiguousarray(triangles), mollify_factor
-        )
-        return lap, mass.diagonal()
-
-    return built_by_blocks(build, vertices, faces, MESH_BLOCK)
+    return built_by_blocks(functools.partial(_robust_mesh, mollify_factor=mollify_factor), vertices, faces, MESH_BLOCK)
 
 
 def point_cloud_operators(
@@ -177,13 +169,30 @@ def point_cloud_operators(
 ) -> tuple[sp.csr_matrix, np.ndarray]:
     """``(L, mass_diagonal)`` from ``robust_laplacian.point_cloud_laplacian``; by blocks of
     :data:`~.blocks.CLOUD_BLOCK` points on larger clouds (:mod:`.blocks`)."""
+    build = functools.partial(_robust_cloud, mollify_factor=mollify_factor, n_neighbors=n_neighbors)
+    return built_by_blocks(build, points, None, CLOUD_BLOCK, n_neighbors)
+
+
+def _robust_mesh(
+    points: np.ndarray, triangles: np.ndarray | None, mollify_factor: float
+) -> tuple[sp.spmatrix, np.ndarray]:
+    """``robust_laplacian.mesh_laplacian`` of one (sub-)mesh: ``(L, mass_diagonal)``."""
     import robust_laplacian
 
-    def build(block: np.ndarray, _: np.ndarray | None) -> tuple[sp.spmatrix, np.ndarray]:
-        lap, mass = robust_laplacian.point_cloud_laplacian(np.ascontiguousarray(block), mollify_factor, n_neighbors)
-        return lap, mass.diagonal()
+    lap, mass = robust_laplacian.mesh_laplacian(
+        np.ascontiguousarray(points), np.ascontiguousarray(triangles), mollify_factor
+    )
+    return lap, mass.diagonal()
 
-    return built_by_blocks(build, points, None, CLOUD_BLOCK, n_neighbors)
+
+def _robust_cloud(
+    points: np.ndarray, _: np.ndarray | None, mollify_factor: float, n_neighbors: int
+) -> tuple[sp.spmatrix, np.ndarray]:
+    """``robust_laplacian.point_cloud_laplacian`` of one (sub-)cloud: ``(L, mass_diagonal)``."""
+    import robust_laplacian
+
+    lap, mass = robust_laplacian.point_cloud_laplacian(np.ascontiguousarray(points), mollify_factor, n_neighbors)
+    return lap, mass.diagonal()
 
 
 def adjacency(n: int, faces: np.ndarray | None = None, laplacian: sp.spmatrix | None = None) -> sp.csr_matrix:

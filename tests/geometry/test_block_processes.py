@@ -1,0 +1,65 @@
+"""The blocks of a large surface's robust Laplacian built in child processes (hht3d.geometry.block_processes).
+
+Oracle: the same blocks built in this process, which tests/geometry/test_blocks.py checks against
+``robust_laplacian`` on the whole surface.  Each block is the same computation on the same input in
+either place, and the rows are assembled in block order, so the two Laplacians are equal to the bit.
+"""
+
+import numpy as np
+import psutil
+import pytest
+
+import hht3d
+from helpers import block_calls
+from helpers.models import shared_model_path
+from hht3d.errors import InputError
+from hht3d.geometry.block_processes import PROCESSES_ENV, mapped, process_count
+from hht3d.geometry.operators import point_cloud_operators
+
+
+def _no_children_left():
+    assert not [child for child in psutil.Process().children() if child.status() != psutil.STATUS_ZOMBIE]
+
+
+def test_blocks_built_in_two_processes_are_those_built_here(monkeypatch):
+    points = hht3d.load(shared_model_path("rocker_arm.ply")).vertices
+    monkeypatch.setattr("hht3d.geometry.operators.CLOUD_BLOCK", 2_500)
+    monkeypatch.setenv(PROCESSES_ENV, "1")
+    here, here_mass = point_cloud_operators(points)
+    monkeypatch.setenv(PROCESSES_ENV, "2")
+    there, there_mass = point_cloud_operators(points)
+    assert (here != there).nnz == 0 and np.array_equal(here.indices, there.indices)
+    np.testing.assert_array_equal(here_mass, there_mass)
+    _no_children_left()
+
+
+def test_calls_come_back_in_order_from_every_child_and_native_output_does_not_corrupt_them():
+    values = [np.arange(k, dtype=float) for k in range(1, 40)]
+    for got, sent in zip(mapped(block_calls.doubled, ((v,) for v in values), 3), values, strict=True):
+        np.testing.assert_array_equal(got, 2 * sent)
+    assert len(set(mapped(block_calls.process_id, ((k,) for k in range(12)), 3))) == 3
+    _no_children_left()
+
+
+def test_an_exception_in_a_child_is_raised_here_and_the_children_end():
+    with pytest.raises(ValueError, match="block of 5 refused"):
+        list(mapped(block_calls.refused, [(np.zeros(5),)] * 4, 2))
+    _no_children_left()
+
+
+def test_a_child_that_ends_without_an_answer_is_reported_with_its_exit_code():
+    with pytest.raises(RuntimeError, match="ended with code 3"):
+        list(mapped(block_calls.ended, [(np.zeros(5),)] * 4, 2))
+    _no_children_left()
+
+
+@pytest.mark.parametrize("value", ["0", "two", "-1"])
+def test_a_process_count_that_is_not_a_positive_integer_is_refused(monkeypatch, value):
+    monkeypatch.setenv(PROCESSES_ENV, value)
+    with pytest.raises(InputError, match=PROCESSES_ENV):
+        process_count()
+
+
+def test_without_the_setting_blocks_use_the_cores_this_process_may_use(monkeypatch):
+    monkeypatch.delenv(PROCESSES_ENV, raising=False)
+    assert 1 <= process_count() <= (psutil.cpu_count() or 1)
