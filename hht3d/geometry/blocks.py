@@ -62,7 +62,7 @@ Builder = Callable[[np.ndarray, "np.ndarray | None"], "tuple[sp.spmatrix, np.nda
 
 def bisection_blocks(points: np.ndarray, size: int) -> list[np.ndarray]:
     """Vertex indices of boxes of at most ``size`` points: each box over ``size`` is halved at the median
-    of its longest side, so the blocks are compact and balanced (deterministic: stable sorts)."""
+    of its longest side, so the blocks are compact and balanced (deterministic: introselect, no random pivot)."""
     pending, blocks = [np.arange(len(points))], []
     while pending:
         index = pending.pop()
@@ -71,8 +71,8 @@ def bisection_blocks(points: np.ndarray, size: int) -> list[np.ndarray]:
             continue
         p = points[index]
         axis = int(np.argmax(p.max(axis=0) - p.min(axis=0)))
-        order = np.argsort(p[:, axis], kind="stable")
         half = len(index) // 2
+        order = np.argpartition(p[:, axis], half)  # the median's side, no whole sort (17 s at 10M points)
         pending += [index[order[half:]], index[order[:half]]]
     return blocks
 
@@ -146,7 +146,10 @@ def _cloud_halo(points: np.ndarray, k: int) -> Callable[[np.ndarray], tuple[np.n
     def halo(block: np.ndarray) -> tuple[np.ndarray, None]:
         reach = CLOUD_HALO_SPANS * float(tree.query(points[block], k=min(k + 1, len(points)))[0].max())
         low, high = points[block].min(axis=0) - reach, points[block].max(axis=0) + reach
-        return np.flatnonzero(np.all((points >= low) & (points <= high), axis=1)), None
+        # the cube around the box from the tree (a scan of every point took 2 s a block at 10M), then the box
+        half = (high - low).max() / 2 * (1 + 1e-9)
+        near = np.asarray(tree.query_ball_point((low + high) / 2, half, p=np.inf, return_sorted=True), dtype=np.int64)
+        return near[np.all((points[near] >= low) & (points[near] <= high), axis=1)], None
 
     return halo
 
