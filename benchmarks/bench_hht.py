@@ -290,6 +290,9 @@ def main(argv=None) -> int:
         "from the points; default: mesh)",
     )
     parser.add_argument("--keep-meshes", action="store_true", help="keep the generated meshes in results/scratch")
+    parser.add_argument(
+        "--drop", nargs="+", default=[], metavar="CASE", help="remove these cases' rows of earlier runs"
+    )
     parser.add_argument("--blas-threads", type=int, default=1, help="OpenBLAS threads of the workers (ARPACK)")
     parser.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
     parser.add_argument("--out", help=argparse.SUPPRESS)
@@ -316,6 +319,8 @@ def main(argv=None) -> int:
     results.setdefault("scaling", [])
     results.setdefault("generated", {})
     results.setdefault("backends", [])
+    for part in ("ladder", "scaling", "backends"):
+        results[part] = [r for r in results[part] if r.get("case") not in args.drop]
 
     suffix = "" if args.emd == "paper" else f" ({args.emd})"
 
