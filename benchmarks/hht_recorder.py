@@ -3,8 +3,9 @@ instrumentation of the sparse solvers and a few sub-steps (benchmark only, no ef
 
 :class:`Recorder` times each stage (wall and CPU seconds) and takes its peak resident set by
 resetting the high-water mark at the stage's start.  Child processes (the blocks of a robust
-Laplacian, :mod:`hht3d.geometry.block_processes`) add their CPU seconds and, as a bound, their
-count times the largest child's peak: the kernel keeps no peak of children that can be reset.
+Laplacian, :mod:`hht3d.geometry.block_processes`) add their CPU seconds and the largest sum of
+their resident sets, sampled every :data:`CHILDREN_SAMPLE` seconds (the kernel's peak of children,
+``ru_maxrss``, carries the forking parent's over ``exec``, so it cannot be used).
 It wraps the PARDISO phases (analysis 11, numeric factorization 22, solve 33, with PARDISO's
 own memory report from ``iparm``), the construction, factorizations and solves of the other
 backends, and ``spectral_bounds``, ``monogenic_from_potential``, ``monogenic_from_riesz``,
@@ -16,11 +17,13 @@ from __future__ import annotations
 import contextlib
 import functools
 import os
-import resource
+import threading
 import time
+from collections.abc import Iterator
+
+import psutil
 
 from benchmarks.common import peak_rss_mb, reset_peak, status_mb
-from hht3d.geometry.block_processes import process_count
 
 #: The stages of a case, in order; their seconds add up to its total.
 STAGES = ["load", "operators", "signal", "emd", "rt"]
@@ -32,9 +35,30 @@ def _children_cpu() -> float:
     return times.children_user + times.children_system
 
 
-def _largest_child_mb() -> float:
-    """The largest peak resident set of this process's ended children (MB)."""
-    return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+#: Seconds between two samples of the children's resident sets.
+CHILDREN_SAMPLE = 0.05
+
+
+@contextlib.contextmanager
+def _children_meter() -> Iterator[list[float]]:
+    """Yields ``[MB]``: the largest sum of the children's resident sets sampled while inside."""
+    largest, done, me = [0.0], threading.Event(), psutil.Process()
+
+    def sample() -> None:
+        while not done.wait(CHILDREN_SAMPLE):
+            total = 0
+            for child in me.children(recursive=True):
+                with contextlib.suppress(psutil.Error):
+                    total += child.memory_info().rss
+            largest[0] = max(largest[0], total / 2**20)
+
+    thread = threading.Thread(target=sample, name="children-meter", daemon=True)
+    thread.start()
+    try:
+        yield largest
+    finally:
+        done.set()
+        thread.join()
 
 
 class Recorder:
@@ -64,10 +88,10 @@ class Recorder:
         self.peak_resets &= reset_peak()
         self.label = name
         start, cpu_start, children_start = time.perf_counter(), time.process_time(), _children_cpu()
-        yield
+        with _children_meter() as children:
+            yield
         seconds, cpu = time.perf_counter() - start, time.process_time() - cpu_start
-        children_cpu = _children_cpu() - children_start
-        children_mb = process_count() * _largest_child_mb() if children_cpu > 0 else 0.0
+        children_cpu, children_mb = _children_cpu() - children_start, children[0]
         self.peaks[f"{name}:tail"] = peak_rss_mb()  # since the last checkpoint of the stage
         self.stages[name] = {
             "seconds": seconds,

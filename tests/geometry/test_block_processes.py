@@ -63,3 +63,6 @@ def test_a_process_count_that_is_not_a_positive_integer_is_refused(monkeypatch, 
 def test_without_the_setting_blocks_use_the_cores_this_process_may_use(monkeypatch):
     monkeypatch.delenv(PROCESSES_ENV, raising=False)
     assert 1 <= process_count() <= (psutil.cpu_count() or 1)
+    monkeypatch.delattr("os.sched_getaffinity", raising=False)  # Windows and macOS lack it
+    monkeypatch.setattr("os.cpu_count", lambda: 3)
+    assert process_count() == 3
