@@ -4,8 +4,9 @@ instrumentation of the sparse solvers and a few sub-steps (benchmark only, no ef
 :class:`Recorder` times each stage (wall and CPU seconds) and takes its peak resident set by
 resetting the high-water mark at the stage's start.  Child processes (the blocks of a robust
 Laplacian, :mod:`hht3d.geometry.block_processes`) add their CPU seconds and the largest sum of
-their resident sets, sampled every :data:`CHILDREN_SAMPLE` seconds (the kernel's peak of children,
-``ru_maxrss``, carries the forking parent's over ``exec``, so it cannot be used).
+their resident sets, sampled every :data:`CHILDREN_SAMPLE` seconds once they run their own program
+(the kernel's peak of children, ``ru_maxrss``, carries the forking parent's over ``exec``, and a
+child between fork and exec shows the parent's pages).
 It wraps the PARDISO phases (analysis 11, numeric factorization 22, solve 33, with PARDISO's
 own memory report from ``iparm``), the construction, factorizations and solves of the other
 backends, and ``spectral_bounds``, ``monogenic_from_potential``, ``monogenic_from_riesz``,
@@ -48,8 +49,9 @@ def _children_meter() -> Iterator[list[float]]:
         while not done.wait(CHILDREN_SAMPLE):
             total = 0
             for child in me.children(recursive=True):
-                with contextlib.suppress(psutil.Error):
-                    total += child.memory_info().rss
+                with contextlib.suppress(psutil.Error):  # a child between fork and exec shows this process's pages
+                    if any("block_processes" in part for part in child.cmdline()):
+                        total += child.memory_info().rss
             largest[0] = max(largest[0], total / 2**20)
 
     thread = threading.Thread(target=sample, name="children-meter", daemon=True)

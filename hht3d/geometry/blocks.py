@@ -22,8 +22,7 @@ length shift ``ε`` is the largest one any triangle of the block needs (at most
 rows are assembled into ``(L + Lᵀ) / 2`` with the diagonal set to minus the off-diagonal
 row sums, so ``L`` stays symmetric with ``L 1 = 0``; each vertex's mass is its block's.
 The blocks are built in :func:`~.block_processes.process_count` child processes
-(:mod:`.block_processes`), at least :data:`BLOCKS_PER_PROCESS` blocks each, so transient
-memory is that of one block per process.
+(:mod:`.block_processes`), so transient memory is that of one block per process.
 """
 
 from __future__ import annotations
@@ -42,7 +41,6 @@ __all__ = [
     "CLOUD_BLOCK",
     "MESH_HALO_RINGS",
     "CLOUD_HALO_SPANS",
-    "BLOCKS_PER_PROCESS",
     "bisection_blocks",
     "built_by_blocks",
     "own_rows",
@@ -57,10 +55,6 @@ MESH_HALO_RINGS = 4
 #: The halo of a point-cloud block reaches this many times its largest ``k``-nearest-neighbour distance (3 gave
 #: the same rows on nefertiti's vertices, 1 rows 7% off).
 CLOUD_HALO_SPANS = 2.0
-
-#: Child processes only from this many blocks each: every child holds a block's transient at once (a 1M-point
-#: cloud's level of 2 blocks peaked at 7.8 GB in 2 processes, 4.2 GB in one).
-BLOCKS_PER_PROCESS = 2
 
 #: ``build(points, faces) -> (L, mass_diagonal)`` of a whole (sub-)surface; it must pickle (child processes).
 Builder = Callable[[np.ndarray, "np.ndarray | None"], "tuple[sp.spmatrix, np.ndarray]"]
@@ -105,8 +99,7 @@ def built_by_blocks(
             yield build, points[kept], sub_faces, np.searchsorted(kept, block)  # kept is sorted, holds the block
 
     rows, cols, vals, mass = [], [], [], np.zeros(n)
-    processes = min(process_count(), len(found) // BLOCKS_PER_PROCESS)
-    for row, col, val, own_mass in mapped(own_rows, arguments(), processes):
+    for row, col, val, own_mass in mapped(own_rows, arguments(), min(process_count(), len(found))):
         block, kept = prepared.popleft()
         rows.append(block[row])
         cols.append(kept[col])
