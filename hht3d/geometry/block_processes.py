@@ -3,7 +3,7 @@
 ``robust_laplacian`` holds the GIL while it builds, so threads would build one block at a
 time: the 256 blocks of a 10M-point cloud took 623 s on one core of two.  The blocks are
 independent (:mod:`.blocks`), so :func:`mapped` hands them to :func:`process_count` child
-processes, each building one block at a time (about 0.7 GB each at :data:`~.blocks.CLOUD_BLOCK`).
+processes, each building one block at a time (about 0.5 GB each at :data:`~.blocks.CLOUD_BLOCK`).
 
 A child is a Python interpreter running :func:`serve`, with the parent's ``sys.path``: it
 reads pickled ``(function, arguments)`` from its stdin and writes the pickled result, or the
@@ -11,8 +11,9 @@ exception, to a copy of its stdout, whose descriptor then points at stderr, so t
 output cannot corrupt the stream.  Each message is framed (:data:`_MAGIC`, its length): a
 stream that is corrupted anyway raises an error instead of waiting.  Not ``multiprocessing``:
 spawning imports the caller's script again (a script without a main guard would run twice)
-and forking copies a multi-threaded process.  A child ignores SIGINT and ends at the end of its stdin: when its
-parent has no more work, or has ended; a parent that stops kills its children.
+and forking copies a multi-threaded process.  A child ignores SIGINT and ends at the end of
+its stdin: when its parent has no more work, or has ended (then after its block at most); a
+parent that stops kills its children.
 """
 
 from __future__ import annotations

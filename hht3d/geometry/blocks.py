@@ -88,9 +88,7 @@ def built_by_blocks(
         lap, mass = build(points, faces)
         return sp.csr_matrix(lap), np.asarray(mass, dtype=np.float64)
     halo = _mesh_halo(n, faces) if faces is not None else _cloud_halo(points, n_neighbors)
-    prepared: deque[tuple[np.ndarray, np.ndarray]] = deque()
-
-    found = bisection_blocks(points, size)
+    found, prepared = bisection_blocks(points, size), deque[tuple[np.ndarray, np.ndarray]]()
 
     def arguments() -> Iterator[tuple]:
         for block in found:
@@ -148,7 +146,7 @@ def _cloud_halo(points: np.ndarray, k: int) -> Callable[[np.ndarray], tuple[np.n
     def halo(block: np.ndarray) -> tuple[np.ndarray, None]:
         reach = CLOUD_HALO_SPANS * float(tree.query(points[block], k=min(k + 1, len(points)))[0].max())
         low, high = points[block].min(axis=0) - reach, points[block].max(axis=0) + reach
-        # the cube around the box from the tree (a scan of every point took 2 s a block at 10M), then the box
+        # the cube around the box from the tree, then the box (at 10M points 0.013 s a block; a scan, 0.27 s)
         half = (high - low).max() / 2 * (1 + 1e-9)
         near = np.asarray(tree.query_ball_point((low + high) / 2, half, p=np.inf, return_sorted=True), dtype=np.int64)
         return near[np.all((points[near] >= low) & (points[near] <= high), axis=1)], None
