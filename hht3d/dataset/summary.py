@@ -31,6 +31,7 @@ from ..io.lock import folder_lock
 from ..io.manifest import recording
 from ..io.storage import file_name, is_url, join, local_copy, local_path
 from ..io.uploads import atomic_location, update_object
+from ..linalg.backends import SOLVER_BACKENDS
 from ..linalg.estimate import slow_fallback
 from ..redaction import redact
 from ..transform import HHTResult
@@ -137,9 +138,11 @@ def item_summary(
 
 
 def _backend_of(decomposition: Any) -> str | None:
-    """The sparse solver an EMD or HHT result was computed with."""
+    """The sparse solver an EMD or HHT result was computed with: iterative filtering records what applied
+    its filters, ``"chebyshev"`` and the solver joined by ``+`` (``None`` when it made no solves)."""
     info = decomposition.info
-    return info.get("emd", info).get("backend")
+    used = str(info.get("emd", info).get("backend") or "").split("+")
+    return next((name for name in used if name in SOLVER_BACKENDS), None)
 
 
 def skipped_summary(source: Path | str, paths: Sequence[str], storage_options: dict | None = None) -> ItemSummary:

@@ -56,3 +56,20 @@ def test_two_runs_into_one_folder_at_once_keep_each_others_summary_rows(job):
     rows = json.loads((out / "summary.json").read_text())
     assert sorted(Path(r["source"]).name for r in rows) == ["s0.ply", "s1.ply"]
     assert sorted(_recorded(out)) == ["s0_hht.npz", "s1_hht.npz", "summary.csv", "summary.json"]
+
+
+@pytest.mark.parametrize(
+    ("recorded", "solver"),
+    [("superlu+chebyshev", "superlu"), ("chebyshev+pardiso", "pardiso"), ("chebyshev", None), ("superlu", "superlu")],
+)
+def test_the_solver_advice_reads_the_solver_out_of_what_applied_the_filters(recorded, solver):
+    """Iterative filtering records ``chebyshev`` joined to the solver; the summary's slow-solver advice takes the
+    solver (a 362k-point scan's pipeline failed on 'pardiso+chebyshev' as a backend name)."""
+    from types import SimpleNamespace
+
+    from hht3d.dataset.summary import _backend_of
+    from hht3d.linalg.estimate import slow_fallback
+
+    assert _backend_of(SimpleNamespace(info={"emd": {"backend": recorded}})) == solver
+    if solver == "superlu":
+        assert "superlu is a slow sparse solver for 1,000,000 vertices" in slow_fallback(10**6, solver)
