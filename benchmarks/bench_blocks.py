@@ -58,11 +58,13 @@ def markdown(records: dict) -> str:
         ]
         for r in records["rows"]
     ]
+    meta = records["meta"]
+    m = meta["machine"]
     return "\n\n".join(
         [
             "# A point cloud's robust Laplacian by blocks: child processes against one process",
-            f"Machine: {records['meta']['machine']}; {records['meta']['pairs']} pairs each, medians; "
-            f"1-minute load before/after {records['meta']['load']}.",
+            f"Machine: {m['platform']}, {m['cpus']} CPUs, Python {m['python']}; {meta['pairs']} pairs each, "
+            f"medians; 1-minute load before/after {meta['load']}.",
             table(
                 ["model", "points", "blocks", "children", "one process s", "children s", "ratio", "same bits"],
                 rows,

@@ -37,6 +37,7 @@ RENDERERS = {
     "viewer": ("bench_viewer", lambda d: (d["cases"], d["machine"])),
     "las": ("bench_las", lambda d: (d,)),
     "multiresolution": ("bench_multiresolution", lambda d: (d,)),
+    "blocks": ("bench_blocks", lambda d: (d,)),
 }
 #: Result files that are not measurements of speed or memory (tools/mutants.py: which test catches a fault).
 NOT_PERFORMANCE = {"mutants"}
