@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -227,3 +228,20 @@ def test_backends_not_declared_thread_safe_have_a_lock():
     (cvxopt's one process-wide workspace) are locked; SciPy's SuperLU keeps no global state."""
     locked = {name for name, b in backends.SOLVER_BACKENDS.items() if b.lock is not None}
     assert locked == {"pardiso", "cholmod"}
+
+
+def test_mkl_runtime_comes_from_the_wheel_file_list_without_a_tree_search(monkeypatch):
+    """The mkl wheel's file list names a loadable mkl_rt; pypardiso's search globs the whole tree (1.6 s)."""
+    pytest.importorskip("pypardiso")
+    import ctypes
+    import glob
+
+    from hht3d.linalg import pardiso
+
+    def no_search(*args, **kwargs):
+        raise AssertionError("searched the installation tree")
+
+    monkeypatch.setattr(glob, "glob", no_search)
+    path = pardiso.listed_mkl_runtime()
+    assert path is not None and "mkl_rt" in Path(path).name and Path(path).is_file()
+    assert ctypes.CDLL(path).pardiso  # the library pypardiso calls
