@@ -89,8 +89,12 @@ def unreliable_vertices(surface: Surface, min_area: float = MIN_AREA_FRACTION) -
     >>> int(unreliable_vertices(load(data_path("sphere_oct4098.ply"))).sum())  # a well-shaped mesh
     0
     """
-    area = surface.mass_diagonal
-    bad = area < min_area * _reference_area(surface)
+    return _unreliable(surface, min_area, _reference_area(surface))
+
+
+def _unreliable(surface: Surface, min_area: float, reference: np.ndarray) -> np.ndarray:
+    """:func:`unreliable_vertices` with the typical nearby areas (:func:`_reference_area`) given."""
+    bad = surface.mass_diagonal < min_area * reference
     if surface.is_mesh:
         angles = np.degrees(ops.corner_angles(surface.vertices, cast(np.ndarray, surface.faces)))
         degenerate = (angles.min(axis=1) < NEEDLE_ANGLE) | (angles.max(axis=1) > CAP_ANGLE)
@@ -108,9 +112,15 @@ def _reference_area(surface: Surface) -> np.ndarray:
 def _neighbour_median(surface: Surface, values: np.ndarray) -> np.ndarray:
     """Median of ``values`` over each vertex's 1-ring (its own value where it has no neighbour)."""
     adj = surface.adjacency
+    n = len(values)
     degree = np.diff(adj.indptr)
-    rows = np.repeat(np.arange(len(values)), degree)
-    ranked = values[adj.indices][np.lexsort((values[adj.indices], rows))]  # sorted within each row
+    order = np.argsort(values, kind="stable")
+    rank = np.empty(n, dtype=np.int64)
+    rank[order] = np.arange(n)
+    # one sort of (row, rank of the value) keys sorts every 1-ring: 0.6 s at 1M vertices, 1.4 s by lexsort
+    key = np.repeat(np.arange(n, dtype=np.int64) * n, degree) + rank[adj.indices]
+    key.sort()
+    ranked = values[order[key % n]]
     out = values.copy()
     has = degree > 0
     start = adj.indptr[:-1][has]
@@ -121,9 +131,9 @@ def _neighbour_median(surface: Surface, values: np.ndarray) -> np.ndarray:
 def _regions(surface: Surface, min_area: float) -> tuple[np.ndarray, sp.csr_matrix]:
     """Seeds (the :func:`unreliable_vertices`) and their regions: the closed 1-ring grown until it
     holds a typical area nearby (:func:`hht3d.geometry.operators.grown_regions`)."""
-    seeds = np.flatnonzero(unreliable_vertices(surface, min_area))
-    area = surface.mass_diagonal
-    return seeds, ops.grown_regions(surface.adjacency, area, seeds, _reference_area(surface)[seeds])
+    reference = _reference_area(surface)
+    seeds = np.flatnonzero(_unreliable(surface, min_area, reference))
+    return seeds, ops.grown_regions(surface.adjacency, surface.mass_diagonal, seeds, reference[seeds])
 
 
 def _region_average(surface: Surface, integrated: np.ndarray, min_area: float) -> np.ndarray:

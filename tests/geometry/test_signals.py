@@ -118,3 +118,18 @@ def test_bad_user_signals_are_refused(tmp_path):
         signals.luminance(surface)
     with pytest.raises(InputError, match="needs a triangle mesh"):
         signals.gaussian_curvature(Surface(fibonacci_sphere(100)))
+
+
+@pytest.mark.parametrize("decimals", [None, 1])
+def test_neighbour_median_is_numpys_median_of_each_one_ring(decimals):
+    """The reference area of the unreliable-vertex test: NumPy's median over each vertex's neighbours,
+    with distinct values and with ties (rounded), on a sliver mesh of uneven degrees."""
+    from hht3d.geometry.curvature import _neighbour_median
+
+    surface = Surface(*sliver_sphere())
+    values = np.random.default_rng(1).standard_normal(surface.n_vertices)
+    if decimals is not None:
+        values = values.round(decimals)
+    adj = surface.adjacency
+    expected = [np.median(values[adj.indices[adj.indptr[i] : adj.indptr[i + 1]]]) for i in range(len(values))]
+    assert np.array_equal(_neighbour_median(surface, values), expected)
