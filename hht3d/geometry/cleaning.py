@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .operators import face_areas
+from .rows import unique_rows
 
 __all__ = ["CleanReport", "clean_mesh", "clean_points"]
 
@@ -61,8 +62,7 @@ class CleanReport:
 
 def _weld(vertices: np.ndarray) -> tuple[np.ndarray, int]:
     """Map vertices with identical coordinates to their first occurrence."""
-    _, first, inverse = np.unique(vertices, axis=0, return_index=True, return_inverse=True)
-    inverse = inverse.ravel()
+    _, first, inverse, _ = unique_rows(vertices)
     representative = first[inverse]  # original index of the kept twin
     return representative, len(vertices) - len(first)
 
@@ -82,7 +82,7 @@ def clean_mesh(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.
     mean_area = area[~repeated].mean() if (~repeated).any() else 0.0
     degenerate = repeated | (area <= DEGENERATE_AREA_FRACTION * mean_area)
     faces = faces[~degenerate]
-    _, first = np.unique(np.sort(faces, axis=1), axis=0, return_index=True)
+    _, first, _, _ = unique_rows(np.sort(faces, axis=1))
     duplicates = len(faces) - len(first)
     faces = faces[np.sort(first)]
 

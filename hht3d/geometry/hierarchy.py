@@ -30,7 +30,7 @@ meant for fields that the coarse level resolves (the band-limited residues of
 :mod:`hht3d.decomposition.multiresolution`), where it adds no error of its own, so a
 round trip ``P R f`` errs only by ``P``'s interpolation.
 
-Everything here is deterministic (NumPy's sorted ``unique``, Open3D's closest points), so a
+Everything here is deterministic (sorted distinct rows, :mod:`.rows`; Open3D's closest points), so a
 worker that rebuilds the hierarchy from the same surface gets the same levels.  The
 hierarchy is built one level at a time, when asked, and kept in ``surface.cache``.
 """
@@ -46,6 +46,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import InputError
 from .operators import adjacency, tangent_gradient
+from .rows import unique_rows
 from .surface import MIN_VERTICES, Surface
 
 __all__ = [
@@ -187,8 +188,7 @@ def _coarser(finer: Level, index: int) -> Level:
     """The next level of ``finer`` (module notes)."""
     fine = finer.surface
     key = np.floor((fine.vertices - fine.vertices.min(axis=0)) / (VOXEL_SPACINGS * finer.spacing)).astype(np.int64)
-    _, cluster = np.unique(key, axis=0, return_inverse=True)
-    cluster = cluster.ravel()
+    cluster = unique_rows(key)[2]
     samples = _representatives(fine, cluster)
     name = f"{fine.name} level {index}"
     if fine.is_mesh:
@@ -225,7 +225,7 @@ def _cluster_triangles(points: np.ndarray, corners: np.ndarray, samples: np.ndar
     the sampled vertices they reference, and the triangles renumbered to them."""
     distinct = (corners[:, 0] != corners[:, 1]) & (corners[:, 1] != corners[:, 2]) & (corners[:, 0] != corners[:, 2])
     corners = corners[distinct]
-    _, first = np.unique(np.sort(corners, axis=1), axis=0, return_index=True)
+    first = unique_rows(np.sort(corners, axis=1))[1]
     corners = corners[np.sort(first)]
     p = points[samples[corners]]
     doubled = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)

@@ -8,6 +8,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from .rows import unique_rows
 from .surface import Surface
 
 __all__ = ["edge_face_counts", "boundary_loops", "describe"]
@@ -16,7 +17,8 @@ __all__ = ["edge_face_counts", "boundary_loops", "describe"]
 def edge_face_counts(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unique undirected edges ``(e, 2)`` and how many faces use each."""
     e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    return np.unique(e, axis=0, return_counts=True)
+    unique, _, _, counts = unique_rows(e)
+    return unique, counts
 
 
 def boundary_loops(n: int, edges: np.ndarray, counts: np.ndarray) -> int:
