@@ -215,7 +215,15 @@ def riesz_vectors(
     surface: Surface, decomposition: Any, options: RieszOptions, backend: str | None = None
 ) -> np.ndarray:
     """The ``(k, n, 3)`` Riesz vectors of all IMFs in one part, then the surface's hierarchy released
-    (:func:`~hht3d.geometry.hierarchy.release_hierarchy`): the last use of its levels in :func:`hht3d.hht`."""
-    vectors = combine_riesz_parts(surface, [riesz_part(surface, decomposition, options, backend)])
+    (:func:`~hht3d.geometry.hierarchy.release_hierarchy`): the last use of its levels in :func:`hht3d.hht`.
+
+    Each IMF's vectors are moved into the result and let go one at a time, so the IMFs' vectors are not
+    held twice (2.4 GB each time for 10 IMFs of a 10M-point cloud), as stacking the part would."""
+    part = riesz_part(surface, decomposition, options, backend)
+    vectors = np.empty((len(part), surface.n_vertices, 3))
+    while part:
+        k, field = part.pop()
+        vectors[k] = field
+        del field
     release_hierarchy(surface)
     return vectors
