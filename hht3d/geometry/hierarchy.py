@@ -45,6 +45,7 @@ import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from ..linalg.heap import release_free_heap
 from .operators import adjacency, tangent_gradient
 from .rows import unique_rows
 from .surface import MIN_VERTICES, Surface
@@ -175,9 +176,10 @@ def hierarchy(surface: Surface) -> Hierarchy:
 
 def release_hierarchy(surface: Surface) -> None:
     """Drop the cached hierarchy of a surface of :data:`KEPT_VERTICES` vertices or more, once no later
-    stage needs it (the next :func:`hierarchy` rebuilds it, identically)."""
-    if surface.n_vertices >= KEPT_VERTICES:
-        surface.cache.pop("hierarchy", None)
+    stage needs it (the next :func:`hierarchy` rebuilds it, identically), and hand the memory its smaller
+    arrays held back to the operating system (:func:`~hht3d.linalg.heap.release_free_heap`)."""
+    if surface.n_vertices >= KEPT_VERTICES and surface.cache.pop("hierarchy", None) is not None:
+        release_free_heap()
 
 
 def _spacing(surface: Surface) -> float:
