@@ -61,6 +61,7 @@ from .. import linalg
 from ..errors import InputError
 from ..geometry.surface import Surface
 from ..geometry.validation import check_signal, check_surface
+from ..linalg.factor import entries_on_pattern
 from .extrema import extrema_spacing
 from .options import EMDOptions, start_tension
 
@@ -118,17 +119,8 @@ class _EnvelopeEnergies:
         return self._on_pattern(0.5 * (bilaplacian + bilaplacian.T))
 
     def _on_pattern(self, a: Any) -> np.ndarray:
-        """The entries of ``a`` (sparse, within the pattern) at the positions of the shared pattern (zeros
-        elsewhere)."""
-        a = sp.csr_matrix(a)
-        if not a.has_canonical_format:  # sorted, one entry each: a copy, as a may be the surface's stiffness
-            a = a.copy()
-            a.sum_duplicates()
-        if np.array_equal(a.indptr, self.indptr) and np.array_equal(a.indices, self.indices):
-            return a.data.astype(float)  # the pattern itself
-        keys = _keys(a.indptr, a.indices, self.n)
-        position = np.searchsorted(_keys(self.indptr, self.indices, self.n), keys)
-        return np.bincount(position, weights=a.data, minlength=len(self.indices))
+        """The entries of ``a`` (sparse, within the pattern) on the shared pattern."""
+        return entries_on_pattern(self.indptr, self.indices, a)
 
     def local_smoothing(self, scale: np.ndarray) -> np.ndarray:
         """Entries of ``L S M̃⁻¹ S L`` with ``S = diag(scale)``: :attr:`smoothing` with a scale per vertex."""
@@ -151,11 +143,6 @@ class _EnvelopeEnergies:
         a = sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n), copy=False)
         a.has_sorted_indices = True
         return a
-
-
-def _keys(indptr: np.ndarray, indices: np.ndarray, n: int) -> np.ndarray:
-    """``row·n + column`` of every entry of a CSR pattern, in its order (sorted when its rows are)."""
-    return np.repeat(np.arange(n, dtype=np.int64) * n, np.diff(indptr)) + indices
 
 
 def membrane_laplacian(surface: Surface) -> sp.csr_matrix:

@@ -9,7 +9,7 @@ import scipy.sparse as sp
 
 from ..errors import InputError, NumericalError
 
-__all__ = ["Factor", "Pattern", "UpperTriangle", "Latest"]
+__all__ = ["Factor", "Pattern", "UpperTriangle", "Latest", "entries_on_pattern"]
 
 
 class Factor:
@@ -76,3 +76,20 @@ class Latest:
     def check(self, token: object) -> None:
         if self._current is not token:
             raise NumericalError(f"this {self._backend} factor was replaced by a later factorization")
+
+
+def entries_on_pattern(indptr: np.ndarray, indices: np.ndarray, a: sp.spmatrix) -> np.ndarray:
+    """The data array of ``a`` on a fixed CSR pattern (``indptr``, sorted ``indices``) that holds every nonzero
+    entry of ``a``: each entry at its position, zeros elsewhere (explicit zeros of ``a`` are dropped)."""
+    a = sp.csr_matrix(a, copy=True)
+    a.sum_duplicates()
+    a.eliminate_zeros()
+    if np.array_equal(a.indptr, indptr) and np.array_equal(a.indices, indices):
+        return a.data.astype(float)
+    n = len(indptr) - 1
+
+    def keys(pointers: np.ndarray, columns: np.ndarray) -> np.ndarray:
+        return np.repeat(np.arange(n, dtype=np.int64) * a.shape[1], np.diff(pointers)) + columns
+
+    position = np.searchsorted(keys(indptr, indices), keys(a.indptr, a.indices))
+    return np.bincount(position, weights=a.data, minlength=len(indices))

@@ -13,6 +13,7 @@ from .. import linalg
 from ..errors import InputError
 from ..geometry.surface import Surface
 from ..geometry.validation import check_surface
+from ..linalg.factor import entries_on_pattern
 
 __all__ = ["shifted_matrix", "shifted_solve", "shift_analysis", "shifted_systems"]
 
@@ -26,16 +27,9 @@ class _ShiftedSystems:
         pattern = (abs(lap) + sp.eye(n, format="csr")).tocsr()
         pattern.sum_duplicates()
         pattern.sort_indices()
-        rows = np.repeat(np.arange(n), np.diff(pattern.indptr))
-        keys = rows * n + pattern.indices
-        coo = lap.tocoo()
-        stored = coo.data != 0  # explicit zeros of L may be missing from the pattern
-        self.l_data = np.zeros(len(keys))
-        np.add.at(
-            self.l_data, np.searchsorted(keys, coo.row[stored].astype(np.int64) * n + coo.col[stored]), coo.data[stored]
-        )
-        self.m_data = np.zeros(len(keys))
-        self.m_data[np.searchsorted(keys, np.arange(n, dtype=np.int64) * (n + 1))] = surface.mass_diagonal
+        # explicit zeros of L may be missing from the pattern: entries_on_pattern drops them
+        self.l_data = entries_on_pattern(pattern.indptr, pattern.indices, lap)
+        self.m_data = entries_on_pattern(pattern.indptr, pattern.indices, sp.diags(surface.mass_diagonal))
         self.indptr, self.indices, self.n = pattern.indptr, pattern.indices, n
 
     def matrix(self, sigma: float) -> sp.csr_matrix:
