@@ -24,6 +24,7 @@ import psutil
 
 from ..io.atomic import writes_end_with
 from ..io.sealed import install
+from ..linalg.threads import SINGLE_THREAD_ENV
 
 __all__ = [
     "SINGLE_THREAD_ENV",
@@ -35,9 +36,6 @@ __all__ = [
     "sigint_ignored_by_children",
     "check_main_guard",
 ]
-
-#: Environment that keeps each worker process's BLAS/OpenMP/MKL to one thread.
-SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
 
 
 def worker_count() -> int:

@@ -32,13 +32,12 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import IO, Any
 
 from ..errors import InputError
+from ..linalg.threads import SINGLE_THREAD_ENV
 
 __all__ = ["PROCESSES_ENV", "process_count", "mapped", "serve"]
 
 #: Environment variable: how many child processes build blocks (``1``: this process builds them).
 PROCESSES_ENV = "HHT3D_BLOCK_PROCESSES"
-#: Children run their BLAS and OpenMP on one thread each: they share the cores already.
-_ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
 #: Seconds a child whose stream ended is given to exit, before it is taken as alive with a corrupt stream.
 _ENDING = 10.0
 #: The first bytes of every message, before its length (8 bytes, little-endian).
@@ -112,7 +111,7 @@ class _Child:
             [sys.executable, "-c", f"from {__name__} import serve; serve()"],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
-            env={**os.environ, **_ONE_THREAD, "PYTHONPATH": path},
+            env={**os.environ, **SINGLE_THREAD_ENV, "PYTHONPATH": path},  # the children share the cores already
         )
 
     def call(self, function: Callable[..., Any], args: tuple) -> Any:

@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["usable_cores"]
+__all__ = ["usable_cores", "SINGLE_THREAD_ENV"]
+
+#: Environment that keeps a process's BLAS/OpenMP/MKL to one thread (Dask worker processes, block processes).
+SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
 
 
 def usable_cores() -> int:
