@@ -14,11 +14,14 @@ rename, so the run is resumable with ``--resume``.  The CLI exits with
 
 from __future__ import annotations
 
+import _thread
 import contextlib
 import multiprocessing
 import os
 import signal
+import sys
 import threading
+import time
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -49,24 +52,82 @@ class Stopped(BaseException):
 def _raise(signum: int, frame: Any) -> None:
     for sig in SIGNALS:  # one stop at a time: a second Ctrl-C does not interrupt the cleanup
         signal.signal(sig, signal.SIG_IGN)
+    _take_swallowed()
     raise Stopped(signum)
+
+
+#: The signal of a stop that Python swallowed, until it is raised again (:func:`_unraisable_hook`).
+_swallowed: list[int] = []
+_swallowed_lock = threading.Lock()
+#: Seconds after which a swallowed stop is raised again in the main thread.
+RAISE_AGAIN_AFTER = 0.01
+
+
+def _take_swallowed() -> int | None:
+    with _swallowed_lock:
+        return _swallowed.pop() if _swallowed else None
+
+
+def _raise_again() -> None:
+    """Trip the swallowed stop's signal in the main thread (from a thread: the hook has returned by then)."""
+    time.sleep(RAISE_AGAIN_AFTER)
+    with _swallowed_lock:
+        if _swallowed:
+            _thread.interrupt_main(signal.Signals(_swallowed[-1]))
+
+
+def _unraisable_hook(previous: Any) -> Any:
+    """A ``sys.unraisablehook`` that raises a :class:`Stopped` again when Python swallowed it.
+
+    A signal's handler runs wherever the main thread is; in a ``__del__`` method or a weakref
+    callback Python ignores its exception, and the run went on to exit 0, its stop lost.  The hook
+    records the stop, re-arms the handlers and has a thread trip the signal once the hook has
+    returned, so the stop surfaces in the code that runs next (or at the end of
+    :func:`stop_on_signals`); other unraisable exceptions go to ``previous``."""
+
+    def hook(unraisable: Any) -> None:
+        stop = unraisable.exc_value
+        if not isinstance(stop, Stopped) or threading.current_thread() is not threading.main_thread():
+            previous(unraisable)
+            return
+        with _swallowed_lock:
+            _swallowed[:] = [stop.signum]
+        while True:
+            try:
+                for sig in SIGNALS:
+                    signal.signal(sig, _raise)
+                threading.Thread(target=_raise_again, name="hht3d-stop", daemon=True).start()
+                return
+            except Stopped as again:  # the thread tripped it before this hook returned: once more
+                with _swallowed_lock:
+                    _swallowed[:] = [again.signum]
+
+    return hook
 
 
 @contextlib.contextmanager
 def stop_on_signals() -> Iterator[None]:
     """Raise :class:`Stopped` in the main thread on the first SIGTERM or SIGINT; handlers restored after.
 
+    A stop raised where Python swallows exceptions (a ``__del__``, a weakref callback) is raised
+    again in the code that follows, at the latest when the block ends (:func:`_unraisable_hook`).
     Outside the main thread (where Python cannot set handlers) it changes nothing.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     previous = {sig: signal.signal(sig, _raise) for sig in SIGNALS}
+    previous_hook = sys.unraisablehook
+    sys.unraisablehook = _unraisable_hook(previous_hook)
     try:
         yield
     finally:
+        swallowed = _take_swallowed()
+        sys.unraisablehook = previous_hook
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+        if swallowed is not None:
+            raise Stopped(swallowed)
 
 
 def clean_stop(folders: Iterable[Path | str]) -> list:

@@ -148,6 +148,53 @@ def test_a_stop_waits_for_a_write_open_in_another_thread(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+def _swallowing_callback(signum: int):
+    """A weakref callback in which the stop handler runs (there Python ignores exceptions), and what it ran after."""
+    after_signal: list = []
+
+    def callback(_):
+        signal.raise_signal(signum)
+        after_signal.append(True)
+
+    return callback, after_signal
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_a_stop_raised_inside_a_finalizer_is_raised_again_after_it(signum):
+    """CI saw a SIGTERM arrive while a weakref callback ran: Python printed "Exception ignored" for the
+    stop and the run went on to exit 0.  The stop must surface in the code that runs next."""
+    import weakref
+
+    from hht3d.stopping import Stopped, stop_on_signals
+
+    callback, after_signal = _swallowing_callback(signum)
+    handler, start = signal.getsignal(signum), time.monotonic()
+    with pytest.raises(Stopped) as stop, stop_on_signals():
+        node = type("Node", (), {})()
+        ref = weakref.ref(node, callback)
+        del node
+        while time.monotonic() < start + 5:
+            time.sleep(0.001)
+    assert ref() is None and after_signal == []  # the stop was raised (and swallowed) inside the callback
+    assert stop.value.signum == signum and time.monotonic() - start < 1
+    assert signal.getsignal(signum) is handler
+
+
+def test_a_stop_swallowed_as_the_block_ends_is_raised_by_its_end():
+    """A stop swallowed just before the block ends, before it could be raised again, is raised by the end."""
+    import weakref
+
+    from hht3d.stopping import Stopped, stop_on_signals
+
+    callback, _ = _swallowing_callback(signal.SIGTERM)
+    with pytest.raises(Stopped), stop_on_signals():
+        node = type("Node", (), {})()
+        ref = weakref.ref(node, callback)
+        del node
+    assert ref() is None
+    time.sleep(0.05)  # the thread that would raise it again finds nothing left to raise
+
+
 def _catches(pid: int, signum: int) -> bool:
     """Whether process ``pid`` has a handler for ``signum`` (Linux's ``SigCgt`` mask)."""
     try:
