@@ -31,10 +31,11 @@ from ..errors import InputError, shown
 from ..execution import compute
 from ..geometry.signals import SIGNALS
 from ..graph import stages as graph
+from ..io import read_ply_header
 from ..io.folder import OutputFolder, check_locations
 from ..io.manifest import new_run_id
 from ..io.sealed import seal
-from ..io.storage import file_name, input_size, join, local_path, resolve_locations, stem
+from ..io.storage import file_name, input_size, is_url, join, local_path, resolve_locations, stem
 from ..output_formats import plain_formats
 from ..transform import HHTResult
 from .guard import MAX_ERROR, Failure, Guarded
@@ -121,12 +122,12 @@ def items_graph(items: dict, folder: OutputFolder, make_item: Callable[..., Any]
     manifest records as complete with the same size and checksum; for a URL,
     likewise in its manifest object) is a ``"skipped"`` row instead.
 
-    The larger an input file, the higher its tasks' ``priority`` (honoured by
-    ``dask.distributed``): the longest chain starts first, and the small items fill the
-    other workers meanwhile, instead of the largest starting last while the others idle.
+    The more work an input holds (:func:`_expected_work`), the higher its tasks' ``priority``
+    (honoured by ``dask.distributed``): the longest chain starts first, and the small items fill
+    the other workers meanwhile, instead of the largest starting last while the others idle.
     """
-    sizes = {source: input_size(source, folder.storage_options) for source in items}
-    rank = {source: index for index, source in enumerate(sorted(items, key=sizes.__getitem__))}
+    work = _expected_work(items, folder.storage_options)
+    rank = {source: index for index, source in enumerate(sorted(items, key=work.__getitem__))}
     rows = []
     for source, paths in items.items():
         if resume and folder.done(paths):
@@ -135,6 +136,27 @@ def items_graph(items: dict, folder: OutputFolder, make_item: Callable[..., Any]
             with dask.annotate(priority=rank[source]):
                 rows.append(make_item(source, paths))
     return delayed(list, pure=True)(rows)
+
+
+def _expected_work(sources: Iterable[Any], storage_options: dict | None = None) -> dict:
+    """Each input's expected work, in one unit for all: the vertices its header declares when every input
+    is a local PLY file with a readable header, else its bytes.
+
+    Bytes per vertex differ threefold between a bare point cloud and a coloured one, so bytes alone ranked
+    the 40,256-point bunny scan (0.48 MB, 14.8 s) below a 34,834-vertex mesh (1.3 MB, 7.3 s), and it ran
+    last on 2 workers (``bench_graph``)."""
+    vertices = {}
+    for source in sources:
+        path = local_path(source)
+        if is_url(path) or Path(path).suffix.lower() != ".ply":
+            break
+        try:
+            vertices[source] = read_ply_header(path).counts.get("vertex", 0)
+        except InputError:  # unreadable: its load reports it
+            break
+    else:
+        return vertices
+    return {source: input_size(source, storage_options) for source in sources}
 
 
 def _check_options(signal: str, formats: Iterable[str]) -> None:

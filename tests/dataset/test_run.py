@@ -5,6 +5,7 @@ import re
 import shutil
 
 import numpy as np
+import open3d as o3d
 import pytest
 
 from helpers.datasets import _make_inputs
@@ -125,3 +126,23 @@ def test_the_largest_input_gets_the_highest_task_priority(tmp_path):
             {str(key).split("_hht.npz-")[0]: note(key) for key in layer if note and "_hht.npz-" in str(key)}
         )
     assert sorted(priority, key=priority.get) == ["write b", "write c", "write a"], priority
+
+
+def test_inputs_rank_by_declared_vertices_not_bytes(tmp_path):
+    """A bare point cloud has a third of a coloured one's bytes per vertex: ranked by bytes, the 40,256-point
+    bunny scan ran last on 2 workers.  Local PLY inputs rank by the vertices their headers declare; with
+    one input that declares none (not PLY), all rank by bytes, one unit for all."""
+    from hht3d.dataset.run import _expected_work
+
+    points = icosphere(3)[0]
+    few, many = tmp_path / "few.ply", tmp_path / "many.ply"
+    coloured = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points[:450]))
+    coloured.colors = o3d.utility.Vector3dVector(np.full((450, 3), 0.5))
+    coloured.normals = o3d.utility.Vector3dVector(np.tile([0.0, 0.0, 1.0], (450, 1)))
+    o3d.io.write_point_cloud(str(few), coloured, write_ascii=True)
+    o3d.io.write_point_cloud(str(many), o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points)))
+    assert few.stat().st_size > many.stat().st_size
+    assert _expected_work([few, many]) == {few: 450, many: len(points)}
+    text = tmp_path / "other.xyz"
+    np.savetxt(text, points[:10])
+    assert _expected_work([few, many, text]) == {p: p.stat().st_size for p in (few, many, text)}
