@@ -17,7 +17,7 @@ Results: ``benchmarks/results/graph.json`` and ``graph.md``.
 
 Usage::
 
-    python -m benchmarks.bench_graph [--parts dataset riesz overhead]
+    python -m benchmarks.bench_graph [--parts dataset riesz overhead] [--repeat N]
 """
 
 from __future__ import annotations
@@ -168,6 +168,7 @@ def main(argv=None) -> int:
         default=["dataset", "riesz", "overhead"],
         help="parts to run; the others are kept from the previous graph.json",
     )
+    parser.add_argument("--repeat", type=int, default=1, help="dataset runs of each setting; the median is kept")
     parser.add_argument("--worker", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
@@ -184,12 +185,17 @@ def main(argv=None) -> int:
     records["machine"] = machine()
     for part in args.parts:
         records[part] = []
-    for workers, riesz_tasks in DATASET_RUNS if "dataset" in args.parts else []:
-        records["dataset"].append(_run(["dataset", str(workers), riesz_tasks], threads=1))
-        print(
-            f"dataset, {workers} worker(s), riesz_tasks {riesz_tasks}: {records['dataset'][-1]['seconds']:.1f} s",
-            file=sys.stderr,
-        )
+    runs: dict = {}
+    for repeat in range(args.repeat if "dataset" in args.parts else 0):  # in turn: a drift hits every setting
+        for workers, riesz_tasks in DATASET_RUNS:
+            record = _run(["dataset", str(workers), riesz_tasks], threads=1)
+            runs.setdefault((workers, riesz_tasks), []).append(record)
+            print(
+                f"dataset, {workers} worker(s), riesz_tasks {riesz_tasks}: {record['seconds']:.1f} s", file=sys.stderr
+            )
+    for answers in runs.values():  # the run of median time, with every run's time
+        answers.sort(key=lambda r: r["seconds"])
+        records["dataset"].append(answers[len(answers) // 2] | {"repeats": [r["seconds"] for r in answers]})
     if "riesz" in args.parts and model_path(RIESZ_MODEL):
         for mode, tasks, threads in [
             ("sequential", 1, 1),
@@ -236,7 +242,19 @@ def markdown(records: dict) -> str:
         )
         + "  1-minute load average after each run: "
         + ", ".join(f"{r.get('load_average_1min', float('nan')):.1f}" for r in records["dataset"])
-        + ".",
+        + "."
+        + (
+            "  Each setting ran "
+            f"{len(one['repeats'])} times in turn; the median is shown (all, s: "
+            + "; ".join(
+                f"{r['workers']} worker(s), riesz_tasks {r['riesz_tasks']}: "
+                + ", ".join(f"{t:.1f}" for t in r["repeats"])
+                for r in records["dataset"]
+            )
+            + ")."
+            if len(one.get("repeats", [])) > 1
+            else ""
+        ),
         "",
     ]
     if records["riesz"]:
