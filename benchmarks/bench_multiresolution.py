@@ -37,12 +37,12 @@ Models: ``nefertiti`` (50k) and ``igea`` (134k) from ``../shared/data`` and the 
 :data:`benchmarks.meshes.SCALING` (``1m``: igea decimated and Loop-subdivided, made once and kept
 in ``--folder``).  Run::
 
-    python -m benchmarks.bench_multiresolution [--models 12k 25k nefertiti igea 1m]
+    python -m benchmarks.bench_multiresolution [--models 3k 6k 9k 12k 25k nefertiti igea 1m]
         [--modes direct multires polynomial auto plain] [--folder /tmp/hht3d-bench] [--timeout 3600]
 
 Writes ``results/multiresolution.json`` and ``results/multiresolution.md`` (the records of models
-and settings not re-run are kept from the previous file).  ``12k`` and ``25k`` (igea decimated) with
-nefertiti place the crossover of ``multiresolution="auto"``.
+and settings not re-run are kept from the previous file).  ``3k``, ``6k``, ``9k``, ``12k`` and ``25k``
+(igea decimated) with nefertiti place the crossover of ``multiresolution="auto"``.
 """
 
 from __future__ import annotations
@@ -73,7 +73,7 @@ from benchmarks.common import (
 )
 from benchmarks.meshes import SCALING
 
-MODELS = ["12k", "25k", "nefertiti", "igea", "1m"]
+MODELS = ["3k", "6k", "9k", "12k", "25k", "nefertiti", "igea", "1m"]
 #: name -> the settings of the run; ``direct`` is the baseline.
 MODES = {
     "direct": {"multiresolution": "never", "evaluation": "solves"},
@@ -256,7 +256,8 @@ def run_model(
     name: str, modes: list[str], folder: Path, env: dict, timeout: float, previous: dict, repeats: int = 1
 ) -> dict:
     """The runs of one model, each in its own subprocess, ``repeats`` times with the median kept, and their
-    comparisons; errors recorded, the runs of ``previous`` not re-run kept."""
+    comparisons; errors recorded, the runs of ``previous`` not re-run kept, with their comparisons when both
+    runs of a pair are kept (a pair with one run re-run is dropped: it would compare two runs)."""
     record: dict = {"model": name, "runs": {m: r for m, r in previous.get("runs", {}).items() if m not in modes}}
     done_runs: dict[str, list[dict]] = {mode: [] for mode in modes}
     for repeat in range(repeats):  # settings in turn, so a drift of the machine's speed hits them alike
@@ -281,7 +282,10 @@ def run_model(
     runs = record["runs"]
     record["comparisons"] = {}
     for mode, base in PAIRS.items():
-        if "seconds" in runs.get(mode, {}) and "seconds" in runs.get(base, {}):
+        if mode not in modes and base not in modes:  # neither re-run: the pair's comparison of one earlier run
+            if mode in previous.get("comparisons", {}):
+                record["comparisons"][mode] = previous["comparisons"][mode]
+        elif mode in modes and base in modes and "seconds" in runs.get(mode, {}) and "seconds" in runs.get(base, {}):
             c = compare(folder, name, (base, mode), runs[base], runs[mode])
             record["comparisons"][mode] = c
             log(f"  {mode}/{base} {c['time_ratio']:.2f} (EMD {c['emd_ratio']:.2f}, spectra {c['spectra_ratio']:.2f})")

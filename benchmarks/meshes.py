@@ -22,6 +22,9 @@ SCALING_SOURCE = "igea"
 #: name -> (decimated base vertices, Loop levels); vertices after = 4^levels * base - O(1)
 #: (8.6m is igea itself, 134,345 vertices, not decimated).
 SCALING = {
+    "3k": (3_125, 0),
+    "6k": (6_250, 0),
+    "9k": (9_375, 0),
     "12k": (12_500, 0),
     "25k": (25_000, 0),
     "250k": (62_500, 1),

@@ -58,9 +58,10 @@ SPACING_LIMIT = 0.5
 REMAINDER_TOLERANCE = 1e-4
 #: Extrema on a coarse level are vertices of at least this many neighbours (module notes).
 COARSE_MIN_DEGREE = 5
-#: ``multiresolution="auto"`` uses the hierarchy from this many vertices on: the measured crossover (whole HHT,
-#: PARDISO, median of 3: 0.92× the direct time at 12.5k, 0.99× at 25k; ``benchmarks/results/multiresolution.md``).
-MULTIRESOLUTION_VERTICES = 20_000
+#: ``multiresolution="auto"`` uses the hierarchy from this many vertices on: the measured crossover (whole HHT of
+#: igea decimated, PARDISO, median of 5: 1.17× the direct time at 3,125 vertices, 1.18× at 6,250, 1.00× at 9,375,
+#: 0.88× at 12,500; ``benchmarks/results/multiresolution.md``).
+MULTIRESOLUTION_VERTICES = 10_000
 
 
 def uses_levels(options: EMDOptions, n_vertices: int) -> bool:

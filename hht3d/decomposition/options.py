@@ -179,7 +179,7 @@ class EMDOptions(Record):
     multiresolution: str = option(
         "auto",
         "method filtering: carry each residue on the coarsest level that resolves it "
-        "(auto: from 20,000 vertices, the measured crossover)",
+        "(auto: from 10,000 vertices, the measured crossover)",
         choices=MULTIRESOLUTION,
     )
     evaluation: str = option(

@@ -83,7 +83,7 @@ def test_quality_within_a_hundredth_of_the_direct_path(runs):
 
 
 def test_auto_keeps_the_direct_path_below_the_crossover(sphere, signal):
-    small = Surface(*icosphere(5))
+    small = Surface(*icosphere(4))
     assert small.n_vertices < MULTIRESOLUTION_VERTICES <= sphere.n_vertices
     auto = emd(small, small.vertices[:, 2] ** 3, method="filtering", max_imfs=2)
     assert auto.levels == () and "levels" not in auto.info
