@@ -235,6 +235,13 @@ def k_ring(adj: sp.csr_matrix, k: int) -> sp.csr_matrix:
 
 #: Vertices per block when assembling the least-squares gradient (bounds its transient memory).
 GRADIENT_BLOCK = 1 << 16
+#: A tangent direction whose share ``Σ_j (p_ij · u)²`` of a vertex's neighbour directions is below this fraction
+#: of the largest is not resolved by them: the gradient takes no component along it (the minimum-norm solution),
+#: instead of dividing the neighbours' noise by it.  Point clouds have such vertices, with one or two
+#: neighbours nearly in line: 558 of igea's 1M-point cloud (209 below 1e-3) and 140 of its level 1, where one
+#: made a Riesz vector 7,000 times the median amplitude; no vertex of igea or nefertiti (their smallest share
+#: at the 1e-4 quantile: 0.27 and 0.064).
+RESOLVED_SHARE = 1e-2
 
 
 def tangent_gradient(
@@ -247,7 +254,8 @@ def tangent_gradient(
     ``g`` minimises ``sum_j ((g, P_ij) - (f_j - f_i)/|v_j - v_i|)^2`` over
     tangent vectors (the paper writes ``f_i - f_j``; that is the negative
     gradient).  Exact for linear functions on planar neighbourhoods.  Vertices
-    whose neighbours do not span the plane get the minimum-norm solution.
+    whose neighbours do not span the plane get the minimum-norm solution, and so do those whose
+    neighbours span it only in a direction holding less than :data:`RESOLVED_SHARE` of their spread.
 
     The CSR arrays are written ``block`` vertices at a time, so the transient
     memory is that of one block, not of all edges (about 2.7 GB at a million
@@ -305,7 +313,7 @@ def tangent_gradient_coefficients(
     owner = rows - first  # Σ_j p pᵀ per vertex by bincount: add.at's sums, 1.7x faster
     ptp = np.stack([np.bincount(owner, weights=outer[:, c], minlength=last - first) for c in range(9)], axis=1)
     ptp = ptp.reshape(-1, 3, 3)
-    pinv = np.linalg.pinv(ptp, rcond=1e-10, hermitian=True)
+    pinv = np.linalg.pinv(ptp, rcond=RESOLVED_SHARE, hermitian=True)
     return np.einsum("eij,ej->ei", pinv[rows - first], p) * inv_len[:, None]
 
 

@@ -75,6 +75,22 @@ def test_gradient_of_linear_function_is_exact_on_a_plane(kind):
     np.testing.assert_allclose(grad, np.broadcast_to(g, grad.shape), atol=1e-10)
 
 
+@pytest.mark.parametrize("offset", [1e-4, 1e-3])
+def test_neighbours_nearly_in_line_resolve_the_gradient_along_their_line_only(offset):
+    """A cloud point with two neighbours nearly in line (558 on igea's 1M-point cloud): a value off the linear
+    function by ``δ`` is answered by the least-squares solution along the line, ``δ / 2`` off, not by a
+    component across it ``δ / offset`` large (one such point made a Riesz vector 7,000 times the median)."""
+    points = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [-1.0, offset, 0.0]])
+    normals = np.tile([0.0, 0.0, 1.0], (3, 1))
+    adj = operators.adjacency(3, laplacian=np.ones((3, 3)) - np.eye(3))
+    delta = 1e-3
+    values = points[:, 0] + np.array([0.0, 0.0, delta])  # f = x, the second neighbour off by δ
+    grad = (operators.tangent_gradient(points, normals, adj) @ values).reshape(-1, 3)[0]
+    along = np.array([1.0, -offset / 2, 0.0]) / np.hypot(1.0, offset / 2)  # the neighbours' mean direction
+    assert abs(grad @ np.array([0.0, 1.0, 0.0])) < 2 * delta  # nothing across the line (δ / offset before)
+    assert abs(grad @ along - 1.0) < delta  # along it, the least squares of the two differences
+
+
 @pytest.mark.parametrize("kind", ["lsq", "fem"])
 def test_gradient_of_x_on_sphere_is_tangential_projection(sphere, kind):
     v = sphere.vertices
