@@ -42,7 +42,9 @@ in ``--folder``).  Run::
 
 Writes ``results/multiresolution.json`` and ``results/multiresolution.md`` (the records of models
 and settings not re-run are kept from the previous file).  ``3k``, ``6k``, ``9k``, ``12k`` and ``25k``
-(igea decimated) with nefertiti place the crossover of ``multiresolution="auto"``.
+(igea decimated) with nefertiti place the crossover of ``multiresolution="auto"``.  ``SIZE_cloud``
+(``1m_cloud``) is a generated size's vertices read as a point cloud, whose Laplacian
+(``robust-laplacian``) is intrinsic Delaunay, so that its polynomial filters give the Riesz potential too.
 """
 
 from __future__ import annotations
@@ -90,12 +92,18 @@ CASE_TIMEOUT = 3600
 
 
 def mesh_path(name: str, folder: Path) -> Path | None:
-    """The public model, or the generated mesh of :data:`SCALING` in ``folder`` (made on first use)."""
-    if name not in SCALING:
-        return model_or_skip(name)
-    from benchmarks.meshes import SCALING_SOURCE, generate
+    """The public model, the generated mesh of :data:`SCALING` in ``folder``, or its vertices as a point cloud
+    for ``SIZE_cloud`` (:func:`benchmarks.meshes.cloud_of`; each made on first use)."""
+    from benchmarks.meshes import SCALING_SOURCE, cloud_of, generate
 
     path = folder / f"{SCALING_SOURCE}_{name}.ply"
+    if name.endswith("_cloud") and name.removesuffix("_cloud") in SCALING:
+        mesh = mesh_path(name.removesuffix("_cloud"), folder)
+        if mesh is not None and not path.is_file():
+            log(f"making {name}: {cloud_of(mesh, path)}")
+        return None if mesh is None else path
+    if name not in SCALING:
+        return model_or_skip(name)
     if not path.is_file():
         if model_or_skip(SCALING_SOURCE) is None:
             return None

@@ -137,14 +137,17 @@ POLYNOMIAL_VERTICES = 2_000_000
 MAX_POLYNOMIAL_DEGREE = 4096
 
 
-def uses_polynomial(options: EMDOptions, n_vertices: int, backend: str | None = None, coarse: bool = False) -> bool:
+def uses_polynomial(
+    options: EMDOptions, n_vertices: int, backend: str | None = None, coarse: bool = False, potential: bool = False
+) -> bool:
     """Whether the filter of a surface of ``n_vertices`` is applied as a Chebyshev polynomial: asked for, or
     ``"auto"`` on a ``coarse`` level of :mod:`.multiresolution` (well-shaped by construction, so of low degree),
-    from :data:`POLYNOMIAL_VERTICES` on, or from :data:`~hht3d.linalg.SLOW_FALLBACK_VERTICES` with a slow
-    backend (SuperLU); never with a local cut."""
+    on a level where its pass also gives the IMFs' Riesz potential (``potential``: :func:`potential_usable`, so
+    the level needs no band quadrature), from :data:`POLYNOMIAL_VERTICES` on, or from
+    :data:`~hht3d.linalg.SLOW_FALLBACK_VERTICES` with a slow backend (SuperLU); never with a local cut."""
     if options.cut != "global" or options.evaluation == "solves":
         return False
-    if options.evaluation == "polynomial" or coarse or n_vertices >= POLYNOMIAL_VERTICES:
+    if options.evaluation == "polynomial" or coarse or potential or n_vertices >= POLYNOMIAL_VERTICES:
         return True
     cost = COSTS.get(linalg.check_backend(backend))
     return cost is not None and cost.slow and n_vertices >= SLOW_FALLBACK_VERTICES
@@ -234,7 +237,8 @@ def apply_passband(
 class Filterer:
     """Extracts IMFs one at a time from a residue by the filter of the module notes; ``eligible``, if
     given, masks the vertices that may be extrema (all by default); ``coarse`` says the surface is a coarse
-    level of :mod:`.multiresolution` (:func:`uses_polynomial`)."""
+    level of :mod:`.multiresolution`, and ``potential`` that the IMFs' Riesz potentials are taken from the
+    polynomial's pass on it (both for :func:`uses_polynomial`)."""
 
     def __init__(
         self,
@@ -243,12 +247,13 @@ class Filterer:
         backend: str | None,
         eligible: np.ndarray | None = None,
         coarse: bool = False,
+        potential: bool = False,
     ):
         self.surface = surface
         self.options = options
         self.eligible = eligible
         self.backend = backend
-        self.polynomial = uses_polynomial(options, surface.n_vertices, backend, coarse)
+        self.polynomial = uses_polynomial(options, surface.n_vertices, backend, coarse, potential)
         self._solver: EnvelopeSolver | None = None
         self._recurrence: tuple[float, sp.csr_matrix] | None = None
         self.mass = floored_mass(surface)

@@ -88,7 +88,8 @@ class MultilevelFilterer:
         if index not in self.filterers:
             surface = self.hierarchy.levels[index].surface
             eligible = np.diff(surface.adjacency.indptr) >= COARSE_MIN_DEGREE if index > 0 else None
-            self.filterers[index] = Filterer(surface, self.options, self.backend, eligible, coarse=index > 0)
+            usable = potential_usable(surface)  # its polynomial saves the level's band quadrature too
+            self.filterers[index] = Filterer(surface, self.options, self.backend, eligible, index > 0, usable)
         return self.filterers[index]
 
     def imf(self, residue: np.ndarray) -> tuple[np.ndarray, dict] | None:

@@ -10,9 +10,11 @@ import pytest
 from scipy.special import eval_legendre
 
 from helpers.meshes import icosphere
-from hht3d import Surface, emd
+from hht3d import Surface, data_path, emd, load
+from hht3d.decomposition.envelopes import is_delaunay
 from hht3d.decomposition.multiresolution import MULTIRESOLUTION_VERTICES, SPACING_LIMIT, uses_levels
 from hht3d.decomposition.options import EMDOptions
+from hht3d.geometry.signals import mean_curvature
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +31,10 @@ def signal(sphere):
 
 @pytest.fixture(scope="module")
 def runs(sphere, signal):
-    return {mode: emd(sphere, signal, method="filtering", multiresolution=mode) for mode in ("always", "never")}
+    """Levels and the direct path with the defaults, and levels filtering by solves (as the direct path does)."""
+    found = {mode: emd(sphere, signal, method="filtering", multiresolution=mode) for mode in ("always", "never")}
+    found["solves"] = emd(sphere, signal, method="filtering", multiresolution="always", evaluation="solves")
+    return found
 
 
 def test_the_imfs_telescope_back_to_the_signal(runs, signal):
@@ -54,19 +59,24 @@ def test_each_residue_moves_to_the_coarsest_level_resolving_its_cut(sphere, runs
         assert 0 <= imf["transfer_error"] < 0.05
 
 
-def test_auto_filters_the_coarse_levels_by_polynomial_and_the_input_by_solves(runs):
+def test_auto_filters_by_polynomial_where_it_gives_the_potential_and_by_solves_elsewhere(runs):
     """Coarse levels are well-shaped (their Laplacian is intrinsic Delaunay: tests/geometry/test_hierarchy.py), so
-    ``evaluation="auto"`` takes the polynomial there, and solves on an input below POLYNOMIAL_VERTICES."""
+    ``evaluation="auto"`` takes the polynomial there; on an input below POLYNOMIAL_VERTICES only where its pass
+    gives the Riesz potential too (the icosphere, Delaunay), and solves elsewhere (spot: negative cotangents)."""
     info = runs["always"].info["imfs"]
     assert any(imf["level"] > 0 for imf in info)
+    assert all("degree" in imf and imf["factorizations"] == 0 for imf in info), info
+    spot = load(data_path("spot.ply"))
+    assert not is_delaunay(spot)
+    info = emd(spot, mean_curvature(spot), method="filtering", multiresolution="always", max_imfs=3).info["imfs"]
+    assert any(imf["level"] == 0 for imf in info)
     assert all(("degree" in imf) == (imf["level"] > 0) for imf in info), info
-    assert all(imf["factorizations"] == 0 for imf in info if imf["level"] > 0)
 
 
 def test_the_direct_imfs_up_to_the_first_move_which_differs_by_its_transfer_error(runs, signal, sphere):
-    """Until a residue moves, both paths compute the same filter on the same residue; the IMF whose residue
-    moves differs from the direct one by exactly ``r_k − P R r_k``, whose norm ``transfer_error`` reports."""
-    on, off = runs["always"], runs["never"]
+    """Until a residue moves, both paths compute the same filter (by solves) on the same residue; the IMF whose
+    residue moves differs from the direct one by exactly ``r_k − P R r_k``, whose norm ``transfer_error`` reports."""
+    on, off = runs["solves"], runs["never"]
     moved = next(k for k, imf in enumerate(on.info["imfs"]) if imf["residue_level"] > imf["level"])
     np.testing.assert_allclose(on.imfs[:moved], off.imfs[:moved], atol=1e-10 * np.abs(signal).max())
     mass = sphere.mass_diagonal
