@@ -1,7 +1,6 @@
 """Discrete differential operators on triangle meshes and point clouds.
 
-All functions are pure: arrays in, arrays or SciPy sparse matrices out.
-:class:`hht3d.geometry.surface.Surface` caches their results.
+Pure functions, arrays in and arrays or sparse matrices out; :class:`~hht3d.geometry.surface.Surface` caches them.
 
 Conventions
 -----------
@@ -235,12 +234,9 @@ def k_ring(adj: sp.csr_matrix, k: int) -> sp.csr_matrix:
 
 #: Vertices per block when assembling the least-squares gradient (bounds its transient memory).
 GRADIENT_BLOCK = 1 << 16
-#: A tangent direction whose share ``Σ_j (p_ij · u)²`` of a vertex's neighbour directions is below this fraction
-#: of the largest is not resolved by them: the gradient takes no component along it (the minimum-norm solution),
-#: instead of dividing the neighbours' noise by it.  Point clouds have such vertices, with one or two
-#: neighbours nearly in line: 558 of igea's 1M-point cloud (209 below 1e-3) and 140 of its level 1, where one
-#: made a Riesz vector 7,000 times the median amplitude; no vertex of igea or nefertiti (their smallest share
-#: at the 1e-4 quantile: 0.27 and 0.064).
+#: A tangent direction holding less than this share ``Σ_j (p_ij · u)²`` of the largest gets no gradient component
+#: (minimum norm) rather than the neighbours' noise divided by it: cloud points with neighbours nearly in line (558
+#: on igea's 1M-point cloud; one gave a Riesz vector 7,000× the median); none on igea or nefertiti.
 RESOLVED_SHARE = 1e-2
 
 
@@ -253,9 +249,8 @@ def tangent_gradient(
     the unit projection of ``v_j - v_i`` on the tangent plane and the gradient
     ``g`` minimises ``sum_j ((g, P_ij) - (f_j - f_i)/|v_j - v_i|)^2`` over
     tangent vectors (the paper writes ``f_i - f_j``; that is the negative
-    gradient).  Exact for linear functions on planar neighbourhoods.  Vertices
-    whose neighbours do not span the plane get the minimum-norm solution, and so do those whose
-    neighbours span it only in a direction holding less than :data:`RESOLVED_SHARE` of their spread.
+    gradient).  Exact for linear functions on planar neighbourhoods.  Vertices whose neighbours
+    do not span the plane (to :data:`RESOLVED_SHARE`) get the minimum-norm solution.
 
     The CSR arrays are written ``block`` vertices at a time, so the transient
     memory is that of one block, not of all edges (about 2.7 GB at a million
