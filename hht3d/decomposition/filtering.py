@@ -236,9 +236,8 @@ def apply_passband(
 
 class Filterer:
     """Extracts IMFs one at a time from a residue by the filter of the module notes; ``eligible``, if
-    given, masks the vertices that may be extrema (all by default); ``coarse`` says the surface is a coarse
-    level of :mod:`.multiresolution`, and ``potential`` that the IMFs' Riesz potentials are taken from the
-    polynomial's pass on it (both for :func:`uses_polynomial`)."""
+    given, masks the vertices that may be extrema (all by default); ``coarse`` (a coarse level of
+    :mod:`.multiresolution`) and ``potential`` (Riesz potentials from the pass) as for :func:`uses_polynomial`."""
 
     def __init__(
         self,
@@ -253,6 +252,7 @@ class Filterer:
         self.options = options
         self.eligible = eligible
         self.backend = backend
+        self.with_potential = potential
         self.polynomial = uses_polynomial(options, surface.n_vertices, backend, coarse, potential)
         self._solver: EnvelopeSolver | None = None
         self._recurrence: tuple[float, sp.csr_matrix] | None = None

@@ -107,8 +107,8 @@ class MultilevelFilterer:
         if cut is None:
             return None
         t, _, info = cut
-        usable = potential_usable(filterer.surface)  # else the Riesz stage takes its band quadrature
-        passed, potential = filterer.filtered_with_potential(t, r, info, potential=usable)
+        # without the potential here, the Riesz stage takes its band quadrature
+        passed, potential = filterer.filtered_with_potential(t, r, info, potential=filterer.with_potential)
         low = r - passed
         target = self.hierarchy.coarsest_resolving(info["cut_frequency"], SPACING_LIMIT, here)
         carried = self.hierarchy.restrict(low, here, target)
