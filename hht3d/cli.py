@@ -116,8 +116,8 @@ def _execute(plan: Pipeline, args: argparse.Namespace) -> int:
     check_resources(plan)
     for line in resource_lines(plan):
         _LOG.info(line)
-    with folder.lock():  # a URL folder's, for the whole run (a stop releases it in clean_stop)
-        try:
+    try:  # a stop while the lock is being taken is cleaned too: release_all removes it if it landed
+        with folder.lock():  # a URL folder's, for the whole run (released as the block ends, a stop included)
             rows = run_pipeline(
                 plan,
                 scheduler=args.scheduler,
@@ -138,18 +138,18 @@ def _execute(plan: Pipeline, args: argparse.Namespace) -> int:
             if plan.summary:
                 write_summary(rows, plan.folder, folder.run, plan.storage_options)
                 print(redact(f"summary: {', '.join(map(str, summary_paths(plan.folder)))}"))
-        except Stopped as stop:
-            clean_stop(folder.part_folders(plan.written_paths()))
-            print(
-                f"hht3d: stopped by {stop}: {_not_done(plan, folder)}; temporary files removed; run again with "
-                "--resume to finish",
-                file=sys.stderr,
-                flush=True,
-            )
-            sys.stdout.flush()
-            os._exit(stop.exit_code)  # worker threads of the stopped run are not waited for
-        except ClusterLost as exc:
-            raise ClusterLost(f"{exc}; {_not_done(plan, folder)}; run again with --resume to finish") from None
+    except Stopped as stop:
+        clean_stop(folder.part_folders(plan.written_paths()))
+        print(
+            f"hht3d: stopped by {stop}: {_not_done(plan, folder)}; temporary files removed; run again with "
+            "--resume to finish",
+            file=sys.stderr,
+            flush=True,
+        )
+        sys.stdout.flush()
+        os._exit(stop.exit_code)  # worker threads of the stopped run are not waited for
+    except ClusterLost as exc:
+        raise ClusterLost(f"{exc}; {_not_done(plan, folder)}; run again with --resume to finish") from None
     failed = failures(rows)
     if failed:
         raise PipelineError(f"{len(failed)} of {len(rows)} inputs failed; first: {failed[0]}")

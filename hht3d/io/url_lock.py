@@ -118,9 +118,9 @@ def url_lock(folder: str, storage_options: dict | None = None, run: str | None =
     try:
         yield
     finally:
+        held.release()  # still in _HELD meanwhile: a stop that cuts the release short has release_all redo it
         with _GUARD:
             _HELD.pop(url, None)
-        held.release()
 
 
 def release_all() -> None:
@@ -159,12 +159,14 @@ def _acquire(url: str, storage_options: dict | None, run: str | None) -> _Held:
         _PENDING[url] = (fs, path, record)
     try:
         held = _create(url, fs, path, record)
-        with _GUARD:  # held before no longer pending: a stop between the two finds it either way
-            _HELD[url] = held
-        return held
-    finally:
+    except Exception:  # not a stop: a stop leaves it pending, for release_all to remove if it landed
         with _GUARD:
             _PENDING.pop(url, None)
+        raise
+    with _GUARD:  # held and no longer pending at once: a stop finds it one way or the other
+        _HELD[url] = held
+        _PENDING.pop(url, None)
+    return held
 
 
 def _create(url: str, fs: Any, path: str, record: dict) -> _Held:

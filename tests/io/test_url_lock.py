@@ -224,3 +224,26 @@ def test_a_store_without_conditional_writes_warns_once_at_run_start(caplog):
         "memory://unlocked: the output folder is not locked, as this store has no conditional writes here: if two "
         "runs write into it at once, the last writer wins (see Safety in the user guide)"
     ]
+
+
+def test_a_stop_while_the_lock_is_written_releases_it(store, monkeypatch):
+    """A stop that reaches the run after its lock object landed on the store but before the run knew
+    it held it (the create request still in flight): the stop's release_all removes the object."""
+    from hht3d.stopping import Stopped
+
+    kind, endpoint, options, fs = store
+    if kind == "s3rver":
+        pytest.skip("s3rver ignores If-None-Match: no lock is held there")
+    checked = url_locks._checked
+
+    def stopped_after_writing(*args):
+        checked(*args)._stop.set()  # the object is on the store now; no heartbeat
+        raise Stopped(signal.SIGTERM)
+
+    monkeypatch.setattr(url_locks, "_checked", stopped_after_writing)
+    with pytest.raises(Stopped):
+        with url_locks.url_lock(f"s3://{BUCKET}/in-flight", options, "run-in-flight"):
+            pass
+    assert _lock_record(fs, "in-flight")["run"] == "run-in-flight"
+    url_locks.release_all()
+    assert _lock_record(fs, "in-flight") is None
