@@ -159,9 +159,9 @@ class Recorder:
         recorder = self
         init, factorize = impl.__init__, impl.factorize
 
-        def timed_init(pattern, *args):
+        def timed_init(pattern, *args, **kwargs):
             start, cpu_start = time.perf_counter(), time.process_time()
-            init(pattern, *args)
+            init(pattern, *args, **kwargs)
             recorder._count("analysis", start, cpu_start)
 
         def timed_factorize(pattern, a):

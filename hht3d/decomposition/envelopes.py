@@ -238,6 +238,7 @@ class EnvelopeSolver:
     def __init__(self, surface: Surface, backend: str | None):
         self.backend = linalg.check_backend(backend)
         self.energies = envelope_energies(surface)
+        self._points = surface.vertices  # for a backend that orders the pattern by them
         self._symbolic: linalg.SymbolicFactorization | None = None
 
     @property
@@ -247,7 +248,7 @@ class EnvelopeSolver:
     def factorize(self, matrix: sp.csr_matrix) -> linalg.Factor:
         """Numeric factorization of an SPD matrix on the shared pattern (analysed on first use)."""
         if self._symbolic is None:
-            self._symbolic = linalg.SymbolicFactorization(matrix, self.backend)
+            self._symbolic = linalg.SymbolicFactorization(matrix, self.backend, points=self._points)
         return self._symbolic.factorize(matrix)
 
     def solve(self, f: np.ndarray, constrained: np.ndarray, tension: float, spacing: float) -> np.ndarray:

@@ -24,8 +24,10 @@ Backends, in order of preference
     workspace in one process-wide ``cholmod_common``.
 ``"superlu"``
     SciPy's SuperLU, always available (a plain ``pip install hht3d``): used
-    as a Cholesky, without pivoting, its minimum-degree ordering computed on
-    the first matrix of a pattern and reused (:mod:`hht3d.linalg.superlu`).
+    as a Cholesky, without pivoting, ordered once per pattern and the ordering
+    reused: by nested dissection of the surface's vertices
+    (:mod:`hht3d.linalg.ordering`), or by its minimum degree when no positions
+    are given (:mod:`hht3d.linalg.superlu`).
     Thread-safe: SuperLU 5 keeps no global state, and SciPy releases the GIL
     around it.
 ``"cg"``
@@ -116,6 +118,15 @@ class Backend:
     iterative : bool
         Solves to a relative residual instead of round-off: ``pattern`` then also takes
         the caller's accuracy as ``pattern(csr, module, tol)``.
+    orders_by_points : bool
+        Has no fill-reducing ordering of its own that suits a surface's systems: ``pattern`` then
+        also takes the rows' positions, when the caller has them, as ``pattern(csr, module, points=)``
+        (:func:`~hht3d.linalg.ordering.nested_dissection`).
+    factorization_iterations : int
+        Iterations of :func:`~hht3d.linalg.jacobi.jacobi_cg` on a surface's ``L + σM`` (4-5
+        right-hand sides) that take about as long as one factorization and solve on this backend:
+        the Riesz quadrature solves a shift by them when they suffice
+        (:func:`~hht3d.spectral.quadrature.quadrature_part`).  0: always factorize.
     """
 
     name: str
@@ -126,6 +137,8 @@ class Backend:
     pattern: Callable = field(repr=False)
     lock: threading.RLock | None = field(default=None, repr=False, compare=False)
     iterative: bool = False
+    orders_by_points: bool = False
+    factorization_iterations: int = 0
 
     def module(self) -> Any:
         """The first of :attr:`modules`, all imported on first use; ``None`` if one is absent."""
@@ -300,6 +313,7 @@ register_backend(
         "pypardiso is not installed (MKL, x86-64 only): pip install 'hht3d[fast]'",
         PardisoPattern,
         PARDISO_LOCK,
+        factorization_iterations=15,  # 13-25 measured on nefertiti, igea and igea at 250k
     )
 )
 register_backend(
@@ -311,6 +325,7 @@ register_backend(
         "cvxopt is not installed (no wheel for this platform?): pip install 'hht3d[fast]'",
         CholmodPattern,
         CHOLMOD_LOCK,
+        factorization_iterations=15,  # as PARDISO's
     )
 )
 register_backend(
@@ -318,9 +333,11 @@ register_backend(
         "superlu",
         "scipy",
         ("scipy.sparse.linalg",),
-        "SciPy SuperLU without pivoting, MMD ordering once per pattern, then reused",
+        "SciPy SuperLU without pivoting, nested dissection (or MMD) once per pattern, then reused",
         "scipy is always installed",
         SuperLUPattern,
+        orders_by_points=True,
+        factorization_iterations=60,  # 53-160 measured on nefertiti, igea and igea at 250k
     )
 )
 register_backend(

@@ -35,6 +35,9 @@ class SymbolicFactorization:
     tol : float, optional
         The relative accuracy the caller needs, for an iterative backend
         (``cg``: :func:`~hht3d.linalg.cg.rtol_for`); direct ones solve to round-off.
+    points : (n, 3) array_like, optional
+        The position of each row (a surface's vertices), from which a backend without an
+        ordering of its own (``superlu``) orders the pattern by nested dissection.
 
     Notes
     -----
@@ -49,7 +52,7 @@ class SymbolicFactorization:
     lock, so tasks of the threads scheduler may share the process safely.
     """
 
-    def __init__(self, pattern: Any, backend: str | None = None, tol: float | None = None) -> None:
+    def __init__(self, pattern: Any, backend: str | None = None, tol: float | None = None, points: Any = None) -> None:
         pattern = _as_square_csr(pattern)
         self.backend = backends.check_backend(backend)
         check_memory(pattern.shape[0], self.backend)
@@ -58,7 +61,8 @@ class SymbolicFactorization:
         self._lock = entry.lock or contextlib.nullcontext()
         with self._lock:
             accuracy = (tol,) if entry.iterative else ()
-            self._impl = entry.pattern(pattern, entry.module(), *accuracy)
+            where = {"points": points} if entry.orders_by_points and points is not None else {}
+            self._impl = entry.pattern(pattern, entry.module(), *accuracy, **where)
         self.n_factorizations = 0
 
     def factorize(self, a: Any) -> Factor:

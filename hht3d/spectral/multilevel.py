@@ -6,8 +6,9 @@ on level ``ℓ`` and, above its own cut ``ω_c``, holds what the filter passed: 
 ``L^{-1/2} f̃`` needs the quadrature of :func:`~hht3d.spectral.quadrature.quadrature_nodes`
 only on ``[λ_lo, M̄]`` with ``λ_lo = (`` :data:`BAND_FLOOR` ``· ω_c)²``, on level ``ℓ``:
 fewer shifts (the condition number is ``M̄ / λ_lo``, not ``M̄ / λ_1``) on a smaller system.
-The IMFs of one level share the shifts of the lowest cut among them, each shift factorized
-once for all of them.
+The IMFs of one level share the shifts of the lowest cut among them, each shift solved once
+for all of them (:func:`~hht3d.spectral.quadrature.quadrature_part`: the largest by Jacobi-CG,
+the others factorized).
 The Riesz vectors ``∇ L^{-1/2} f̃`` are taken on level ``ℓ`` (Eq. 17), prolonged to the input's
 vertices (:class:`~hht3d.geometry.hierarchy.Hierarchy`) and projected on its tangent planes.
 
@@ -61,7 +62,6 @@ from .eigenpairs import upper_bound
 from .options import RieszOptions
 from .quadrature import QuadraturePlan, combine_quadrature_parts, quadrature_nodes, quadrature_part
 from .riesz_transform import riesz, vertex_gradient
-from .shifts import shift_analysis
 
 __all__ = [
     "BAND_FLOOR",
@@ -98,7 +98,7 @@ def band_potential(surface: Surface, f: np.ndarray, floor: float, tol: float, ba
     mbar = upper_bound(surface)
     low = min(floor, 0.5 * mbar)
     plan = QuadraturePlan((low, mbar), tol, *quadrature_nodes(low, mbar, tol))
-    part = quadrature_part(surface, f, plan, symbolic=shift_analysis(surface, backend, tol))
+    part = quadrature_part(surface, f, plan, backend=backend)
     return combine_quadrature_parts(surface, [part])
 
 

@@ -19,9 +19,11 @@ from .. import linalg
 from ..errors import InputError, NumericalError
 from ..geometry.signals import fluctuation
 from ..geometry.surface import Surface
+from ..linalg.cg import rtol_for
+from ..linalg.jacobi import jacobi_cg
 from .eigenpairs import spectral_bounds
 from .options import MIN_TOL, RIESZ_DEFAULTS
-from .shifts import shift_analysis, shifted_solve
+from .shifts import shift_analysis, shifted_matrix, shifted_solve
 
 __all__ = [
     "quadrature_nodes",
@@ -164,6 +166,11 @@ def quadrature_part(
 ) -> np.ndarray:
     """Partial sum ``Σ_j w_j (L + σ_j M)⁻¹ M f̃`` over the shifts ``j ≡ group (mod groups)``.
 
+    From the largest shift down, each is solved by Jacobi-preconditioned CG
+    (:func:`~hht3d.linalg.jacobi.jacobi_cg`, relative residual
+    :func:`~hht3d.linalg.cg.rtol_for` ``(tol)``) while it converges within the backend's
+    ``factorization_iterations``; the first that does not, and every smaller one, are factorized.
+
     Parameters
     ----------
     surface : Surface
@@ -186,10 +193,15 @@ def quadrature_part(
     rhs = (surface.mass_diagonal * np.atleast_2d(g)).T  # (n, k): M f̃, one column per signal
     total = np.zeros_like(rhs)
     mine = slice(int(group), None, int(groups))
-    if rhs.size and len(plan.sigmas[mine]):
-        symbolic = symbolic or shift_analysis(surface, backend, plan.tol)
-        for sigma, weight in zip(plan.sigmas[mine], plan.weights[mine]):
-            total += weight * shifted_solve(surface, sigma, rhs, symbolic=symbolic)
+    solver = linalg.SOLVER_BACKENDS[symbolic.backend if symbolic else linalg.check_backend(backend)]
+    budget = solver.factorization_iterations
+    for sigma, weight in sorted(zip(plan.sigmas[mine], plan.weights[mine]), reverse=True) if rhs.size else ():
+        x = jacobi_cg(shifted_matrix(surface, sigma), rhs, rtol_for(plan.tol), budget) if budget else None
+        if x is None:  # a smaller shift needs more iterations still: factorize from here on
+            budget = 0
+            symbolic = symbolic or shift_analysis(surface, backend, plan.tol)
+            x = shifted_solve(surface, sigma, rhs, symbolic=symbolic)
+        total += weight * x
     return total.T.reshape(g.shape)
 
 

@@ -53,9 +53,10 @@ split the shifts into groups and run one task per group:
              for group in range(groups)]
     result = combine_quadrature_parts(surface, parts)
 
-Each part factorizes its shifts once (:func:`shifted_solve`) and solves all
-signals as one multi-column right-hand side; factorizations never leave the
-task.  :func:`fractional_laplacian` does the same with one group.
+Each part solves each of its shifts once for all signals, as one multi-column
+right-hand side: the largest by Jacobi-preconditioned CG, the rest factorized
+(:func:`shifted_solve`); factorizations never leave the task.
+:func:`fractional_laplacian` does the same with one group.
 """
 
 from __future__ import annotations

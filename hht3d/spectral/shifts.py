@@ -110,4 +110,4 @@ def shift_analysis(
         The quadrature's relative accuracy, which an iterative backend's solves keep
         (:class:`~hht3d.linalg.symbolic.SymbolicFactorization`).
     """
-    return linalg.SymbolicFactorization(shifted_matrix(surface, 1.0), backend, tol)
+    return linalg.SymbolicFactorization(shifted_matrix(surface, 1.0), backend, tol, points=surface.vertices)
