@@ -85,8 +85,9 @@ def systems(surface) -> dict:
     }
 
 
-def candidates(a) -> dict:
-    """``name -> (first(), again())``: each returns a solve function; ``again`` reuses the analysis."""
+def candidates(a, points) -> dict:
+    """``name -> (first(), again())``: each returns a solve function; ``again`` reuses the analysis.  The
+    installed backends get the vertices ``points``, as hht3d gives them (SuperLU orders by them)."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
@@ -96,7 +97,7 @@ def candidates(a) -> dict:
     for name in linalg.available_backends():
 
         def first(name=name):
-            symbolic = linalg.SymbolicFactorization(a, name)
+            symbolic = linalg.SymbolicFactorization(a, name, points=points)
             out[name + ":symbolic"] = symbolic
             return symbolic.factorize(a).solve
 
@@ -162,7 +163,7 @@ def factorization_part(name: str) -> list[dict]:
     for kind, a in systems(surface).items():
         b = np.random.default_rng(1).standard_normal(a.shape[0])
         reference = None
-        for cand, (first, again) in candidates(a).items():
+        for cand, (first, again) in candidates(a, surface.vertices).items():
             solve, t_first = timed(first)
             solve, t_again = timed(again)
             x, t_solve = timed(lambda solve=solve: solve(b))

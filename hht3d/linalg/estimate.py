@@ -73,11 +73,11 @@ class Cost:
 
 
 #: Fitted costs by backend name (``benchmarks/bench_backends.py`` prints them after each run;
-#: these from results/backends.json: nefertiti and igea, 2026-12-02).
+#: these from results/backends.json: nefertiti and igea, 2026-12-07, SuperLU ordered by nested dissection).
 COSTS: dict[str, Cost] = {
-    "pardiso": Cost(a=5725.4, b=0.0, seconds_50k=32.18, exponent=0.85),
-    "cholmod": Cost(a=5356.3, b=0.0, seconds_50k=30.54, exponent=0.684),
-    "superlu": Cost(a=0.0, b=445.2, seconds_50k=106.27, exponent=1.41, slow=True),
+    "pardiso": Cost(a=5209.4, b=0.0, seconds_50k=17.47, exponent=0.747),
+    "cholmod": Cost(a=0.0, b=271.2, seconds_50k=18.45, exponent=1.104),
+    "superlu": Cost(a=0.0, b=366.2, seconds_50k=76.0, exponent=0.985, slow=True),
 }
 
 
