@@ -123,7 +123,7 @@ class Backend:
         also takes the rows' positions, when the caller has them, as ``pattern(csr, module, points=)``
         (:func:`~hht3d.linalg.ordering.nested_dissection`).
     factorization_iterations : int
-        Iterations of :func:`~hht3d.linalg.jacobi.jacobi_cg` on a surface's ``L + σM`` (4-5
+        Iterations of :func:`~hht3d.linalg.pcg.jacobi_cg` on a surface's ``L + σM`` (4-5
         right-hand sides) that take about as long as one factorization and solve on this backend:
         the Riesz quadrature solves a shift by them when they suffice
         (:func:`~hht3d.spectral.quadrature.quadrature_part`).  0: always factorize.

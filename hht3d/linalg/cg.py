@@ -33,6 +33,7 @@ import scipy.sparse as sp
 
 from ..errors import NumericalError
 from .factor import Factor, Pattern
+from .pcg import pcg
 
 __all__ = ["CGPattern", "DEFAULT_RTOL", "MAX_ITERATIONS", "rtol_for"]
 
@@ -74,39 +75,18 @@ class CGPattern:
         rtol = self.rtol
 
         def solve(b: np.ndarray) -> np.ndarray:
-            if b.ndim == 1:
-                return _pcg(a, preconditioner, b, rtol)
-            return np.column_stack([_pcg(a, preconditioner, column, rtol) for column in b.T]).reshape(b.shape)
+            x, reached = pcg(a, b, lambda r: _columns(preconditioner, r), rtol, MAX_ITERATIONS)
+            if reached > rtol:
+                raise NumericalError(
+                    f"CG did not converge on the {a.shape[0]:,}-row SPD system ({a.nnz:,} entries) in "
+                    f"{MAX_ITERATIONS} iterations: relative residual {reached:.2e}, asked {rtol:.1e}; the cg backend "
+                    "is for second-order systems (M + tL, L + σM): use a direct backend (pardiso, cholmod, superlu)"
+                )
+            return x
 
         return Factor(solve, a.shape[0])
 
 
-def _pcg(a: sp.csr_matrix, preconditioner: Any, b: np.ndarray, rtol: float) -> np.ndarray:
-    """``x`` with ``‖b − a x‖ ≤ rtol ‖b‖`` by preconditioned CG from ``x = 0``."""
-    x = np.zeros_like(b)
-    bound = rtol * np.linalg.norm(b)
-    if bound == 0:
-        return x
-    r = b.copy()
-    z = preconditioner @ r
-    p = z.copy()
-    rz = r @ z
-    for _ in range(MAX_ITERATIONS):
-        q = a @ p
-        curvature = p @ q
-        if not curvature > 0:
-            raise NumericalError(f"CG met pᵀAp = {curvature:.3g} on the {a.shape[0]:,}-row system: not SPD")
-        step = rz / curvature
-        x += step * p
-        r -= step * q
-        if np.linalg.norm(r) <= bound:
-            return x
-        z = preconditioner @ r
-        rz, previous = r @ z, rz
-        p = z + (rz / previous) * p
-    reached = np.linalg.norm(b - a @ x) / np.linalg.norm(b)
-    raise NumericalError(
-        f"CG did not converge on the {a.shape[0]:,}-row SPD system ({a.nnz:,} entries) in {MAX_ITERATIONS} "
-        f"iterations: relative residual {reached:.2e}, asked {rtol:.1e}; the cg backend is for second-order "
-        "systems (M + tL, L + σM): use a direct backend (pardiso, cholmod, superlu)"
-    )
+def _columns(preconditioner: Any, r: np.ndarray) -> np.ndarray:
+    """The V-cycle applied to each column of ``r`` (n, k)."""
+    return np.column_stack([preconditioner @ column for column in r.T])

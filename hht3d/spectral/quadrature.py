@@ -20,7 +20,7 @@ from ..errors import InputError, NumericalError
 from ..geometry.signals import fluctuation
 from ..geometry.surface import Surface
 from ..linalg.cg import rtol_for
-from ..linalg.jacobi import jacobi_cg
+from ..linalg.pcg import jacobi_cg
 from .eigenpairs import spectral_bounds
 from .options import MIN_TOL, RIESZ_DEFAULTS
 from .shifts import shift_analysis, shifted_matrix, shifted_solve
@@ -167,7 +167,7 @@ def quadrature_part(
     """Partial sum ``Σ_j w_j (L + σ_j M)⁻¹ M f̃`` over the shifts ``j ≡ group (mod groups)``.
 
     From the largest shift down, each is solved by Jacobi-preconditioned CG
-    (:func:`~hht3d.linalg.jacobi.jacobi_cg`, relative residual
+    (:func:`~hht3d.linalg.pcg.jacobi_cg`, relative residual
     :func:`~hht3d.linalg.cg.rtol_for` ``(tol)``) while it converges within the backend's
     ``factorization_iterations``; the first that does not, and every smaller one, are factorized.
 

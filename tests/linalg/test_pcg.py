@@ -1,4 +1,4 @@
-"""Jacobi-preconditioned CG on many right-hand sides (hht3d.linalg.jacobi) against a direct solve."""
+"""Jacobi-preconditioned CG on many right-hand sides (hht3d.linalg.pcg) against a direct solve."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from hht3d.linalg.jacobi import jacobi_cg
+from hht3d.linalg.pcg import jacobi_cg
 from hht3d.spectral.shifts import shifted_matrix
 
 
