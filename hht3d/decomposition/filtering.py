@@ -95,7 +95,7 @@ from scipy.special import betainc
 
 from .. import linalg
 from ..geometry.surface import Surface
-from ..linalg.chebyshev import apply_series, chebyshev_series, recurrence_matrix, spectral_radius_bound
+from ..linalg.chebyshev import Recurrence, apply_series, chebyshev_series, recurrence_matrix, spectral_radius_bound
 from ..linalg.estimate import COSTS, SLOW_FALLBACK_VERTICES
 from .envelopes import EnvelopeSolver, floored_mass, is_delaunay, membrane_laplacian
 from .extrema import active_extrema
@@ -175,7 +175,7 @@ def potential_response(lam: np.ndarray, t: float, options: EMDOptions) -> np.nda
         return np.where(lam > 0, filter_response(lam, t, options) / np.sqrt(t * lam), 0.0)
 
 
-def polynomial_operator(surface: Surface) -> tuple[float, sp.csr_matrix]:
+def polynomial_operator(surface: Surface) -> tuple[float, Recurrence]:
     """``λ̄ ≥ λ_max(M̃⁻¹L)`` (membrane ``L``, floored areas ``M̃``) and the
     :func:`~hht3d.linalg.chebyshev.recurrence_matrix` of the polynomial filter on ``surface``."""
     lap, mass = membrane_laplacian(surface), floored_mass(surface)
@@ -255,7 +255,7 @@ class Filterer:
         self.with_potential = potential
         self.polynomial = uses_polynomial(options, surface.n_vertices, backend, coarse, potential)
         self._solver: EnvelopeSolver | None = None
-        self._recurrence: tuple[float, sp.csr_matrix] | None = None
+        self._recurrence: tuple[float, Recurrence] | None = None
         self.mass = floored_mass(surface)
         self.n_solves = self.n_products = 0
         self.counts = (math.inf, math.inf)
@@ -351,7 +351,7 @@ class Filterer:
     def _potential_series(self, width: float, tol: float = POTENTIAL_TOLERANCE) -> np.ndarray | None:
         return self._series(lambda lam: potential_response(lam, width, self.options), width, tol)
 
-    def _operator(self) -> tuple[float, sp.csr_matrix]:
+    def _operator(self) -> tuple[float, Recurrence]:
         """:func:`polynomial_operator` of the surface (made once)."""
         if self._recurrence is None:
             self._recurrence = polynomial_operator(self.surface)

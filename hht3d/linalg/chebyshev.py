@@ -20,6 +20,13 @@ degree of about ``√(λ̄ / λ_c)`` times a factor set by the transition's
 sharpness and ``tol`` (Chebyshev points crowd at the ends of the interval at
 spacing ``λ̄ / n²``).  So ``λ̄`` should be tight: a few badly shaped vertices
 set it.
+
+The products stream the matrix from memory and gather the vector's entries at each row's
+columns.  :func:`recurrence_matrix` numbers the rows in reverse Cuthill–McKee order, which
+keeps each row's columns close together: on 1M vertices the gathers then hit the cache and a
+product takes 0.69–0.72 of its time in the file's order (a subdivided mesh and its vertices
+as a point cloud); below about 200k vertices the whole matrix fits in the cache and the order
+changes nothing.
 """
 
 from __future__ import annotations
@@ -28,10 +35,12 @@ import contextlib
 import math
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.fft
 import scipy.sparse as sp
+from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ..errors import NumericalError
 from .threads import usable_cores
@@ -39,6 +48,7 @@ from .threads import usable_cores
 __all__ = [
     "spectral_radius_bound",
     "chebyshev_series",
+    "Recurrence",
     "recurrence_matrix",
     "apply_series",
     "POWER_ITERATIONS",
@@ -150,13 +160,30 @@ def chebyshev_series(
     raise NumericalError(f"the Chebyshev series needs more than {MAX_DEGREE} degrees for tolerance {tol:g}")
 
 
-def recurrence_matrix(stiffness: sp.spmatrix, mass: np.ndarray, top: float) -> sp.csr_matrix:
-    """``Y₂ = 4 M⁻¹L / λ̄ − 2I``: twice the argument ``2A/λ̄ − I`` of the series, as one sparse matrix.
+@dataclass(frozen=True)
+class Recurrence:
+    """The matrix of :func:`apply_series`'s recurrence, its rows in a cache-friendly order (module notes).
+
+    Attributes
+    ----------
+    matrix : csr (n, n)
+        ``Y₂[order][:, order]``, with ``Y₂ = 4 M⁻¹L / λ̄ − 2I``.
+    order : (n,) int ndarray
+        The vertex of each row of ``matrix``.
+    """
+
+    matrix: sp.csr_matrix
+    order: np.ndarray
+
+
+def recurrence_matrix(stiffness: sp.spmatrix, mass: np.ndarray, top: float) -> Recurrence:
+    """``Y₂ = 4 M⁻¹L / λ̄ − 2I``: twice the argument ``2A/λ̄ − I`` of the series, as one sparse matrix, its
+    rows and columns in reverse Cuthill–McKee order (module notes).
 
     Parameters
     ----------
     stiffness : sparse (n, n)
-        ``L``.
+        ``L``, symmetric.
     mass : (n,) ndarray
         The diagonal of ``M``.
     top : float
@@ -165,17 +192,24 @@ def recurrence_matrix(stiffness: sp.spmatrix, mass: np.ndarray, top: float) -> s
     Examples
     --------
     >>> import scipy.sparse as sp
-    >>> recurrence_matrix(sp.csr_matrix([[1.0, -1.0], [-1.0, 1.0]]), np.ones(2), 2.0).toarray()
+    >>> y2 = recurrence_matrix(sp.csr_matrix([[1.0, -1.0], [-1.0, 1.0]]), np.ones(2), 2.0)
+    >>> y2.matrix.toarray()
     array([[ 0., -2.],
            [-2.,  0.]])
     """
-    y2 = sp.csr_matrix(sp.diags(4.0 / (top * np.asarray(mass, dtype=float))) @ stiffness)
+    lap = sp.csr_matrix(stiffness)
+    order = reverse_cuthill_mckee(lap, symmetric_mode=True).astype(np.int64)
+    y2 = lap[order]  # a copy: its rows in the new order, then its columns renamed
+    inverse = np.empty(len(order), dtype=y2.indices.dtype)
+    inverse[order] = np.arange(len(order))
+    y2.indices = inverse[y2.indices]
+    y2.data *= np.repeat(4.0 / (top * np.asarray(mass, dtype=float)[order]), np.diff(y2.indptr))
     y2.setdiag(y2.diagonal() - 2.0)
     y2.sort_indices()
-    return y2
+    return Recurrence(y2, order)
 
 
-def apply_series(coefficients: np.ndarray, y2: sp.csr_matrix, v: np.ndarray, threads: int | None = None) -> np.ndarray:
+def apply_series(coefficients: np.ndarray, y2: Recurrence, v: np.ndarray, threads: int | None = None) -> np.ndarray:
     """``p(A) v`` for ``p = Σ c_j T_j(2λ/λ̄ − 1)``, by the three-term recurrence ``T_{j+1}(Y) v = Y₂ T_j(Y) v −
     T_{j−1}(Y) v``.
 
@@ -185,7 +219,7 @@ def apply_series(coefficients: np.ndarray, y2: sp.csr_matrix, v: np.ndarray, thr
     ----------
     coefficients : (d + 1,) or (s, d + 1) ndarray
         From :func:`chebyshev_series`: one series, or ``s`` of them (shorter ones padded with zeros).
-    y2 : sparse (n, n)
+    y2 : Recurrence
         :func:`recurrence_matrix` with the series' ``λ̄``.
     v : (n,) or (n, k) ndarray
         Signals (columns), transformed together.
@@ -208,11 +242,11 @@ def apply_series(coefficients: np.ndarray, y2: sp.csr_matrix, v: np.ndarray, thr
     >>> bool(np.allclose(p, scipy.linalg.expm(-path.toarray()) @ v))
     True
     """
-    v = np.asarray(v, dtype=float)
+    v = np.asarray(v, dtype=float)[y2.order]
     c = np.asarray(coefficients, dtype=float)
     rows = c[:, None] if c.ndim == 1 else c.T  # (d + 1, s): row j scales T_j v in each series
     out = np.multiply.outer(rows[0], v)
-    blocks = _row_blocks(y2, usable_cores() if threads is None else threads)
+    blocks = _row_blocks(y2.matrix, usable_cores() if threads is None else threads)
     # T_{j-1} and T_j alternate between two vectors: each block overwrites its own rows of T_{j-1} with
     # T_{j+1} = Y₂ T_j − T_{j−1}, which only its own rows of T_{j−1} enter
     vectors = [np.array(v), np.empty_like(v)]
@@ -237,7 +271,9 @@ def apply_series(coefficients: np.ndarray, y2: sp.csr_matrix, v: np.ndarray, thr
                 step(0, j, weights)
             else:
                 list(pool.map(step, range(len(blocks)), [j] * len(blocks), [weights] * len(blocks)))
-    return out[0] if c.ndim == 1 else out
+    result = np.empty_like(out)
+    result[:, y2.order] = out  # back to the vertices' order
+    return result[0] if c.ndim == 1 else result
 
 
 def _row_blocks(y2: sp.csr_matrix, threads: int) -> list[tuple[slice, sp.csr_matrix]]:

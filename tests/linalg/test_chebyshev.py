@@ -7,6 +7,7 @@ Oracles: the dense generalized eigendecomposition of ``(L, M)`` on a small icosp
 import numpy as np
 import pytest
 import scipy.linalg as sl
+import scipy.sparse as sp
 
 from helpers.meshes import icosphere
 from hht3d import Surface
@@ -109,3 +110,30 @@ def test_threads_share_the_rows_and_change_nothing(pencil, monkeypatch, threads)
     np.testing.assert_array_equal(shared, one)
     exact = vectors @ (np.exp(-values / 20) * (vectors.T @ (mass * v)))
     assert np.sqrt(mass @ (shared - exact) ** 2 / (mass @ v**2)) < 1e-9
+
+
+def test_the_rows_are_renumbered_into_a_narrow_band_and_the_result_back():
+    """A 40×60 grid numbered at random: its bandwidth is 40 at best (the grid's, min(m, n)), about 2,400 as
+    numbered; the recurrence's rows have at most twice the best, and ``exp(−A/20) v`` comes back in the
+    vertices' order (the dense ``expm``)."""
+    side, other = 40, 60
+    grid = sp.kronsum(_path(other), _path(side)).tocsr()  # vertex (a, b) is row a * side + b
+    shuffle = np.random.default_rng(2).permutation(side * other)
+    lap = grid[shuffle][:, shuffle].tocsr()
+    mass = np.random.default_rng(3).uniform(0.5, 2.0, side * other)
+    top = spectral_radius_bound(lap, mass)
+    y2 = recurrence_matrix(lap, mass, top)
+    rows, cols = y2.matrix.nonzero()
+    assert np.abs(rows - cols).max() <= 2 * side
+    assert np.abs(np.subtract(*lap.nonzero())).max() > 20 * side  # the numbering it started from
+    v = np.random.default_rng(4).standard_normal(side * other)
+    series = chebyshev_series(lambda lam: np.exp(-lam / 20), top, 1e-12)
+    exact = sl.expm(-(lap.toarray() / mass[:, None]) / 20) @ v
+    np.testing.assert_allclose(apply_series(series, y2, v), exact, atol=1e-10 * np.abs(v).max())
+
+
+def _path(n: int) -> sp.csr_matrix:
+    """The Laplacian of a path of ``n`` vertices."""
+    main = np.full(n, 2.0)
+    main[[0, -1]] = 1.0
+    return sp.diags([-np.ones(n - 1), main, -np.ones(n - 1)], [-1, 0, 1]).tocsr()
