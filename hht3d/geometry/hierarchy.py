@@ -46,9 +46,10 @@ from scipy.spatial import cKDTree
 
 from ..errors import InputError
 from ..linalg.heap import release_free_heap
-from .operators import adjacency, tangent_gradient
+from .operators import adjacency
 from .rows import unique_rows
 from .surface import MIN_VERTICES, Surface
+from .tangent_gradient import tangent_gradient
 
 __all__ = [
     "Level",

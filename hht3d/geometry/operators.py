@@ -35,8 +35,6 @@ __all__ = [
     "point_cloud_operators",
     "adjacency",
     "k_ring",
-    "tangent_gradient",
-    "tangent_gradient_coefficients",
     "face_gradient",
     "vertex_fem_gradient",
     "connected_components",
@@ -230,86 +228,6 @@ def k_ring(adj: sp.csr_matrix, k: int) -> sp.csr_matrix:
     reach.eliminate_zeros()
     reach.sort_indices()
     return reach
-
-
-#: Vertices per block when assembling the least-squares gradient (bounds its transient memory).
-GRADIENT_BLOCK = 1 << 16
-#: A tangent direction holding less than this share ``Σ_j (p_ij · u)²`` of the largest gets no gradient component
-#: (minimum norm) rather than the neighbours' noise divided by it: cloud points with neighbours nearly in line (558
-#: on igea's 1M-point cloud; one gave a Riesz vector 7,000× the median); none on igea or nefertiti.
-RESOLVED_SHARE = 1e-2
-
-
-def tangent_gradient(
-    vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matrix, block: int = GRADIENT_BLOCK
-) -> sp.csr_matrix:
-    """Tangent-plane least-squares gradient of Eq. (17) as a sparse ``(3n, n)`` operator.
-
-    At vertex ``i`` with unit normal ``n_i`` and neighbours ``j``, ``P_ij`` is
-    the unit projection of ``v_j - v_i`` on the tangent plane and the gradient
-    ``g`` minimises ``sum_j ((g, P_ij) - (f_j - f_i)/|v_j - v_i|)^2`` over
-    tangent vectors (the paper writes ``f_i - f_j``; that is the negative
-    gradient).  Exact for linear functions on planar neighbourhoods.  Vertices whose neighbours
-    do not span the plane (to :data:`RESOLVED_SHARE`) get the minimum-norm solution.
-
-    The CSR arrays are written ``block`` vertices at a time, so the transient
-    memory is that of one block, not of all edges (about 2.7 GB at a million
-    vertices otherwise).
-    """
-    n = len(vertices)
-    adj = sp.csr_matrix(adj)
-    degree = np.diff(adj.indptr)
-    # row 3i+k holds vertex i's neighbours and, if it has any, i itself: sorted columns
-    length = degree + (degree > 0)
-    start = np.concatenate([[0], np.cumsum(length)])
-    nnz = 3 * int(start[-1])
-    index = np.int32 if max(nnz, n) < np.iinfo(np.int32).max else np.int64
-    data, indices = np.empty(nnz), np.empty(nnz, dtype=index)
-    for first in range(0, n, block):
-        last = min(first + block, n)
-        edges = slice(adj.indptr[first], adj.indptr[last])
-        coef = tangent_gradient_coefficients(vertices, normals, adj, first, last)  # (edges, 3)
-        rows = np.repeat(np.arange(first, last), degree[first:last])
-        cols = adj.indices[edges]
-        # each vertex's entries: its neighbours, then itself with minus their sum
-        diagonal = np.flatnonzero(degree[first:last]) + first
-        sums = np.stack([np.bincount(rows - first, coef[:, k], last - first) for k in range(3)], axis=1)
-        entry_vertex = np.concatenate([rows, diagonal])
-        entry_col = np.concatenate([cols, diagonal])
-        entry_val = np.concatenate([coef, -sums[diagonal - first]])
-        order = np.lexsort((entry_col, entry_vertex))
-        entry_vertex, entry_col, entry_val = entry_vertex[order], entry_col[order], entry_val[order]
-        offset = np.arange(len(order)) - (start[entry_vertex] - start[first])
-        for k in range(3):
-            position = 3 * start[entry_vertex] + k * length[entry_vertex] + offset
-            data[position] = entry_val[:, k]
-            indices[position] = entry_col
-    indptr = np.concatenate([[0], np.cumsum(np.repeat(length, 3))]).astype(index)
-    return sp.csr_matrix((data, indices, indptr), shape=(3 * n, n))
-
-
-def tangent_gradient_coefficients(
-    vertices: np.ndarray, normals: np.ndarray, adj: sp.csr_matrix, first: int, last: int
-) -> np.ndarray:
-    """``(P^T P)^+ P_ij / |v_j - v_i|`` (edges, 3) for the edges ``adj`` holds for vertices ``first..last-1``, in
-    its order: the entries ``c_ij`` of :func:`tangent_gradient` (``∇f_i = Σ_j c_ij (f_j − f_i)``)."""
-    rows = np.repeat(np.arange(first, last), np.diff(adj.indptr[first : last + 1]))
-    cols = adj.indices[adj.indptr[first] : adj.indptr[last]]
-    d = vertices[cols] - vertices[rows]
-    length = np.linalg.norm(d, axis=1)
-    nrm = normals[rows]
-    p = d - np.einsum("ei,ei->e", d, nrm)[:, None] * nrm
-    p_len = np.linalg.norm(p, axis=1)
-    ok = (p_len > 0) & (length > 0)
-    p = np.divide(p, p_len[:, None], out=np.zeros_like(p), where=ok[:, None])
-    inv_len = np.divide(1.0, length, out=np.zeros_like(length), where=ok)
-    # normal equations per vertex, solved in the tangent plane: (P^T P)^+ P^T
-    outer = (p[:, :, None] * p[:, None, :]).reshape(len(p), 9)
-    owner = rows - first  # Σ_j p pᵀ per vertex by bincount: add.at's sums, 1.7x faster
-    ptp = np.stack([np.bincount(owner, weights=outer[:, c], minlength=last - first) for c in range(9)], axis=1)
-    ptp = ptp.reshape(-1, 3, 3)
-    pinv = np.linalg.pinv(ptp, rcond=RESOLVED_SHARE, hermitian=True)
-    return np.einsum("eij,ej->ei", pinv[rows - first], p) * inv_len[:, None]
 
 
 def face_gradient(vertices: np.ndarray, faces: np.ndarray) -> sp.csr_matrix:

@@ -21,6 +21,7 @@ from ..records import Record, option
 from . import operators as ops
 from .cleaning import CleanReport, clean_mesh, clean_points
 from .normals import estimate_point_normals, principal_axes
+from .tangent_gradient import tangent_gradient
 
 __all__ = ["Surface", "SurfaceOptions", "MIN_VERTICES", "LAPLACIANS", "MAX_NEIGHBORS"]
 
@@ -307,7 +308,7 @@ class Surface:
 
         def build() -> sp.csr_matrix:
             if kind == "lsq":
-                return ops.tangent_gradient(self.vertices, self.normals, self.adjacency)
+                return tangent_gradient(self.vertices, self.normals, self.adjacency)
             return ops.vertex_fem_gradient(self.vertices, self._triangles)
 
         return build() if self.n_vertices >= CACHED_GRADIENT_VERTICES else self._cached(f"gradient:{kind}", build)

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from ..geometry.operators import tangent_gradient_coefficients
 from ..geometry.surface import Surface
+from ..geometry.tangent_gradient import tangent_gradient_coefficients
 
 __all__ = ["BLOCK_EDGES", "CACHED_VERTICES", "Block", "EdgeStencil", "edge_stencil", "build_edge_stencil"]
 
