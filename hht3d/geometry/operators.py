@@ -18,12 +18,16 @@ Conventions
 from __future__ import annotations
 
 import functools
+from concurrent.futures import ThreadPoolExecutor
 from typing import Callable, cast
 
 import numpy as np
 import scipy.sparse as sp
 
+from ..errors import InputError
+from .block_processes import process_count
 from .blocks import CLOUD_BLOCK, MESH_BLOCK, built_by_blocks
+from .normals import estimate_point_normals
 
 __all__ = [
     "face_areas",
@@ -33,6 +37,7 @@ __all__ = [
     "mixed_voronoi_mass",
     "robust_mesh_operators",
     "point_cloud_operators",
+    "cloud_operators_and_normals",
     "adjacency",
     "k_ring",
     "face_gradient",
@@ -168,6 +173,27 @@ def point_cloud_operators(
     :data:`~.blocks.CLOUD_BLOCK` points on larger clouds (:mod:`.blocks`)."""
     build = functools.partial(_robust_cloud, mollify_factor=mollify_factor, n_neighbors=n_neighbors)
     return built_by_blocks(build, points, None, CLOUD_BLOCK, n_neighbors)
+
+
+def cloud_operators_and_normals(
+    points: np.ndarray, n_neighbors: int = 30
+) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray | None]:
+    """:func:`point_cloud_operators` and the points' normals (:func:`~.normals.estimate_point_normals`),
+    estimated in a thread meanwhile when child processes build the Laplacian's blocks: this process only
+    waits on them then, and the normals' single-threaded orientation fills the cores' idle time.
+
+    The normals are ``None`` when the Laplacian is built in this process (nothing to overlap) or when they
+    cannot be estimated: asked for later, they raise their error then.
+    """
+    if len(points) <= CLOUD_BLOCK or process_count() <= 1:
+        return (*point_cloud_operators(points, n_neighbors), None)
+    with ThreadPoolExecutor(1, thread_name_prefix="hht3d-normals") as pool:
+        normals = pool.submit(estimate_point_normals, points)
+        lap, mass = point_cloud_operators(points, n_neighbors)
+        try:
+            return lap, mass, normals.result()
+        except InputError:  # a degenerate cloud: its normals' error waits for a request of them
+            return lap, mass, None
 
 
 def _robust_mesh(

@@ -227,8 +227,12 @@ class Surface:
     # -- operators --------------------------------------------------------------------
     def _operators(self) -> _Operators:
         def build() -> _Operators:
-            if not self.is_mesh:
+            if not self.is_mesh and "normals" in self.cache:
                 lap, mass = ops.point_cloud_operators(self.vertices, self.n_neighbors)
+            elif not self.is_mesh:  # large clouds estimate their normals meanwhile
+                lap, mass, normals = ops.cloud_operators_and_normals(self.vertices, self.n_neighbors)
+                if normals is not None:
+                    self.cache["normals"] = normals
             elif self.laplacian == "robust":
                 lap, mass = ops.robust_mesh_operators(self.vertices, self._triangles)
             else:

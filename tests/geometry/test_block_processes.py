@@ -14,6 +14,7 @@ from helpers import block_calls
 from helpers.models import shared_model_path
 from hht3d.errors import InputError
 from hht3d.geometry.block_processes import PROCESSES_ENV, mapped, process_count
+from hht3d.geometry.normals import estimate_point_normals
 from hht3d.geometry.operators import point_cloud_operators
 
 
@@ -37,6 +38,35 @@ def test_blocks_built_in_two_processes_are_those_built_here(monkeypatch):
     there, there_mass = point_cloud_operators(points)
     assert (here != there).nnz == 0 and np.array_equal(here.indices, there.indices)
     np.testing.assert_array_equal(here_mass, there_mass)
+    _no_children_left()
+
+
+def test_a_cloud_built_in_processes_has_its_normals_estimated_meanwhile_the_same(monkeypatch):
+    """A cloud whose Laplacian children build has its normals once the Laplacian is there, those it would
+    estimate when asked (the same function on the same points, in a thread)."""
+    points = hht3d.load(shared_model_path("rocker_arm.ply")).vertices
+    monkeypatch.setattr("hht3d.geometry.operators.CLOUD_BLOCK", 2_500)
+    monkeypatch.setenv(PROCESSES_ENV, "2")
+    cloud = hht3d.Surface(points)
+    assert cloud.stiffness.shape == (len(points), len(points))
+    assert "normals" in cloud.cache
+    np.testing.assert_array_equal(cloud.normals, estimate_point_normals(cloud.vertices))
+    _no_children_left()
+
+
+def test_normals_that_cannot_be_estimated_fail_when_asked_for_not_with_the_laplacian(monkeypatch):
+    def refused(points, k=30):
+        raise InputError("cannot estimate the point normals (a test)")
+
+    points = hht3d.load(shared_model_path("rocker_arm.ply")).vertices
+    monkeypatch.setattr("hht3d.geometry.operators.CLOUD_BLOCK", 2_500)
+    monkeypatch.setattr("hht3d.geometry.operators.estimate_point_normals", refused)
+    monkeypatch.setattr("hht3d.geometry.surface.estimate_point_normals", refused)
+    monkeypatch.setenv(PROCESSES_ENV, "2")
+    cloud = hht3d.Surface(points)
+    assert cloud.stiffness.nnz > 0
+    with pytest.raises(InputError, match="cannot estimate the point normals"):
+        cloud.normals  # noqa: B018 (the property raises)
     _no_children_left()
 
 
