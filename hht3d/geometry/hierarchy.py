@@ -46,6 +46,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import InputError
 from ..linalg.heap import release_free_heap
+from ..linalg.threads import usable_cores
 from .operators import adjacency
 from .rows import unique_rows
 from .surface import MIN_VERTICES, Surface
@@ -261,7 +262,7 @@ def _barycentric(points: np.ndarray, coarse: Surface) -> sp.csr_matrix:
 def _shepard(points: np.ndarray, coarse: np.ndarray) -> sp.csr_matrix:
     """Rows of inverse-square-distance weights of the :data:`CLOUD_NEIGHBOURS` nearest coarse points."""
     k = min(CLOUD_NEIGHBOURS, len(coarse))
-    distance, index = cKDTree(coarse).query(points, k=k)
+    distance, index = cKDTree(coarse).query(points, k=k, workers=usable_cores())
     distance, index = distance.reshape(len(points), k), index.reshape(len(points), k)
     weights = 1.0 / np.maximum(distance, 1e-9 * max(float(distance.max()), 1e-300)) ** 2
     return _rows(weights / weights.sum(axis=1, keepdims=True), index, len(coarse))
