@@ -54,9 +54,10 @@ class EdgeStencil:
     def n(self) -> int:
         return self.points.shape[1]
 
-    def blocks(self) -> Iterator["Block"]:
-        """The vertices in consecutive ranges of about :data:`BLOCK_EDGES` edges, one block at a time."""
-        step = max(1, BLOCK_EDGES * self.n // max(len(self.cols), 1))
+    def blocks(self, at_least: int = 1) -> Iterator["Block"]:
+        """The vertices in consecutive ranges of about :data:`BLOCK_EDGES` edges, one block at a time; at least
+        ``at_least`` of them (as many as threads that share them) where there are that many vertices."""
+        step = max(1, min(BLOCK_EDGES * self.n // max(len(self.cols), 1), -(-self.n // at_least)))
         for a in range(0, self.n, step):
             yield Block(self, a, min(a + step, self.n))
 

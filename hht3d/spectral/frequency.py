@@ -68,7 +68,8 @@ Frequencies above it are reported (:func:`resolution_report`), never clipped.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable
+from concurrent.futures import Executor, ThreadPoolExecutor
 from typing import Any, cast
 
 import numpy as np
@@ -95,9 +96,6 @@ _SYMMETRIC = np.array([[0, 1, 2], [1, 3, 4], [2, 4, 5]])
 _MAX_UNWRAP = 8
 #: Floor of the discrete Riesz response (it tends to 0 at the Nyquist limit).
 _MIN_RESPONSE = 0.05
-#: Vertices of all threads' signals at once: each thread holds about 18 floats a vertex (its
-#: signal's Riesz vectors, orientation, first fit and response), so 1M vertices get 2 threads and 4M one.
-_THREAD_VERTICES = 4_000_000
 
 
 def instantaneous_frequency(
@@ -126,9 +124,9 @@ def instantaneous_frequency(
     **overrides
         Settings that replace those of ``options``.
 
-    The ``"phase"`` route reads the signals in parallel threads, one per
-    core this process may use (``OMP_NUM_THREADS`` where set); the result
-    does not depend on their number.
+    The ``"phase"`` route reads each signal's blocks of vertices in parallel
+    threads, one per core this process may use (``OMP_NUM_THREADS`` where
+    set); the result does not depend on their number.
 
     Returns
     -------
@@ -151,14 +149,11 @@ def instantaneous_frequency(
         return _gradient_frequency(surface, f / scale[:, None], r / scale[:, None, None], options.gradient)
     stencil = edge_stencil(surface, options.gradient)
     omega = np.empty(f.shape)
-
-    def one(k: int) -> None:
-        scale = _unit_scale(f[k, None], r[k, None])[0]
-        r_t = np.empty((3, f.shape[1]))
-        omega[k] = _phase_frequency(stencil, f[k] / scale, np.divide(r[k].T, scale, out=r_t))
-
-    with ThreadPoolExecutor(_threads(len(f), surface.n_vertices)) as pool:  # NumPy releases the GIL
-        list(pool.map(one, range(len(f))))
+    with ThreadPoolExecutor(usable_cores()) as pool:  # NumPy releases the GIL
+        for k in range(len(f)):
+            scale = _unit_scale(f[k, None], r[k, None])[0]
+            r_t = np.empty((3, f.shape[1]))
+            omega[k] = _phase_frequency(stencil, f[k] / scale, np.divide(r[k].T, scale, out=r_t), pool)
     return omega
 
 
@@ -175,12 +170,6 @@ def _unit_scale(f: np.ndarray, r: np.ndarray) -> np.ndarray:
 def _peak(x: np.ndarray, axes: int | tuple[int, ...]) -> np.ndarray:
     """``max |x|`` over ``axes``, without an array of ``|x|``."""
     return np.maximum(x.max(axis=axes, initial=0.0), -x.min(axis=axes, initial=0.0))
-
-
-def _threads(count: int, vertices: int) -> int:
-    """Threads for ``count`` signals, one signal each: :func:`~hht3d.linalg.threads.usable_cores`, and no more
-    than keep :data:`_THREAD_VERTICES` vertices' work arrays alive at once."""
-    return max(1, min(count, usable_cores(), _THREAD_VERTICES // max(vertices, 1)))
 
 
 # -- the paper's route: vertex gradients of the sampled fields --------------------------------
@@ -216,14 +205,15 @@ def _norm_gradient(surface: Surface, rf: np.ndarray, q: np.ndarray, kind: str) -
 # -- phase increments along edges --------------------------------------------------------------
 
 
-def _phase_frequency(st: EdgeStencil, f: np.ndarray, r_t: np.ndarray) -> np.ndarray:
+def _phase_frequency(st: EdgeStencil, f: np.ndarray, r_t: np.ndarray, pool: Executor) -> np.ndarray:
     """``|∇ψ|`` (n,) of one signal ``f`` (n,) with Riesz vectors ``r_t`` (3, n), from edge phase increments,
     unwrapped and dispersion-corrected: a first fit, the Riesz response from it (which reads the first
-    fit on each vertex's ring), then the corrected fit, each a pass over the stencil's blocks.
+    fit on each vertex's ring), then the corrected fit, each a pass over the stencil's blocks, which the
+    ``pool``'s threads share (each writes its blocks' own vertices).
 
     The vectors come as rows (3, n), as the orientation leaves them: 1-D gathers are the fast ones."""
     q = np.sqrt(r_t[0] ** 2 + r_t[1] ** 2 + r_t[2] ** 2)
-    o_t = _orientation(st, r_t, q)
+    o_t = _orientation(st, r_t, q, pool)
     qo = r_t[0] * o_t[0] + r_t[1] * o_t[1] + r_t[2] * o_t[2]
 
     def fit(block: Block, response: np.ndarray | None, guess: np.ndarray | None) -> np.ndarray:
@@ -233,22 +223,34 @@ def _phase_frequency(st: EdgeStencil, f: np.ndarray, r_t: np.ndarray) -> np.ndar
             q_i, q_j = q_i / block.at_start(response), q_j / response[block.cols]
         return _unwrapped_fit(block, block.at_start(f), f[block.cols], q_i, q_j, guess)
 
-    first = np.empty((st.n, 3))
-    for block in st.blocks():
+    first, response, omega = np.empty((st.n, 3)), np.empty(st.n), np.empty(st.n)
+
+    def first_fit(block: Block) -> None:
         first[block.a : block.b] = fit(block, None, None)
+
+    def corrected_fit(block: Block) -> None:
+        omega[block.a : block.b] = np.linalg.norm(fit(block, response, first[block.a : block.b]), axis=1)
+
+    _each_block(pool, st, first_fit)
     energy = f**2 + q**2
     magnitude = np.linalg.norm(first, axis=1)
     moment = energy * magnitude
-    response = np.empty(st.n)
-    for block in st.blocks():
+
+    def respond(block: Block) -> None:
         response[block.a : block.b] = _riesz_response(block, first, magnitude, moment, energy)
-    omega = np.empty(st.n)
-    for block in st.blocks():
-        omega[block.a : block.b] = np.linalg.norm(fit(block, response, first[block.a : block.b]), axis=1)
+
+    _each_block(pool, st, respond)
+    _each_block(pool, st, corrected_fit)
     return omega
 
 
-def _orientation(st: EdgeStencil, r_t: np.ndarray, q: np.ndarray) -> np.ndarray:
+def _each_block(pool: Executor, st: EdgeStencil, work: Callable[[Block], None]) -> None:
+    """``work(block)`` for every block of ``st``, at least one a thread, on the ``pool``'s threads; a block's
+    cached offsets go with it once its work is done."""
+    list(pool.map(work, st.blocks(usable_cores())))
+
+
+def _orientation(st: EdgeStencil, r_t: np.ndarray, q: np.ndarray, pool: Executor) -> np.ndarray:
     """Unit orientation (3, n) of the signed quadrature ``Rf·o``, for Riesz vectors ``r_t`` (3, n).
 
     ``Rf_i/|Rf_i|``: then ``∇(Rf·o) = ∇|Rf|`` at the vertex, and the fitted
@@ -258,7 +260,8 @@ def _orientation(st: EdgeStencil, r_t: np.ndarray, q: np.ndarray) -> np.ndarray:
     ``Σ r_j r_jᵀ`` over the vertex and its ring orients the phase there.
     """
     o_t = np.divide(r_t, q, out=np.zeros_like(r_t), where=q > 0)
-    for block in st.blocks():
+
+    def refold(block: Block) -> None:
         ring_max = np.zeros(block.size)
         has = block.counts > 0
         if len(block.cols):
@@ -268,6 +271,8 @@ def _orientation(st: EdgeStencil, r_t: np.ndarray, q: np.ndarray) -> np.ndarray:
         if fold.size:
             tensor = (_fold_ring(block, fold, r_t) + _products(r_t, block.a + fold))[:, _SYMMETRIC]
             o_t[:, block.a + fold] = np.linalg.eigh(tensor)[1][:, :, -1].T
+
+    _each_block(pool, st, refold)
     return o_t
 
 

@@ -216,10 +216,12 @@ def test_signals_at_once_equal_one_at_a_time(monkeypatch):
     f = rng.standard_normal((3, small.n_vertices))
     r = rng.standard_normal((3, small.n_vertices, 3))
     r -= np.einsum("kvc,vc->kv", r, small.normals)[..., None] * small.normals
-    monkeypatch.setenv("OMP_NUM_THREADS", "3")  # one thread per signal, whatever the cores
+    monkeypatch.setenv("OMP_NUM_THREADS", "3")  # three threads share each signal's blocks, whatever the cores
     together = instantaneous_frequency(small, f, r)
     alone = np.stack([instantaneous_frequency(small, f[i : i + 1], r[i : i + 1])[0] for i in range(3)])
     assert np.array_equal(together, alone)
+    monkeypatch.setenv("OMP_NUM_THREADS", "1")  # one block, one thread: the same bits
+    assert np.array_equal(instantaneous_frequency(small, f, r), together)
     assert np.all(np.isfinite(together)) and together.min() >= 0
 
 
