@@ -19,11 +19,9 @@ from .. import linalg
 from ..errors import InputError, NumericalError
 from ..geometry.signals import fluctuation
 from ..geometry.surface import Surface
-from ..linalg.cg import rtol_for
-from ..linalg.pcg import jacobi_cg
 from .eigenpairs import spectral_bounds
 from .options import MIN_TOL, RIESZ_DEFAULTS
-from .shifts import shift_analysis, shifted_matrix, shifted_solve
+from .shifts import shift_analysis, solve_shifts
 
 __all__ = [
     "quadrature_nodes",
@@ -169,7 +167,9 @@ def quadrature_part(
     From the largest shift down, each is solved by Jacobi-preconditioned CG
     (:func:`~hht3d.linalg.pcg.jacobi_cg`, relative residual
     :func:`~hht3d.linalg.cg.rtol_for` ``(tol)``) while it converges within the backend's
-    ``factorization_iterations``; the first that does not, and every smaller one, are factorized.
+    ``factorization_iterations``; the first that does not, and every smaller one, are factorized,
+    by a second thread from the smallest up meanwhile where the backend allows
+    (:func:`~hht3d.spectral.shifts.solve_shifts`).
 
     Parameters
     ----------
@@ -193,14 +193,10 @@ def quadrature_part(
     rhs = (surface.mass_diagonal * np.atleast_2d(g)).T  # (n, k): M f̃, one column per signal
     total = np.zeros_like(rhs)
     mine = slice(int(group), None, int(groups))
-    solver = linalg.SOLVER_BACKENDS[symbolic.backend if symbolic else linalg.check_backend(backend)]
-    budget = solver.factorization_iterations
-    for sigma, weight in sorted(zip(plan.sigmas[mine], plan.weights[mine]), reverse=True) if rhs.size else ():
-        x = jacobi_cg(shifted_matrix(surface, sigma), rhs, rtol_for(plan.tol), budget) if budget else None
-        if x is None:  # a smaller shift needs more iterations still: factorize from here on
-            budget = 0
-            symbolic = symbolic or shift_analysis(surface, backend, plan.tol)
-            x = shifted_solve(surface, sigma, rhs, symbolic=symbolic)
+    shifts = sorted(zip(plan.sigmas[mine], plan.weights[mine]), reverse=True) if rhs.size else []
+    sigmas = np.array([sigma for sigma, _ in shifts])
+    solutions = solve_shifts(surface, rhs, sigmas, plan.tol, backend, symbolic) if shifts else []
+    for (_, weight), x in zip(shifts, solutions):
         total += weight * x
     return total.T.reshape(g.shape)
 

@@ -139,3 +139,82 @@ def test_no_signals_need_no_solve(jittered_grid, monkeypatch):
 
     monkeypatch.setattr(linalg.SymbolicFactorization, "factorize", refuse)
     assert quadrature_part(jittered_grid, empty, plan).shape == empty.shape
+
+
+def _factorizations_by_thread(monkeypatch):
+    """Record, per factorization of the quadrature's shifts, whether the main thread ran it and its shift (the
+    matrix's first diagonal entry ``L₀₀ + σ M₀₀`` names it)."""
+    import threading
+
+    from hht3d import linalg
+
+    records = []
+    original = linalg.SymbolicFactorization.factorize
+
+    def recording(self, a):
+        records.append((threading.current_thread() is threading.main_thread(), a.diagonal()[0]))
+        return original(self, a)
+
+    monkeypatch.setattr(linalg.SymbolicFactorization, "factorize", recording)
+    return records
+
+
+def _threads(records):
+    """Whether each factorization ran in the main thread, after checking that no shift was factorized twice."""
+    shifts = [shift for _, shift in records]
+    assert len(set(shifts)) == len(shifts), "a shift factorized twice"
+    return [main for main, _ in records]
+
+
+def test_a_second_thread_factorizes_the_small_shifts_and_changes_no_bit(jittered_grid, monkeypatch):
+    # On SuperLU the smallest shifts are factorized in a second thread while CG takes the largest
+    # (hht3d.spectral.shifts.solve_shifts).  Oracle: the same quadrature in one thread, which solves each shift
+    # by the method the sequence from the top gives it; the sum must be the same to the bit, and the
+    # factorizations must have run outside the main thread.
+    from hht3d.spectral import shifts
+
+    monkeypatch.setattr(shifts, "usable_cores", lambda: 2)
+    s, f = jittered_grid, mixed_signals(jittered_grid)
+    plan = quadrature_plan(s, 1e-8)
+    records = _factorizations_by_thread(monkeypatch)
+    both = quadrature_part(s, f, plan, backend="superlu")
+    threads = _threads(records)
+    assert threads and not all(threads)  # some factorized in the second thread
+    assert len(threads) < len(plan.sigmas)  # not the largest shift, which CG took first
+    monkeypatch.setattr(shifts, "CONCURRENT_VERTICES", 0)
+    records.clear()
+    alone = quadrature_part(s, f, plan, backend="superlu")
+    assert records and all(_threads(records))
+    np.testing.assert_array_equal(both, alone)
+
+
+def test_a_shift_factorized_ahead_of_cg_is_solved_by_cg_as_in_one_thread(jittered_grid, monkeypatch):
+    # With a budget that lets CG converge on every shift, one thread factorizes none; the second thread, ahead
+    # of a slowed CG, factorizes shifts from the bottom anyway.  Those must be replaced by CG's solutions, so
+    # the sum is the all-CG one to the bit (a factorized shift differs from CG's in the 9th digit).
+    import time
+
+    from hht3d import linalg
+    from hht3d.spectral import shifts
+
+    monkeypatch.setattr(shifts, "usable_cores", lambda: 2)
+    entry = dataclasses.replace(linalg.SOLVER_BACKENDS["superlu"], factorization_iterations=100_000)
+    monkeypatch.setitem(linalg.SOLVER_BACKENDS, "superlu", entry)
+    s, f = jittered_grid, mixed_signals(jittered_grid)
+    plan = quadrature_plan(s, 1e-8)
+    records = _factorizations_by_thread(monkeypatch)
+    cg = shifts.jacobi_cg
+
+    def slow_cg(*args):
+        time.sleep(0.02)
+        return cg(*args)
+
+    monkeypatch.setattr(shifts, "jacobi_cg", slow_cg)
+    both = quadrature_part(s, f, plan, backend="superlu")
+    threads = _threads(records)
+    assert threads and not any(threads)  # factorized ahead, in the second thread only
+    monkeypatch.setattr(shifts, "CONCURRENT_VERTICES", 0)
+    records.clear()
+    alone = quadrature_part(s, f, plan, backend="superlu")
+    assert not records
+    np.testing.assert_array_equal(both, alone)
