@@ -51,7 +51,8 @@ Evaluation
 the pattern the envelopes share (:class:`~hht3d.decomposition.envelopes.EnvelopeSolver`;
 one symbolic analysis per run) and ``2m − 1`` solves, in the Clenshaw
 recurrence of ``P`` in Chebyshev form (stable for any ``m``); ``cut="local"``
-adds one factorization for the density.  The factor's fill grows faster than
+adds one factorization for the density.  On SuperLU the bilaplacian's global cut
+factorizes the complex second-order system of :mod:`.resolvent` instead.  The factor's fill grows faster than
 the mesh and dominates the memory of large surfaces.
 
 ``evaluation="polynomial"`` (global cut): ``W = g(A)``, ``A = M̃⁻¹ L``,
@@ -86,12 +87,10 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from functools import lru_cache
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
-from scipy.special import betainc
 
 from .. import linalg
 from ..geometry.surface import Surface
@@ -100,6 +99,7 @@ from ..linalg.estimate import COSTS, SLOW_FALLBACK_VERTICES
 from .envelopes import EnvelopeSolver, floored_mass, is_delaunay, membrane_laplacian
 from .extrema import active_extrema
 from .options import EMDOptions
+from .resolvent import apply_passband, passband, resolvent
 
 __all__ = [
     "Filterer",
@@ -203,37 +203,6 @@ def opposite_distances(points: np.ndarray, is_max: np.ndarray, is_min: np.ndarra
     return np.concatenate([cKDTree(minima).query(maxima)[0], cKDTree(maxima).query(minima)[0]])
 
 
-def passband(g: np.ndarray | float, order: int) -> np.ndarray:
-    """``P(g) = 1 − I_g(m, m)``: the share of a component with low-pass response ``g`` kept in the IMF."""
-    return 1.0 - betainc(order, order, np.clip(g, 0.0, 1.0))
-
-
-@lru_cache(maxsize=None)
-def _chebyshev(order: int) -> np.ndarray:
-    """Chebyshev coefficients (in ``y = 2G − 1``) of :func:`passband`, a polynomial of degree ``2m − 1``."""
-    degree = 2 * order - 1
-    return np.polynomial.chebyshev.chebinterpolate(lambda y: passband((y + 1) / 2, order), degree)
-
-
-def apply_passband(
-    solve: Callable[[np.ndarray], np.ndarray], mass: np.ndarray, r: np.ndarray, order: int
-) -> np.ndarray:
-    """``P(W) r`` for ``W v = solve(mass · v)``, by Clenshaw's recurrence in ``Y = 2W − I``.
-
-    ``P`` (:func:`passband`) has degree ``2m − 1`` in ``W``, written in Chebyshev form, so the
-    recurrence is stable for any ``m``; it costs ``2m − 1`` solves.
-    """
-    coefficients = _chebyshev(order)
-
-    def y(v: np.ndarray) -> np.ndarray:
-        return 2.0 * solve(mass * v) - v
-
-    b1, b2 = coefficients[-1] * r, np.zeros_like(r)
-    for c in coefficients[-2:0:-1]:
-        b1, b2 = c * r + 2.0 * y(b1) - b2, b1
-    return coefficients[0] * r + y(b1) - b2
-
-
 class Filterer:
     """Extracts IMFs one at a time from a residue by the filter of the module notes; ``eligible``, if
     given, masks the vertices that may be extrema (all by default); ``coarse`` (a coarse level of
@@ -258,6 +227,7 @@ class Filterer:
         self._recurrence: tuple[float, Recurrence] | None = None
         self.mass = floored_mass(surface)
         self.n_solves = self.n_products = 0
+        self.n_complex = 0  # factorizations of the complex system of resolvent()
         self.counts = (math.inf, math.inf)
 
     @property
@@ -269,7 +239,7 @@ class Filterer:
 
     @property
     def n_factorizations(self) -> int:
-        return 0 if self._solver is None else self._solver.n_factorizations
+        return self.n_complex + (0 if self._solver is None else self._solver.n_factorizations)
 
     @property
     def backend_name(self) -> str:
@@ -321,9 +291,17 @@ class Filterer:
         width = float(t[0])
         series = self._series(lambda lam: filter_response(lam, width, self.options), width, POLYNOMIAL_TOLERANCE)
         if series is None:
-            factor = self.solver.factorize(self._system(t))
+            global_bilaplacian = self.options.filter == "bilaplacian" and np.ptp(t) == 0
+            solve, complex_system = resolvent(
+                self.surface,
+                self.mass,
+                width if global_bilaplacian else None,
+                self.backend,
+                lambda: self.solver.factorize(self._system(t)).solve,
+            )
+            self.n_complex += complex_system
             self.n_solves += 2 * self.options.order - 1
-            return apply_passband(factor.solve, self.mass, residue, self.options.order), None
+            return apply_passband(solve, self.mass, residue, self.options.order), None
         info["degree"] = len(series) - 1
         extra = self._potential_series(width) if potential else None
         rows = [series] if extra is None else [series, extra]

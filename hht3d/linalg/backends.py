@@ -69,7 +69,7 @@ from ..errors import HHT3DDeprecationWarning, InputError
 from .cg import CGPattern
 from .cholmod import CHOLMOD_LOCK, CholmodPattern
 from .pardiso import PARDISO_LOCK, PardisoPattern
-from .superlu import SuperLUPattern
+from .superlu import SuperLUPattern, complex_symmetric_solver
 
 __all__ = [
     "Backend",
@@ -127,6 +127,10 @@ class Backend:
         right-hand sides) that take about as long as one factorization and solve on this backend:
         the Riesz quadrature solves a shift by them when they suffice
         (:func:`~hht3d.spectral.quadrature.quadrature_part`).  0: always factorize.
+    complex_solver : callable or None
+        ``complex_solver(matrix, points)`` factorizes a complex symmetric matrix whose real part is SPD and
+        gives its solve (``b ↦ A⁻¹ b``), ordered by the rows' positions ``points``: the bilaplacian filter
+        as one second-order system (:mod:`hht3d.decomposition.resolvent`).  ``None``: real systems only.
     """
 
     name: str
@@ -139,6 +143,7 @@ class Backend:
     iterative: bool = False
     orders_by_points: bool = False
     factorization_iterations: int = 0
+    complex_solver: Callable | None = field(default=None, repr=False, compare=False)
 
     def module(self) -> Any:
         """The first of :attr:`modules`, all imported on first use; ``None`` if one is absent."""
@@ -338,6 +343,7 @@ register_backend(
         SuperLUPattern,
         orders_by_points=True,
         factorization_iterations=60,  # 53-160 measured on nefertiti, igea and igea at 250k
+        complex_solver=complex_symmetric_solver,
     )
 )
 register_backend(

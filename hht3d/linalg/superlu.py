@@ -21,16 +21,18 @@ skipping the ordering.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, cast
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.linalg import splu
 
 from ..errors import NumericalError
 from .factor import Factor, Pattern
 from .ordering import nested_dissection
 
-__all__ = ["SuperLUPattern", "SUPERLU_OPTIONS"]
+__all__ = ["SuperLUPattern", "SUPERLU_OPTIONS", "complex_symmetric_solver"]
 
 #: Keyword arguments of ``splu`` for SPD matrices: diagonal pivots, symmetric structure.
 SUPERLU_OPTIONS = {"diag_pivot_thresh": 0.0, "options": {"SymmetricMode": True}}
@@ -78,3 +80,26 @@ class SuperLUPattern:
             return x
 
         return Factor(solve, n)
+
+
+def complex_symmetric_solver(matrix: sp.spmatrix, points: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """``b ↦ A⁻¹ b`` for a complex symmetric ``A`` whose real part is SPD, factorized as the SPD systems are.
+
+    Its Hermitian part (the real part) is positive definite, so elimination without pivoting exists
+    and is stable (Golub & Van Loan, *Matrix Computations*, 4th ed., §4.2): diagonal pivots in
+    nested-dissection order of ``points`` (:func:`~hht3d.linalg.ordering.nested_dissection`).
+    """
+    a = sp.csr_matrix(matrix, dtype=np.complex128)
+    a.sort_indices()
+    order = nested_dissection(sp.csr_matrix(abs(a)), points)
+    try:
+        lu = splu(a[order][:, order].tocsc(), permc_spec="NATURAL", **SUPERLU_OPTIONS)
+    except RuntimeError as exc:  # "Factor is exactly singular"
+        raise NumericalError(f"SuperLU factorization failed: {exc}") from exc
+
+    def solve(b: np.ndarray) -> np.ndarray:
+        x = np.empty(b.shape, dtype=np.complex128)
+        x[order] = lu.solve(np.ascontiguousarray(b[order], dtype=np.complex128))
+        return x
+
+    return solve
