@@ -79,11 +79,17 @@ def test_first_imf_is_the_filter_of_the_module_notes(sphere, evaluation):
 
 
 def test_auto_takes_the_polynomial_on_large_surfaces_and_global_cuts_only():
+    from hht3d import linalg
     from hht3d.decomposition import filtering
     from hht3d.decomposition.options import EMDOptions
+    from hht3d.linalg.estimate import COSTS, SLOW_FALLBACK_VERTICES
 
-    assert not uses_polynomial(EMDOptions(method="filtering"), filtering.POLYNOMIAL_VERTICES - 1)
-    assert uses_polynomial(EMDOptions(method="filtering"), filtering.POLYNOMIAL_VERTICES)
+    # from POLYNOMIAL_VERTICES on a fast default backend, from SLOW_FALLBACK_VERTICES on SuperLU (HHT3D_BACKEND)
+    slow = COSTS[linalg.default_backend()].slow
+    start = SLOW_FALLBACK_VERTICES if slow else filtering.POLYNOMIAL_VERTICES
+    assert not uses_polynomial(EMDOptions(method="filtering"), start - 1)
+    assert uses_polynomial(EMDOptions(method="filtering"), start)
+    assert uses_polynomial(EMDOptions(method="filtering"), SLOW_FALLBACK_VERTICES, "superlu")
     assert uses_polynomial(EMDOptions(method="filtering"), 500, coarse=True)  # a coarse level of the hierarchy
     assert not uses_polynomial(EMDOptions(method="filtering", evaluation="solves"), 500, coarse=True)
     assert not uses_polynomial(EMDOptions(method="filtering", cut="local", evaluation="polynomial"), 10**9)

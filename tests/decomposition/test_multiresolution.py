@@ -77,6 +77,8 @@ def test_the_direct_imfs_up_to_the_first_move_which_differs_by_its_transfer_erro
     """Until a residue moves, both paths compute the same filter (by solves) on the same residue; the IMF whose
     residue moves differs from the direct one by exactly ``r_k − P R r_k``, whose norm ``transfer_error`` reports."""
     on, off = runs["solves"], runs["never"]
+    if any("degree" in imf for imf in off.info["imfs"]):  # SuperLU's "auto" filters 41k vertices by polynomial
+        off = emd(sphere, signal, method="filtering", multiresolution="never", evaluation="solves")
     moved = next(k for k, imf in enumerate(on.info["imfs"]) if imf["residue_level"] > imf["level"])
     np.testing.assert_allclose(on.imfs[:moved], off.imfs[:moved], atol=1e-10 * np.abs(signal).max())
     mass = sphere.mass_diagonal
