@@ -49,12 +49,6 @@ class SuperLUPattern:
         if points is not None:
             self._analyse(pattern, np.argsort(nested_dissection(pattern, points)))
 
-    def _run(self, csc: sp.csc_matrix, permc_spec: str) -> Any:
-        try:
-            return self._splu(csc, permc_spec=permc_spec, **SUPERLU_OPTIONS)
-        except RuntimeError as exc:  # "Factor is exactly singular": not positive definite
-            raise NumericalError(f"SuperLU factorization failed: {exc}") from exc
-
     def _analyse(self, a: sp.csr_matrix, perm_c: np.ndarray) -> None:
         """Keep the ordering ``perm_c`` of a first factorization and the map of ``P A Pᵀ``."""
         self._order = np.argsort(perm_c)
@@ -67,19 +61,12 @@ class SuperLUPattern:
         a = self._pattern.check(a)
         n = self._pattern.n
         if self._order is None:
-            lu = self._run(a.tocsc(), "MMD_AT_PLUS_A")
+            lu = _factorized(self._splu, a.tocsc(), "MMD_AT_PLUS_A")
             self._analyse(a, lu.perm_c)
             return Factor(lu.solve, n)
         indptr, indices, source = cast(tuple[np.ndarray, np.ndarray, np.ndarray], self._permuted)  # set with _order
-        lu = self._run(sp.csc_matrix((a.data[source], indices, indptr), shape=a.shape), "NATURAL")
-        order = self._order
-
-        def solve(b: np.ndarray) -> np.ndarray:
-            x = np.empty_like(b)
-            x[order] = lu.solve(np.ascontiguousarray(b[order]))
-            return x
-
-        return Factor(solve, n)
+        lu = _factorized(self._splu, sp.csc_matrix((a.data[source], indices, indptr), shape=a.shape), "NATURAL")
+        return Factor(_permuted_solve(lu, cast(np.ndarray, self._order), np.float64), n)
 
 
 def complex_symmetric_solver(matrix: sp.spmatrix, points: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
@@ -92,14 +79,23 @@ def complex_symmetric_solver(matrix: sp.spmatrix, points: np.ndarray) -> Callabl
     a = sp.csr_matrix(matrix, dtype=np.complex128)
     a.sort_indices()
     order = nested_dissection(sp.csr_matrix(abs(a)), points)
+    return _permuted_solve(_factorized(splu, a[order][:, order].tocsc(), "NATURAL"), order, np.complex128)
+
+
+def _factorized(splu: Callable, csc: sp.csc_matrix, permc_spec: str) -> Any:
+    """``splu`` with :data:`SUPERLU_OPTIONS`; a zero pivot (not positive definite) as a ``NumericalError``."""
     try:
-        lu = splu(a[order][:, order].tocsc(), permc_spec="NATURAL", **SUPERLU_OPTIONS)
+        return splu(csc, permc_spec=permc_spec, **SUPERLU_OPTIONS)
     except RuntimeError as exc:  # "Factor is exactly singular"
         raise NumericalError(f"SuperLU factorization failed: {exc}") from exc
 
+
+def _permuted_solve(lu: Any, order: np.ndarray, dtype: type) -> Callable[[np.ndarray], np.ndarray]:
+    """``b ↦ A⁻¹ b`` from the factor ``lu`` of ``A[order][:, order]`` (``order``: new position -> row)."""
+
     def solve(b: np.ndarray) -> np.ndarray:
-        x = np.empty(b.shape, dtype=np.complex128)
-        x[order] = lu.solve(np.ascontiguousarray(b[order], dtype=np.complex128))
+        x: np.ndarray = np.empty(b.shape, dtype=dtype)
+        x[order] = lu.solve(np.ascontiguousarray(b[order], dtype=dtype))
         return x
 
     return solve

@@ -70,7 +70,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from concurrent.futures import Executor, ThreadPoolExecutor
-from typing import Any, cast
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 
@@ -149,7 +149,9 @@ def instantaneous_frequency(
         return _gradient_frequency(surface, f / scale[:, None], r / scale[:, None, None], options.gradient)
     stencil = edge_stencil(surface, options.gradient)
     omega = np.empty(f.shape)
-    with ThreadPoolExecutor(usable_cores()) as pool:  # NumPy releases the GIL
+    threads = usable_cores()
+    with ThreadPoolExecutor(threads) as executor:  # NumPy releases the GIL
+        pool = _Pool(executor, threads)
         for k in range(len(f)):
             scale = _unit_scale(f[k, None], r[k, None])[0]
             r_t = np.empty((3, f.shape[1]))
@@ -205,7 +207,7 @@ def _norm_gradient(surface: Surface, rf: np.ndarray, q: np.ndarray, kind: str) -
 # -- phase increments along edges --------------------------------------------------------------
 
 
-def _phase_frequency(st: EdgeStencil, f: np.ndarray, r_t: np.ndarray, pool: Executor) -> np.ndarray:
+def _phase_frequency(st: EdgeStencil, f: np.ndarray, r_t: np.ndarray, pool: _Pool) -> np.ndarray:
     """``|∇ψ|`` (n,) of one signal ``f`` (n,) with Riesz vectors ``r_t`` (3, n), from edge phase increments,
     unwrapped and dispersion-corrected: a first fit, the Riesz response from it (which reads the first
     fit on each vertex's ring), then the corrected fit, each a pass over the stencil's blocks, which the
@@ -244,13 +246,20 @@ def _phase_frequency(st: EdgeStencil, f: np.ndarray, r_t: np.ndarray, pool: Exec
     return omega
 
 
-def _each_block(pool: Executor, st: EdgeStencil, work: Callable[[Block], None]) -> None:
+class _Pool(NamedTuple):
+    """The threads that share a signal's blocks, and how many they are."""
+
+    executor: Executor
+    threads: int
+
+
+def _each_block(pool: _Pool, st: EdgeStencil, work: Callable[[Block], None]) -> None:
     """``work(block)`` for every block of ``st``, at least one a thread, on the ``pool``'s threads; a block's
     cached offsets go with it once its work is done."""
-    list(pool.map(work, st.blocks(usable_cores())))
+    list(pool.executor.map(work, st.blocks(pool.threads)))
 
 
-def _orientation(st: EdgeStencil, r_t: np.ndarray, q: np.ndarray, pool: Executor) -> np.ndarray:
+def _orientation(st: EdgeStencil, r_t: np.ndarray, q: np.ndarray, pool: _Pool) -> np.ndarray:
     """Unit orientation (3, n) of the signed quadrature ``Rf·o``, for Riesz vectors ``r_t`` (3, n).
 
     ``Rf_i/|Rf_i|``: then ``∇(Rf·o) = ∇|Rf|`` at the vertex, and the fitted
